@@ -1,0 +1,17 @@
+//! Space triangulations for tent-pitched spacetime meshes: the mesh and its adjacency, structured
+//! and Gmsh-read meshes, the advancing front and the tent pitcher.
+//!
+//! Units are SI: metres for lengths, seconds for times.
+
+pub mod front;
+pub mod geometry;
+pub mod gmsh;
+pub mod mesh;
+pub mod rectangle;
+pub mod tent;
+
+pub use front::Front;
+pub use geometry::Point;
+pub use mesh::{Edge, EdgeId, Mesh, MeshError, TagId, TriangleId, VertexId};
+pub use rectangle::{Diagonal, GridSegment, Rectangle, RectangleError};
+pub use tent::{PitchError, Pitcher, Tent};

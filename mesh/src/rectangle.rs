@@ -1,0 +1,296 @@
+//! Structured triangulations of a rectangle `[0, width] x [0, height]`.
+
+use crate::mesh::{Mesh, MeshError, TagId, VertexId};
+use crate::geometry::{self, Point};
+
+/// How each grid cell is split into two triangles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Diagonal {
+    /// Every cell split along `/` (lower-left to upper-right).
+    Right,
+    /// Every cell split along `\` (upper-left to lower-right).
+    Left,
+    /// `/` and `\` alternating like a checkerboard (vertex degrees 4 and 8).
+    Alternate,
+}
+
+/// A straight segment on grid lines to tag as an interior interface (later a crack or a
+/// contact line). Both ends must be grid nodes and the segment horizontal or vertical.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridSegment {
+    /// One end, metres.
+    pub from: Point,
+    /// The other end, metres.
+    pub to: Point,
+    /// Tag name of the interface edges.
+    pub tag: String,
+}
+
+/// Parameters of a rectangle mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rectangle {
+    /// Extent in x, metres.
+    pub width: f64,
+    /// Extent in y, metres.
+    pub height: f64,
+    /// Cells along x.
+    pub nx: u32,
+    /// Cells along y.
+    pub ny: u32,
+    /// Cell split pattern.
+    pub diagonal: Diagonal,
+    /// Optional interface segment on grid lines.
+    pub interface: Option<GridSegment>,
+    /// Random displacement of interior vertices as a fraction of the cell size in each
+    /// direction, in `[0, 0.25)`. Vertices on the boundary or the interface do not move.
+    pub perturb: f64,
+    /// Seed of the perturbation; each vertex's draw depends only on the seed and its id.
+    pub seed: u64,
+}
+
+/// Why a rectangle cannot be generated; `field` names the offending parameter.
+#[derive(Debug, thiserror::Error)]
+#[error("{field}: {reason}")]
+pub struct RectangleError {
+    /// Parameter name (`width`, `nx`, `interface`, ...).
+    pub field: &'static str,
+    /// What is wrong with it.
+    pub reason: String,
+}
+
+fn invalid(field: &'static str, reason: impl Into<String>) -> RectangleError {
+    RectangleError {
+        field,
+        reason: reason.into(),
+    }
+}
+
+/// The boundary side tags, in tag-id order.
+pub const SIDES: [&str; 4] = ["left", "right", "bottom", "top"];
+
+impl Rectangle {
+    /// Generates the triangulation. Boundary edges are tagged `left`, `right`, `bottom`, `top`;
+    /// interface edges get the segment's tag.
+    pub fn build(&self) -> Result<Mesh, RectangleError> {
+        for (field, value) in [("width", self.width), ("height", self.height)] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(invalid(field, format!("must be a positive length, got {value}")));
+            }
+        }
+        for (field, n) in [("nx", self.nx), ("ny", self.ny)] {
+            if n == 0 {
+                return Err(invalid(field, "must be at least 1"));
+            }
+        }
+        let nodes = (self.nx as u64 + 1) * (self.ny as u64 + 1);
+        if nodes > u32::MAX as u64 / 8 {
+            return Err(invalid("nx", "too many cells for 32-bit indices"));
+        }
+        if !(0.0..0.25).contains(&self.perturb) {
+            return Err(invalid("perturb", format!("must be in [0, 0.25), got {}", self.perturb)));
+        }
+        let (nx, ny) = (self.nx, self.ny);
+        let dx = self.width / nx as f64;
+        let dy = self.height / ny as f64;
+        let id = |i: u32, j: u32| j * (nx + 1) + i;
+        let mut vertices = Vec::with_capacity(nodes as usize);
+        for j in 0..=ny {
+            for i in 0..=nx {
+                vertices.push([i as f64 * dx, j as f64 * dy]);
+            }
+        }
+        let mut triangles = Vec::with_capacity(2 * (nx * ny) as usize);
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                let slash = match self.diagonal {
+                    Diagonal::Right => true,
+                    Diagonal::Left => false,
+                    Diagonal::Alternate => (i + j) % 2 == 0,
+                };
+                if slash {
+                    triangles.extend([[a, b, c], [a, c, d]]);
+                } else {
+                    triangles.extend([[a, b, d], [b, c, d]]);
+                }
+            }
+        }
+
+        let mut tagged: Vec<([VertexId; 2], TagId)> = Vec::new();
+        for i in 0..nx {
+            tagged.push(([id(i, 0), id(i + 1, 0)], 2));
+            tagged.push(([id(i, ny), id(i + 1, ny)], 3));
+        }
+        for j in 0..ny {
+            tagged.push(([id(0, j), id(0, j + 1)], 0));
+            tagged.push(([id(nx, j), id(nx, j + 1)], 1));
+        }
+        let mut tag_names: Vec<String> = SIDES.iter().map(|s| s.to_string()).collect();
+        let mut pinned = vec![false; vertices.len()];
+        if let Some(seg) = &self.interface {
+            if SIDES.contains(&seg.tag.as_str()) {
+                return Err(invalid("interface", format!("tag `{}` is a side name", seg.tag)));
+            }
+            let node = |p: Point| -> Result<(u32, u32), RectangleError> {
+                let (fi, fj) = (p[0] / dx, p[1] / dy);
+                let (i, j) = (fi.round(), fj.round());
+                let on_grid = (fi - i).abs() < 1e-9 && (fj - j).abs() < 1e-9;
+                if !on_grid || i < 0.0 || j < 0.0 || i > nx as f64 || j > ny as f64 {
+                    return Err(invalid(
+                        "interface",
+                        format!("end point {p:?} is not a grid node of the rectangle"),
+                    ));
+                }
+                Ok((i as u32, j as u32))
+            };
+            let (a, b) = (node(seg.from)?, node(seg.to)?);
+            let steps: Vec<(u32, u32)> = if a == b {
+                return Err(invalid("interface", "the segment has zero length"));
+            } else if a.1 == b.1 {
+                if a.1 == 0 || a.1 == ny {
+                    return Err(invalid("interface", "the segment lies on the boundary"));
+                }
+                (a.0.min(b.0)..=a.0.max(b.0)).map(|i| (i, a.1)).collect()
+            } else if a.0 == b.0 {
+                if a.0 == 0 || a.0 == nx {
+                    return Err(invalid("interface", "the segment lies on the boundary"));
+                }
+                (a.1.min(b.1)..=a.1.max(b.1)).map(|j| (a.0, j)).collect()
+            } else {
+                return Err(invalid("interface", "the segment must be horizontal or vertical"));
+            };
+            let tag = tag_names.len() as TagId;
+            tag_names.push(seg.tag.clone());
+            for w in steps.windows(2) {
+                tagged.push(([id(w[0].0, w[0].1), id(w[1].0, w[1].1)], tag));
+            }
+            for &(i, j) in &steps {
+                pinned[id(i, j) as usize] = true;
+            }
+        }
+
+        if self.perturb > 0.0 {
+            for j in 1..ny {
+                for i in 1..nx {
+                    let v = id(i, j);
+                    if !pinned[v as usize] {
+                        let p = &mut vertices[v as usize];
+                        p[0] += self.perturb * dx * (2.0 * unit_draw(self.seed, v, 0) - 1.0);
+                        p[1] += self.perturb * dy * (2.0 * unit_draw(self.seed, v, 1) - 1.0);
+                    }
+                }
+            }
+            if let Some(t) = triangles.iter().position(|tri| {
+                let p = tri.map(|v| vertices[v as usize]);
+                geometry::signed_area2(p[0], p[1], p[2]) <= 0.0
+            }) {
+                return Err(invalid(
+                    "perturb",
+                    format!("the perturbation inverts triangle {t}; use a smaller value"),
+                ));
+            }
+        }
+        Mesh::new(vertices, triangles, tag_names, &tagged).map_err(|e: MeshError| {
+            invalid("mesh", format!("generated an invalid triangulation: {e}"))
+        })
+    }
+}
+
+/// A uniform draw in `[0, 1)` that depends only on `(seed, vertex, axis)` (SplitMix64).
+fn unit_draw(seed: u64, vertex: VertexId, axis: u64) -> f64 {
+    fn mix(mut z: u64) -> u64 {
+        z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    let bits = mix(seed ^ mix(2 * vertex as u64 + axis));
+    (bits >> 11) as f64 / (1u64 << 53) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rect(diagonal: Diagonal) -> Rectangle {
+        Rectangle {
+            width: 2.0,
+            height: 1.0,
+            nx: 4,
+            ny: 3,
+            diagonal,
+            interface: None,
+            perturb: 0.0,
+            seed: 1,
+        }
+    }
+
+    #[test]
+    fn counts_and_side_tags() {
+        for d in [Diagonal::Right, Diagonal::Left, Diagonal::Alternate] {
+            let m = rect(d).build().unwrap();
+            assert_eq!(m.vertices().len(), 20);
+            assert_eq!(m.triangles().len(), 24);
+            let area: f64 = (0..24).map(|t| m.area(t)).sum();
+            assert!((area - 2.0).abs() < 1e-12);
+            for (tag, count) in [(0, 3), (1, 3), (2, 4), (3, 4)] {
+                let n = m.edges().iter().filter(|e| e.tag == Some(tag)).count();
+                assert_eq!(n, count, "{d:?} side {}", SIDES[tag as usize]);
+                assert!(m.edges().iter().filter(|e| e.tag == Some(tag)).all(|e| e.is_boundary()));
+            }
+            assert_eq!(m.edges().iter().filter(|e| e.is_boundary()).count(), 14);
+        }
+    }
+
+    #[test]
+    fn interface_segment_tags_interior_edges() {
+        let mut r = rect(Diagonal::Alternate);
+        r.interface = Some(GridSegment {
+            from: [0.0, 2.0 / 3.0],
+            to: [1.0, 2.0 / 3.0],
+            tag: "crack".into(),
+        });
+        r.perturb = 0.2;
+        let m = r.build().unwrap();
+        let crack = m.tag_id("crack").unwrap();
+        let edges: Vec<_> = m.edges().iter().filter(|e| e.tag == Some(crack)).collect();
+        assert_eq!(edges.len(), 2);
+        assert!(edges.iter().all(|e| e.is_interface()));
+        for e in edges {
+            for v in e.vertices {
+                assert!((m.vertex(v)[1] - 2.0 / 3.0).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_bad_parameters() {
+        let field = |r: Rectangle| r.build().unwrap_err().field;
+        assert_eq!(field(Rectangle { nx: 0, ..rect(Diagonal::Right) }), "nx");
+        assert_eq!(field(Rectangle { width: -1.0, ..rect(Diagonal::Right) }), "width");
+        assert_eq!(field(Rectangle { perturb: 0.3, ..rect(Diagonal::Right) }), "perturb");
+        let seg = |from, to| Rectangle {
+            interface: Some(GridSegment { from, to, tag: "c".into() }),
+            ..rect(Diagonal::Right)
+        };
+        assert_eq!(field(seg([0.0, 0.1], [1.0, 0.1])), "interface");
+        assert_eq!(field(seg([0.0, 0.0], [1.0, 0.0])), "interface");
+        assert_eq!(field(seg([0.0, 1.0 / 3.0], [1.0, 2.0 / 3.0])), "interface");
+    }
+
+    #[test]
+    fn perturbation_is_deterministic_and_keeps_sides_straight() {
+        let mut r = rect(Diagonal::Right);
+        r.perturb = 0.2;
+        let a = r.build().unwrap();
+        let b = r.build().unwrap();
+        assert_eq!(a.vertices(), b.vertices());
+        let moved = a
+            .vertices()
+            .iter()
+            .zip(rect(Diagonal::Right).build().unwrap().vertices())
+            .filter(|(p, q)| p != q)
+            .count();
+        assert_eq!(moved, 3 * 2);
+    }
+}

@@ -1,0 +1,205 @@
+//! Tent pitching: raising one vertex of the front as far as causality and progress allow.
+//!
+//! # Rule
+//! Each triangle `T` gets a time budget `B_T = s (1 - GUARD) h_T / c`, where `h_T` is its
+//! smallest altitude (its minimum width), `c` the fastest wave speed and `s` the safety factor.
+//! The pitcher keeps the invariant
+//!
+//! > (I) on every front triangle, `max tau - min tau <= B_T`.
+//!
+//! A linear function whose vertex values span `R` on a triangle of minimum width `h_T` has
+//! `|grad tau| <= R / h_T`, so (I) gives `c |grad tau| <= s (1 - GUARD) < s`: every front facet is
+//! space-like with margin. A vertex `v` that is a local minimum of the front is raised to
+//!
+//! `tau_new(v) = min(t_end, min over T in star(v) of (min over w in T, w != v of tau(w)) + B_T)`,
+//!
+//! which keeps (I) on the star and changes no other triangle.
+//!
+//! # Progress
+//! Because `v` is a local minimum, every term above is at least `tau(v) + B_T`, so each tent
+//! advances its vertex by at least `min(t_end - tau(v), min over the star of B_T) > 0`. The global
+//! minimum of the front is always a local minimum, hence a vertex can always be pitched, and the
+//! front reaches `t_end` exactly after at most `sum_v (t_end / min_star(v) B_T + 1)` tents. This
+//! holds on any valid triangulation (obtuse, strongly graded, multiply connected): only positive
+//! altitudes are used. The rule is the "range" form of the progress constraint of Ungor and
+//! Sheffer: it bounds the spread of times per triangle instead of the gradient, which is what lets
+//! a local minimum always move.
+//!
+//! Tent poles are vertical: the pole top has the same space position as its base. A tilted pole
+//! (crack alignment) changes the space position of the vertex; [`Tent`] records only times so
+//! far.
+
+use crate::front::Front;
+use crate::mesh::{Mesh, TriangleId, VertexId};
+
+/// Relative margin under the safety factor that absorbs rounding in times and gradients.
+pub const GUARD: f64 = 1e-9;
+
+/// A tent: vertex `vertex` raised from `t_old` to `t_new` (seconds). Its patch consists of one
+/// spacetime tetrahedron per triangle of the vertex star, with corners `(vertex, t_old)`,
+/// `(vertex, t_new)` and the two other triangle corners at their front times.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tent {
+    /// The pitched vertex.
+    pub vertex: VertexId,
+    /// Time at the pole's base, seconds.
+    pub t_old: f64,
+    /// Time at the pole's top, seconds.
+    pub t_new: f64,
+}
+
+/// Why a pitcher cannot be set up.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PitchError {
+    #[error("the wave speed must be positive and finite, got {0} m/s")]
+    WaveSpeed(f64),
+    #[error("the safety factor must be in (0, 1), got {0}")]
+    Safety(f64),
+    #[error("the end time must be finite, got {0} s")]
+    EndTime(f64),
+}
+
+/// Computes tent heights on a fixed mesh under the rule in the module docs.
+#[derive(Clone, Debug)]
+pub struct Pitcher {
+    budgets: Vec<f64>,
+    c_max: f64,
+    safety: f64,
+    t_end: f64,
+}
+
+impl Pitcher {
+    /// A pitcher for fastest wave speed `c_max` (m/s), safety factor `safety` in (0, 1) and end
+    /// time `t_end` (s).
+    pub fn new(mesh: &Mesh, c_max: f64, safety: f64, t_end: f64) -> Result<Self, PitchError> {
+        if !(c_max.is_finite() && c_max > 0.0) {
+            return Err(PitchError::WaveSpeed(c_max));
+        }
+        if !(safety > 0.0 && safety < 1.0) {
+            return Err(PitchError::Safety(safety));
+        }
+        if !t_end.is_finite() {
+            return Err(PitchError::EndTime(t_end));
+        }
+        let scale = safety * (1.0 - GUARD) / c_max;
+        let budgets = (0..mesh.triangles().len() as TriangleId)
+            .map(|t| scale * mesh.altitudes(t).into_iter().fold(f64::INFINITY, f64::min))
+            .collect();
+        Ok(Self {
+            budgets,
+            c_max,
+            safety,
+            t_end,
+        })
+    }
+
+    /// The end time, seconds.
+    pub fn t_end(&self) -> f64 {
+        self.t_end
+    }
+
+    /// The fastest wave speed the front is causal for, m/s.
+    pub fn c_max(&self) -> f64 {
+        self.c_max
+    }
+
+    /// The safety factor `s`: every front facet has `c_max |grad tau| < s`.
+    pub fn safety(&self) -> f64 {
+        self.safety
+    }
+
+    /// Time budget `B_T` of triangle `t`, seconds.
+    pub fn budget(&self, t: TriangleId) -> f64 {
+        self.budgets[t as usize]
+    }
+
+    /// The pole-top time for vertex `v` on the front `times`, or `None` when `v` is not a local
+    /// minimum or has reached the end time.
+    pub fn pole_height(&self, mesh: &Mesh, times: &[f64], v: VertexId) -> Option<f64> {
+        let t_v = times[v as usize];
+        if t_v >= self.t_end || mesh.vertex_neighbors(v).iter().any(|&w| times[w as usize] < t_v) {
+            return None;
+        }
+        let mut top = self.t_end;
+        for &t in mesh.vertex_triangles(v) {
+            let others = mesh.triangles()[t as usize]
+                .into_iter()
+                .filter(|&w| w != v)
+                .map(|w| times[w as usize])
+                .fold(f64::INFINITY, f64::min);
+            top = top.min(others + self.budgets[t as usize]);
+        }
+        Some(top)
+    }
+
+    /// Pitches a tent at `v` and advances the front, or returns `None` (front unchanged) when `v`
+    /// is not a local minimum below the end time.
+    pub fn pitch(&self, mesh: &Mesh, front: &mut Front, v: VertexId) -> Option<Tent> {
+        let t_new = self.pole_height(mesh, front.times(), v)?;
+        let tent = Tent {
+            vertex: v,
+            t_old: front.time(v),
+            t_new,
+        };
+        front.set_time(v, t_new);
+        Some(tent)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rectangle::{Diagonal, Rectangle};
+
+    fn mesh() -> Mesh {
+        Rectangle {
+            width: 1.0,
+            height: 1.0,
+            nx: 2,
+            ny: 2,
+            diagonal: Diagonal::Right,
+            interface: None,
+            perturb: 0.0,
+            seed: 0,
+        }
+        .build()
+        .unwrap()
+    }
+
+    #[test]
+    fn first_tent_reaches_the_slope_bound() {
+        let m = mesh();
+        let p = Pitcher::new(&m, 2.0, 0.5, 10.0).unwrap();
+        let mut front = Front::flat(m.vertices().len(), 0.0);
+        let tent = p.pitch(&m, &mut front, 4).unwrap();
+        let h_min = 0.5 / 2f64.sqrt();
+        assert!((tent.t_new - 0.5 * h_min / 2.0).abs() < 1e-9 * tent.t_new);
+        let ratio = m
+            .vertex_triangles(4)
+            .iter()
+            .map(|&t| front.slope(&m, t) * p.c_max())
+            .fold(0.0, f64::max);
+        assert!(ratio < 0.5 && ratio > 0.5 * (1.0 - 1e-6), "{ratio}");
+    }
+
+    #[test]
+    fn only_local_minima_below_the_end_are_pitched() {
+        let m = mesh();
+        let p = Pitcher::new(&m, 1.0, 0.9, 0.01).unwrap();
+        let mut front = Front::flat(m.vertices().len(), 0.0);
+        let tent = p.pitch(&m, &mut front, 4).unwrap();
+        assert_eq!(tent.t_new, 0.01, "capped exactly at the end time");
+        assert!(p.pitch(&m, &mut front, 4).is_none(), "at the end time");
+        assert!(p.pitch(&m, &mut front, 0).is_some());
+        assert!(p.pitch(&m, &mut front, 0).is_none(), "neighbour 1 is earlier");
+        assert!(p.pitch(&m, &mut front, 1).is_some());
+    }
+
+    #[test]
+    fn rejects_bad_parameters() {
+        let m = mesh();
+        assert_eq!(Pitcher::new(&m, 0.0, 0.9, 1.0).unwrap_err(), PitchError::WaveSpeed(0.0));
+        assert_eq!(Pitcher::new(&m, 1.0, 1.0, 1.0).unwrap_err(), PitchError::Safety(1.0));
+        assert!(Pitcher::new(&m, 1.0, 0.9, f64::NAN).is_err());
+    }
+}
