@@ -1,1 +1,15 @@
+//! The engine: configuration, problem setup, the run loop wiring mesh, solver and scheduler, and
+//! the outputs of a run.
 
+pub mod config;
+pub mod error;
+pub mod output;
+pub mod problem;
+pub mod run;
+pub mod spacetime;
+
+pub use config::{Config, ConfigError, LoadedConfig};
+pub use error::EngineError;
+pub use problem::Problem;
+pub use run::{MeshSummary, RunOptions, mesh_job, pitch_to_end};
+pub use spacetime::SpacetimeMesh;

@@ -315,7 +315,12 @@ impl Mesh {
             .filter_map(|e| e.tag.map(|t| (e.vertices, t)))
             .collect();
         let vertices = self.vertices.iter().map(|&p| f(p)).collect();
-        Mesh::new(vertices, self.triangles.clone(), self.tag_names.clone(), &tagged)
+        Mesh::new(
+            vertices,
+            self.triangles.clone(),
+            self.tag_names.clone(),
+            &tagged,
+        )
     }
 
     /// Shortest and longest edge lengths of the mesh, in metres.
@@ -337,7 +342,13 @@ mod tests {
 
     fn square() -> Mesh {
         let v = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-        Mesh::new(v, vec![[0, 1, 2], [0, 3, 2]], vec!["diag".into()], &[([0, 2], 0)]).unwrap()
+        Mesh::new(
+            v,
+            vec![[0, 1, 2], [0, 3, 2]],
+            vec!["diag".into()],
+            &[([0, 2], 0)],
+        )
+        .unwrap()
     }
 
     #[test]
@@ -384,7 +395,13 @@ mod tests {
         let m = square();
         assert!((m.edge_length_range().1 - 2f64.sqrt()).abs() < 1e-15);
         assert_eq!(m.edge_length_range().0, 1.0);
-        assert!((m.angles(0).iter().cloned().fold(0.0, f64::max) - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
-        assert!((m.altitudes(0).iter().cloned().fold(f64::INFINITY, f64::min) - 0.5f64.sqrt()).abs() < 1e-15);
+        assert!(
+            (m.angles(0).iter().cloned().fold(0.0, f64::max) - std::f64::consts::FRAC_PI_2).abs()
+                < 1e-15
+        );
+        assert!(
+            (m.altitudes(0).iter().cloned().fold(f64::INFINITY, f64::min) - 0.5f64.sqrt()).abs()
+                < 1e-15
+        );
     }
 }

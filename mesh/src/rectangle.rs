@@ -1,7 +1,7 @@
 //! Structured triangulations of a rectangle `[0, width] x [0, height]`.
 
-use crate::mesh::{Mesh, MeshError, TagId, VertexId};
 use crate::geometry::{self, Point};
+use crate::mesh::{Mesh, MeshError, TagId, VertexId};
 
 /// How each grid cell is split into two triangles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,7 +74,10 @@ impl Rectangle {
     pub fn build(&self) -> Result<Mesh, RectangleError> {
         for (field, value) in [("width", self.width), ("height", self.height)] {
             if !(value.is_finite() && value > 0.0) {
-                return Err(invalid(field, format!("must be a positive length, got {value}")));
+                return Err(invalid(
+                    field,
+                    format!("must be a positive length, got {value}"),
+                ));
             }
         }
         for (field, n) in [("nx", self.nx), ("ny", self.ny)] {
@@ -87,7 +90,10 @@ impl Rectangle {
             return Err(invalid("nx", "too many cells for 32-bit indices"));
         }
         if !(0.0..0.25).contains(&self.perturb) {
-            return Err(invalid("perturb", format!("must be in [0, 0.25), got {}", self.perturb)));
+            return Err(invalid(
+                "perturb",
+                format!("must be in [0, 0.25), got {}", self.perturb),
+            ));
         }
         let (nx, ny) = (self.nx, self.ny);
         let dx = self.width / nx as f64;
@@ -129,7 +135,10 @@ impl Rectangle {
         let mut pinned = vec![false; vertices.len()];
         if let Some(seg) = &self.interface {
             if SIDES.contains(&seg.tag.as_str()) {
-                return Err(invalid("interface", format!("tag `{}` is a side name", seg.tag)));
+                return Err(invalid(
+                    "interface",
+                    format!("tag `{}` is a side name", seg.tag),
+                ));
             }
             let node = |p: Point| -> Result<(u32, u32), RectangleError> {
                 let (fi, fj) = (p[0] / dx, p[1] / dy);
@@ -157,7 +166,10 @@ impl Rectangle {
                 }
                 (a.1.min(b.1)..=a.1.max(b.1)).map(|j| (a.0, j)).collect()
             } else {
-                return Err(invalid("interface", "the segment must be horizontal or vertical"));
+                return Err(invalid(
+                    "interface",
+                    "the segment must be horizontal or vertical",
+                ));
             };
             let tag = tag_names.len() as TagId;
             tag_names.push(seg.tag.clone());
@@ -236,7 +248,12 @@ mod tests {
             for (tag, count) in [(0, 3), (1, 3), (2, 4), (3, 4)] {
                 let n = m.edges().iter().filter(|e| e.tag == Some(tag)).count();
                 assert_eq!(n, count, "{d:?} side {}", SIDES[tag as usize]);
-                assert!(m.edges().iter().filter(|e| e.tag == Some(tag)).all(|e| e.is_boundary()));
+                assert!(
+                    m.edges()
+                        .iter()
+                        .filter(|e| e.tag == Some(tag))
+                        .all(|e| e.is_boundary())
+                );
             }
             assert_eq!(m.edges().iter().filter(|e| e.is_boundary()).count(), 14);
         }
@@ -266,11 +283,33 @@ mod tests {
     #[test]
     fn rejects_bad_parameters() {
         let field = |r: Rectangle| r.build().unwrap_err().field;
-        assert_eq!(field(Rectangle { nx: 0, ..rect(Diagonal::Right) }), "nx");
-        assert_eq!(field(Rectangle { width: -1.0, ..rect(Diagonal::Right) }), "width");
-        assert_eq!(field(Rectangle { perturb: 0.3, ..rect(Diagonal::Right) }), "perturb");
+        assert_eq!(
+            field(Rectangle {
+                nx: 0,
+                ..rect(Diagonal::Right)
+            }),
+            "nx"
+        );
+        assert_eq!(
+            field(Rectangle {
+                width: -1.0,
+                ..rect(Diagonal::Right)
+            }),
+            "width"
+        );
+        assert_eq!(
+            field(Rectangle {
+                perturb: 0.3,
+                ..rect(Diagonal::Right)
+            }),
+            "perturb"
+        );
         let seg = |from, to| Rectangle {
-            interface: Some(GridSegment { from, to, tag: "c".into() }),
+            interface: Some(GridSegment {
+                from,
+                to,
+                tag: "c".into(),
+            }),
             ..rect(Diagonal::Right)
         };
         assert_eq!(field(seg([0.0, 0.1], [1.0, 0.1])), "interface");

@@ -117,7 +117,12 @@ impl Pitcher {
     /// minimum or has reached the end time.
     pub fn pole_height(&self, mesh: &Mesh, times: &[f64], v: VertexId) -> Option<f64> {
         let t_v = times[v as usize];
-        if t_v >= self.t_end || mesh.vertex_neighbors(v).iter().any(|&w| times[w as usize] < t_v) {
+        if t_v >= self.t_end
+            || mesh
+                .vertex_neighbors(v)
+                .iter()
+                .any(|&w| times[w as usize] < t_v)
+        {
             return None;
         }
         let mut top = self.t_end;
@@ -191,15 +196,24 @@ mod tests {
         assert_eq!(tent.t_new, 0.01, "capped exactly at the end time");
         assert!(p.pitch(&m, &mut front, 4).is_none(), "at the end time");
         assert!(p.pitch(&m, &mut front, 0).is_some());
-        assert!(p.pitch(&m, &mut front, 0).is_none(), "neighbour 1 is earlier");
+        assert!(
+            p.pitch(&m, &mut front, 0).is_none(),
+            "neighbour 1 is earlier"
+        );
         assert!(p.pitch(&m, &mut front, 1).is_some());
     }
 
     #[test]
     fn rejects_bad_parameters() {
         let m = mesh();
-        assert_eq!(Pitcher::new(&m, 0.0, 0.9, 1.0).unwrap_err(), PitchError::WaveSpeed(0.0));
-        assert_eq!(Pitcher::new(&m, 1.0, 1.0, 1.0).unwrap_err(), PitchError::Safety(1.0));
+        assert_eq!(
+            Pitcher::new(&m, 0.0, 0.9, 1.0).unwrap_err(),
+            PitchError::WaveSpeed(0.0)
+        );
+        assert_eq!(
+            Pitcher::new(&m, 1.0, 1.0, 1.0).unwrap_err(),
+            PitchError::Safety(1.0)
+        );
         assert!(Pitcher::new(&m, 1.0, 0.9, f64::NAN).is_err());
     }
 }

@@ -1,0 +1,525 @@
+//! The TOML run configuration: schema, command-line overrides and load-time validation.
+//!
+//! Every key is documented in `docs/config.md`. Units are SI. Unknown keys, wrong types and
+//! unphysical values are rejected with an error naming the file and the key.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use sdg_solver::{Material, Plane};
+
+/// A configuration error: where it came from, which key, and why.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("{file}: {}{reason}", key.as_ref().map(|k| format!("{k}: ")).unwrap_or_default())]
+pub struct ConfigError {
+    /// The config file, or `--set KEY=VALUE` for an override.
+    pub file: String,
+    /// Dotted key path, when the error belongs to one key.
+    pub key: Option<String>,
+    /// What is wrong.
+    pub reason: String,
+}
+
+/// The complete configuration of a run.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// The space mesh at the initial time.
+    pub mesh: MeshConfig,
+    /// The bulk material.
+    pub material: MaterialConfig,
+    /// Time span.
+    pub time: TimeConfig,
+    /// Tent pitching.
+    #[serde(default)]
+    pub pitch: PitchConfig,
+    /// Outputs.
+    #[serde(default)]
+    pub output: OutputConfig,
+}
+
+/// Where the space mesh comes from.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshKind {
+    /// A structured rectangle mesh (`width`, `height`, `nx`, `ny`, ...).
+    Rectangle,
+    /// A Gmsh MSH 4.1 ASCII file (`path`).
+    Gmsh,
+}
+
+/// Cell split pattern of a rectangle mesh.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum DiagonalName {
+    /// Every cell split along `/`.
+    Right,
+    /// Every cell split along `\`.
+    Left,
+    /// Alternating `/` and `\`.
+    #[default]
+    Alternate,
+}
+
+/// `[mesh]`: the space triangulation. Rectangle keys and `path` are exclusive by `kind`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MeshConfig {
+    /// `"rectangle"` or `"gmsh"`.
+    pub kind: MeshKind,
+    /// Gmsh file, relative to the config file's folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathBuf>,
+    /// Rectangle extent in x, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
+    /// Rectangle extent in y, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
+    /// Rectangle cells along x.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nx: Option<u32>,
+    /// Rectangle cells along y.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ny: Option<u32>,
+    /// Rectangle cell split pattern (default `"alternate"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diagonal: Option<DiagonalName>,
+    /// Random displacement of interior rectangle vertices, fraction of a cell, in [0, 0.25).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perturb: Option<f64>,
+    /// Seed of the perturbation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// An interface segment on rectangle grid lines.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interface: Option<InterfaceConfig>,
+}
+
+/// `[mesh.interface]`: a straight interior segment on grid lines, tagged as an interface.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InterfaceConfig {
+    /// One end `[x, y]`, m.
+    pub from: [f64; 2],
+    /// The other end `[x, y]`, m.
+    pub to: [f64; 2],
+    /// Tag name (default `"interface"`).
+    #[serde(default = "default_interface_tag")]
+    pub tag: String,
+}
+
+fn default_interface_tag() -> String {
+    "interface".into()
+}
+
+/// The 2D mode of elasticity.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum PlaneName {
+    /// Plane strain.
+    Strain,
+    /// Plane stress.
+    Stress,
+    /// Anti-plane shear.
+    Antiplane,
+}
+
+/// `[material]`: an isotropic linear elastic material.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialConfig {
+    /// Young's modulus, Pa.
+    pub young: f64,
+    /// Poisson ratio, in (-1, 0.5).
+    pub poisson: f64,
+    /// Mass density, kg/m^3.
+    pub density: f64,
+    /// `"strain"`, `"stress"` or `"antiplane"`.
+    pub plane: PlaneName,
+}
+
+/// `[time]`: the simulated span, starting at 0.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TimeConfig {
+    /// End time, s.
+    pub end: f64,
+}
+
+/// `[pitch]`: tent pitching.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PitchConfig {
+    /// Every front facet keeps `c_max |grad tau| < safety`, in (0, 1). Default 0.9.
+    #[serde(default = "default_safety")]
+    pub safety: f64,
+}
+
+fn default_safety() -> f64 {
+    0.9
+}
+
+impl Default for PitchConfig {
+    fn default() -> Self {
+        Self {
+            safety: default_safety(),
+        }
+    }
+}
+
+/// `[output]`: what is written where.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OutputConfig {
+    /// Output folder, relative to the working directory. Default `out`.
+    #[serde(default = "default_output_dir")]
+    pub dir: PathBuf,
+    /// Write the spacetime mesh as `spacetime.vtu` (small runs only). Default false.
+    #[serde(default)]
+    pub spacetime_mesh: bool,
+}
+
+fn default_output_dir() -> PathBuf {
+    PathBuf::from("out")
+}
+
+impl Default for OutputConfig {
+    fn default() -> Self {
+        Self {
+            dir: default_output_dir(),
+            spacetime_mesh: false,
+        }
+    }
+}
+
+/// A loaded, validated configuration and where it came from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedConfig {
+    /// The validated configuration with overrides applied.
+    pub config: Config,
+    /// The config file.
+    pub file: PathBuf,
+}
+
+impl LoadedConfig {
+    /// Reads `file`, applies `overrides` (`key.path=value`, in order) and validates.
+    pub fn load(file: &Path, overrides: &[String]) -> Result<Self, ConfigError> {
+        let source = file.display().to_string();
+        let text = std::fs::read_to_string(file).map_err(|e| ConfigError {
+            file: source.clone(),
+            key: None,
+            reason: format!("cannot read: {e}"),
+        })?;
+        let config = Config::parse(&text, &source, overrides)?;
+        Ok(Self {
+            config,
+            file: file.to_path_buf(),
+        })
+    }
+
+    /// Resolves a path given in the config relative to the config file's folder.
+    pub fn resolve(&self, path: &Path) -> PathBuf {
+        match self.file.parent() {
+            Some(dir) if path.is_relative() => dir.join(path),
+            _ => path.to_path_buf(),
+        }
+    }
+}
+
+impl Config {
+    /// Parses TOML `text` (named `source` in errors), applies `overrides` and validates.
+    pub fn parse(text: &str, source: &str, overrides: &[String]) -> Result<Self, ConfigError> {
+        let mut table: toml::Table = toml::from_str(text).map_err(|e| ConfigError {
+            file: source.to_string(),
+            key: None,
+            reason: format!("invalid TOML: {}", e.message())
+                .trim_end()
+                .to_string()
+                + &line_of(text, e.span()),
+        })?;
+        for spec in overrides {
+            apply_override(&mut table, spec)?;
+        }
+        let config: Config =
+            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+                let path = e.path().to_string();
+                ConfigError {
+                    file: source.to_string(),
+                    key: (path != ".").then_some(path),
+                    reason: e.into_inner().message().to_string(),
+                }
+            })?;
+        config.validate().map_err(|(key, reason)| ConfigError {
+            file: source.to_string(),
+            key: Some(key),
+            reason,
+        })?;
+        Ok(config)
+    }
+
+    /// The material, validated.
+    pub fn material(&self) -> Result<Material, ConfigError> {
+        let m = &self.material;
+        let plane = match m.plane {
+            PlaneName::Strain => Plane::Strain,
+            PlaneName::Stress => Plane::Stress,
+            PlaneName::Antiplane => Plane::Antiplane,
+        };
+        Material::new(m.young, m.poisson, m.density, plane).map_err(|e| ConfigError {
+            file: String::new(),
+            key: Some(format!("material.{}", e.field())),
+            reason: e
+                .to_string()
+                .split_once(": ")
+                .map_or(e.to_string(), |(_, r)| r.to_string()),
+        })
+    }
+
+    /// Checks values that the schema's types cannot: returns `(key, reason)`.
+    fn validate(&self) -> Result<(), (String, String)> {
+        let fail = |key: &str, reason: String| Err((key.to_string(), reason));
+        self.material()
+            .map_err(|e| (e.key.unwrap_or_default(), e.reason))?;
+        let end = self.time.end;
+        if !(end.is_finite() && end > 0.0) {
+            return fail(
+                "time.end",
+                format!("must be a positive time in s, got {end}"),
+            );
+        }
+        let safety = self.pitch.safety;
+        if !(safety > 0.0 && safety < 1.0) {
+            return fail(
+                "pitch.safety",
+                format!(
+                    "must be in (0, 1): a front facet at or above 1 is not causal, got {safety}"
+                ),
+            );
+        }
+        let m = &self.mesh;
+        let rectangle_keys = [
+            ("mesh.width", m.width.is_some()),
+            ("mesh.height", m.height.is_some()),
+            ("mesh.nx", m.nx.is_some()),
+            ("mesh.ny", m.ny.is_some()),
+            ("mesh.diagonal", m.diagonal.is_some()),
+            ("mesh.perturb", m.perturb.is_some()),
+            ("mesh.seed", m.seed.is_some()),
+            ("mesh.interface", m.interface.is_some()),
+        ];
+        match m.kind {
+            MeshKind::Rectangle => {
+                if m.path.is_some() {
+                    return fail("mesh.path", "is only used with mesh.kind = \"gmsh\"".into());
+                }
+                for key in ["mesh.width", "mesh.height", "mesh.nx", "mesh.ny"] {
+                    if !rectangle_keys.iter().any(|&(k, set)| k == key && set) {
+                        return fail(key, "is required with mesh.kind = \"rectangle\"".into());
+                    }
+                }
+                self.rectangle()
+                    .build()
+                    .map(drop)
+                    .or_else(|e| fail(&format!("mesh.{}", e.field), e.reason))?;
+            }
+            MeshKind::Gmsh => {
+                if m.path.is_none() {
+                    return fail("mesh.path", "is required with mesh.kind = \"gmsh\"".into());
+                }
+                if let Some((key, _)) = rectangle_keys.iter().find(|(_, set)| *set) {
+                    return fail(key, "is only used with mesh.kind = \"rectangle\"".into());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The rectangle generator's parameters; missing keys read as zero (validation rejects them).
+    pub fn rectangle(&self) -> sdg_mesh::Rectangle {
+        let m = &self.mesh;
+        sdg_mesh::Rectangle {
+            width: m.width.unwrap_or(0.0),
+            height: m.height.unwrap_or(0.0),
+            nx: m.nx.unwrap_or(0),
+            ny: m.ny.unwrap_or(0),
+            diagonal: match m.diagonal.unwrap_or_default() {
+                DiagonalName::Right => sdg_mesh::Diagonal::Right,
+                DiagonalName::Left => sdg_mesh::Diagonal::Left,
+                DiagonalName::Alternate => sdg_mesh::Diagonal::Alternate,
+            },
+            interface: m.interface.as_ref().map(|i| sdg_mesh::GridSegment {
+                from: i.from,
+                to: i.to,
+                tag: i.tag.clone(),
+            }),
+            perturb: m.perturb.unwrap_or(0.0),
+            seed: m.seed.unwrap_or(0),
+        }
+    }
+}
+
+/// ` (line N)` for a TOML error span, or nothing.
+fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> String {
+    span.map(|s| {
+        let line = text[..s.start.min(text.len())].matches('\n').count() + 1;
+        format!(" (line {line})")
+    })
+    .unwrap_or_default()
+}
+
+/// Applies one `key.path=value` override. The value is read as a TOML value (`3`, `1e-6`,
+/// `true`, `"text"`, `[0.0, 1.0]`), or as a string when it is not one; the schema then checks
+/// its type like any other key.
+fn apply_override(table: &mut toml::Table, spec: &str) -> Result<(), ConfigError> {
+    let source = format!("--set {spec}");
+    let err = |key: Option<String>, reason: &str| ConfigError {
+        file: source.clone(),
+        key,
+        reason: reason.to_string(),
+    };
+    let (path, raw) = spec
+        .split_once('=')
+        .ok_or_else(|| err(None, "expected KEY=VALUE"))?;
+    let path = path.trim();
+    let keys: Vec<&str> = path.split('.').collect();
+    if keys.iter().any(|k| k.is_empty()) {
+        return Err(err(None, "the key path has an empty segment"));
+    }
+    let value = toml::from_str::<toml::Table>(&format!("v = {raw}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(raw.to_string()));
+    let (last, parents) = keys.split_last().expect("split yields at least one key");
+    let mut node = table;
+    for (i, key) in parents.iter().enumerate() {
+        let entry = node
+            .entry(key.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        node = entry
+            .as_table_mut()
+            .ok_or_else(|| err(Some(keys[..=i].join(".")), "is a value, not a table"))?;
+    }
+    node.insert(last.to_string(), value);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = r#"
+[mesh]
+kind = "rectangle"
+width = 0.016
+height = 0.01
+nx = 16
+ny = 10
+
+[material]
+young = 3.24e9
+poisson = 0.35
+density = 1190.0
+plane = "strain"
+
+[time]
+end = 1e-6
+"#;
+
+    fn parse(text: &str, overrides: &[&str]) -> Result<Config, ConfigError> {
+        let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        Config::parse(text, "test.toml", &o)
+    }
+
+    fn key_of(text: &str, overrides: &[&str]) -> Option<String> {
+        parse(text, overrides).unwrap_err().key
+    }
+
+    #[test]
+    fn defaults_and_overrides() {
+        let c = parse(BASE, &[]).unwrap();
+        assert_eq!(c.pitch.safety, 0.9);
+        assert_eq!(c.output.dir, PathBuf::from("out"));
+        let c = parse(
+            BASE,
+            &[
+                "mesh.nx=32",
+                "pitch.safety=0.5",
+                "output.dir=runs/a",
+                "mesh.diagonal=right",
+            ],
+        )
+        .unwrap();
+        assert_eq!(c.mesh.nx, Some(32));
+        assert_eq!(c.pitch.safety, 0.5);
+        assert_eq!(c.output.dir, PathBuf::from("runs/a"));
+        assert_eq!(c.mesh.diagonal, Some(DiagonalName::Right));
+        let c = parse(
+            BASE,
+            &[
+                "mesh.interface.from=[0.0, 0.005]",
+                "mesh.interface.to=[0.002, 0.005]",
+            ],
+        )
+        .unwrap();
+        assert_eq!(c.mesh.interface.unwrap().tag, "interface");
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        assert_eq!(key_of(BASE, &["mesh.nx=abc"]).as_deref(), Some("mesh.nx"));
+        assert_eq!(key_of(BASE, &["mesh.nx=1.5"]).as_deref(), Some("mesh.nx"));
+        assert_eq!(
+            key_of(BASE, &["material.density=-1"]).as_deref(),
+            Some("material.density")
+        );
+        assert_eq!(
+            key_of(BASE, &["material.poisson=0.5"]).as_deref(),
+            Some("material.poisson")
+        );
+        assert_eq!(
+            key_of(BASE, &["pitch.safety=1.0"]).as_deref(),
+            Some("pitch.safety")
+        );
+        assert_eq!(key_of(BASE, &["time.end=0"]).as_deref(), Some("time.end"));
+        assert_eq!(
+            key_of(BASE, &["mesh.path=a.msh"]).as_deref(),
+            Some("mesh.path")
+        );
+        assert_eq!(
+            key_of(BASE, &["mesh.kind=gmsh", "mesh.path=a.msh"]).as_deref(),
+            Some("mesh.width")
+        );
+        assert_eq!(
+            key_of(BASE, &["mesh.perturb=0.3"]).as_deref(),
+            Some("mesh.perturb")
+        );
+        assert_eq!(
+            key_of(BASE, &["mesh.kind=tetra"]).as_deref(),
+            Some("mesh.kind")
+        );
+        let unknown = parse(BASE, &["material.colour=1"]).unwrap_err();
+        assert!(unknown.reason.contains("colour"), "{unknown}");
+        let missing = parse(&BASE.replace("nx = 16\n", ""), &[]).unwrap_err();
+        assert_eq!(missing.key.as_deref(), Some("mesh.nx"));
+        let e = parse(BASE, &["mesh.nx.deep=1"]).unwrap_err();
+        assert_eq!(
+            (e.file.as_str(), e.key.as_deref()),
+            ("--set mesh.nx.deep=1", Some("mesh.nx"))
+        );
+        assert!(
+            parse(BASE, &["novalue"])
+                .unwrap_err()
+                .reason
+                .contains("KEY=VALUE")
+        );
+    }
+
+    #[test]
+    fn syntax_errors_give_the_line() {
+        let e = parse(&format!("{BASE}\n[time\n"), &[]).unwrap_err();
+        assert!(e.reason.contains("line 18"), "{e}");
+        assert_eq!(e.to_string().split(':').next(), Some("test.toml"));
+    }
+}

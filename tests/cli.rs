@@ -1,0 +1,191 @@
+//! The `sdg` command line: outputs, overrides, and exit codes with clear messages on bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn sdg(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sdg"))
+        .args(args)
+        .output()
+        .expect("the sdg binary runs")
+}
+
+fn repo(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+const CONFIG: &str = r#"
+[mesh]
+kind = "rectangle"
+width = 0.004
+height = 0.002
+nx = 8
+ny = 4
+
+[material]
+young = 3.24e9
+poisson = 0.35
+density = 1190.0
+plane = "strain"
+
+[time]
+end = 1e-7
+"#;
+
+/// Writes `text` as a config in a fresh folder; returns the folder and the config path.
+fn config_file(text: &str) -> (tempfile::TempDir, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("case.toml");
+    std::fs::write(&path, text).unwrap();
+    let path = path.to_str().unwrap().to_string();
+    (dir, path)
+}
+
+/// Runs `args`, expects exit code 2 and a message containing every one of `needles`.
+fn expect_input_error(args: &[&str], needles: &[&str]) {
+    let out = sdg(args);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "{args:?}: `{n}` not in: {err}");
+    }
+}
+
+#[test]
+fn mesh_writes_summary_and_spacetime_mesh() {
+    let (dir, config) = config_file(CONFIG);
+    let out_dir = dir.path().join("out");
+    let out = sdg(&[
+        "mesh",
+        &config,
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--set",
+        "output.spacetime_mesh=true",
+        "--set",
+        "mesh.nx=16",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.stdout.is_empty(), "--quiet prints nothing");
+    let text = std::fs::read_to_string(out_dir.join("summary.json")).unwrap();
+    let s: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(s["final_time"].as_f64(), Some(1e-7));
+    assert_eq!(
+        s["vertices"].as_u64(),
+        Some(17 * 5),
+        "the override took effect"
+    );
+    let ratio = s["max_slope_ratio"].as_f64().unwrap();
+    assert!(ratio > 0.0 && ratio < 0.9, "{ratio}");
+    assert!(s["tents"].as_u64().unwrap() > 0);
+    assert!(s["tetrahedra"].as_u64().unwrap() > s["tents"].as_u64().unwrap());
+    assert!(s["wall_time_s"].as_f64().is_some() && s["threads"].as_u64() == Some(1));
+    let vtu = std::fs::read_to_string(out_dir.join("spacetime.vtu")).unwrap();
+    let cells = format!("NumberOfCells=\"{}\"", s["tetrahedra"]);
+    assert!(vtu.contains(&cells));
+}
+
+#[test]
+fn validate_accepts_the_shipped_configs() {
+    for entry in std::fs::read_dir(repo("configs")).unwrap() {
+        let path = entry.unwrap().path();
+        let out = sdg(&["validate", path.to_str().unwrap()]);
+        assert!(out.status.success(), "{}: {}", path.display(), stderr(&out));
+    }
+}
+
+#[test]
+fn malformed_config() {
+    let (_dir, config) = config_file(&format!("{CONFIG}\n[pitch\nsafety = 0.5\n"));
+    expect_input_error(
+        &["mesh", &config],
+        &["case.toml", "invalid TOML", "line 18"],
+    );
+}
+
+#[test]
+fn unknown_key() {
+    let (_dir, config) = config_file(&CONFIG.replace("[time]", "[time]\nstart = 0.0"));
+    expect_input_error(
+        &["validate", &config],
+        &["case.toml", "time", "unknown field `start`"],
+    );
+    let (_dir, config) = config_file(CONFIG);
+    expect_input_error(&["mesh", &config, "--set", "pitch.speed=2"], &["speed"]);
+}
+
+#[test]
+fn negative_density() {
+    let (_dir, config) = config_file(&CONFIG.replace("1190.0", "-1190.0"));
+    expect_input_error(
+        &["mesh", &config],
+        &["case.toml", "material.density", "positive"],
+    );
+}
+
+#[test]
+fn poisson_ratio_at_or_above_one_half() {
+    let (_dir, config) = config_file(CONFIG);
+    for nu in ["0.5", "0.7"] {
+        let set = format!("material.poisson={nu}");
+        expect_input_error(
+            &["mesh", &config, "--set", &set],
+            &["material.poisson", "(-1, 0.5)"],
+        );
+    }
+}
+
+#[test]
+fn non_causal_safety_factor() {
+    let (_dir, config) = config_file(CONFIG);
+    expect_input_error(
+        &["mesh", &config, "--set", "pitch.safety=1.2"],
+        &["pitch.safety"],
+    );
+}
+
+#[test]
+fn wrong_type_in_an_override() {
+    let (_dir, config) = config_file(CONFIG);
+    expect_input_error(
+        &["mesh", &config, "--set", "mesh.nx=many"],
+        &["mesh.nx", "many"],
+    );
+}
+
+#[test]
+fn truncated_gmsh_file() {
+    let msh = repo("tests/data/truncated.msh");
+    let text = CONFIG
+        .replace(
+            "kind = \"rectangle\"",
+            &format!("kind = \"gmsh\"\npath = {:?}", msh),
+        )
+        .replace("width = 0.004\nheight = 0.002\nnx = 8\nny = 4\n", "");
+    let (_dir, config) = config_file(&text);
+    expect_input_error(&["mesh", &config], &["truncated.msh:"]);
+}
+
+#[test]
+fn missing_config_file_and_bad_arguments() {
+    expect_input_error(
+        &["mesh", "no/such/file.toml"],
+        &["no/such/file.toml", "cannot read"],
+    );
+    expect_input_error(&["mesh"], &["CONFIG"]);
+    expect_input_error(&["mesh", "x.toml", "--threads", "0"], &["--threads"]);
+}
+
+#[test]
+fn run_without_a_solver_is_a_runtime_failure() {
+    let (_dir, config) = config_file(CONFIG);
+    let out = sdg(&["run", &config]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("sdg mesh"));
+}
