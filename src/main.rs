@@ -86,7 +86,7 @@ fn execute(cli: &Cli) -> Result<(), EngineError> {
             let (summary, dir) = sdg_engine::mesh_job(&problem, &options)?;
             if !cli.quiet {
                 println!(
-                    "{} tents, {} tetrahedra to t = {} s, max slope ratio {:.6} (safety {}), \
+                    "{} tents, {} tetrahedra to t = {} s, max slope ratio {} (safety {}), \
                      {:.3} s; outputs in {}",
                     summary.tents,
                     summary.tetrahedra,
