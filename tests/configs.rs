@@ -11,7 +11,9 @@ const EXPECTED: [(&str, u64, u64); 2] = [
 ];
 
 fn run_mesh(config: &str, out: &Path) -> serde_json::Value {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(config);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(config);
     let status = Command::new(env!("CARGO_BIN_EXE_sdg"))
         .args(["mesh", path.to_str().unwrap(), "--quiet", "--output"])
         .arg(out)
@@ -26,7 +28,11 @@ fn shipped_configs_match_stored_results() {
     let shipped = std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs"))
         .unwrap()
         .count();
-    assert_eq!(shipped, EXPECTED.len(), "every shipped config has stored results");
+    assert_eq!(
+        shipped,
+        EXPECTED.len(),
+        "every shipped config has stored results"
+    );
     for (config, tents, tetrahedra) in EXPECTED {
         let dir = tempfile::tempdir().unwrap();
         let s = run_mesh(config, dir.path());
@@ -60,9 +66,19 @@ fn spacetime_mesh_opens_in_meshio() {
         .arg(dir.path().join("spacetime.vtu"))
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8(out.stdout).unwrap();
-    let fields: Vec<f64> = text.split_whitespace().map(|w| w.parse().unwrap()).collect();
+    let fields: Vec<f64> = text
+        .split_whitespace()
+        .map(|w| w.parse().unwrap())
+        .collect();
     let points = s["vertices"].as_f64().unwrap() + s["tents"].as_f64().unwrap();
-    assert_eq!(fields, [points, s["tetrahedra"].as_f64().unwrap(), 0.0, 5e-7]);
+    assert_eq!(
+        fields,
+        [points, s["tetrahedra"].as_f64().unwrap(), 0.0, 5e-7]
+    );
 }

@@ -12,7 +12,7 @@ pub mod tent;
 
 pub use front::Front;
 pub use geometry::Point;
-pub use gmsh::{read_msh, GmshError};
+pub use gmsh::{GmshError, read_msh};
 pub use mesh::{Edge, EdgeId, Mesh, MeshError, TagId, TriangleId, VertexId};
 pub use rectangle::{Diagonal, GridSegment, Rectangle, RectangleError};
 pub use tent::{PitchError, Pitcher, Tent};
