@@ -13,13 +13,17 @@
 //!
 //! `tau_new(v) = min(t_end, min over T in star(v) of (min over w in T, w != v of tau(w)) + B_T)`,
 //!
-//! which keeps (I) on the star and changes no other triangle.
+//! which keeps (I) on the star and changes no other triangle (so does any lower time above
+//! `tau(v)`). If that would leave `v` a gap to `t_end` of less than half its step, the vertex goes
+//! to the middle of what remains instead, so that no sliver tents appear at the end time (they
+//! cost accuracy and conditioning).
 //!
 //! # Progress
 //! Because `v` is a local minimum, every term above is at least `tau(v) + B_T`, so each tent
-//! advances its vertex by at least `min(t_end - tau(v), min over the star of B_T) > 0`. The global
+//! advances its vertex by at least `min(t_end - tau(v), min over the star of B_T / 2) > 0` (the
+//! half from the end-time split, which only happens while the gap exceeds the star's budget). The global
 //! minimum of the front is always a local minimum, hence a vertex can always be pitched, and the
-//! front reaches `t_end` exactly after at most `sum_v (t_end / min_star(v) B_T + 1)` tents. This
+//! front reaches `t_end` exactly after at most `sum_v (2 t_end / min_star(v) B_T + 1)` tents. This
 //! holds on any valid triangulation (obtuse, strongly graded, multiply connected): only positive
 //! altitudes are used. The rule is the "range" form of the progress constraint of Ungor and
 //! Sheffer: it bounds the spread of times per triangle instead of the gradient, which is what lets
@@ -133,6 +137,11 @@ impl Pitcher {
                 .map(|w| times[w as usize])
                 .fold(f64::INFINITY, f64::min);
             top = top.min(others + self.budgets[t as usize]);
+        }
+        // No slivers at the end time: rather than leave a gap under half this step, split what
+        // remains into two equal steps.
+        if top < self.t_end && self.t_end - top < 0.5 * (top - t_v) {
+            top = 0.5 * (t_v + self.t_end);
         }
         Some(top)
     }

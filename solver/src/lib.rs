@@ -1,7 +1,19 @@
-//! Physics of the spacetime DG method: materials and wave speeds (the patch solver follows).
+//! Physics of the spacetime DG method for 2D linear elastodynamics: materials, the scaled
+//! first-order system, Riemann solutions, boundary data histories, exact solutions, and the
+//! patch solver.
 //!
-//! Units are SI throughout: Pa, kg/m^3, m/s.
+//! Units are SI throughout: Pa, kg/m^3, m/s, m, s.
 
+pub mod basis;
+pub mod boundary;
+pub mod element;
+pub mod exact;
+pub mod history;
 pub mod material;
+pub mod norms;
+pub mod patch;
+pub mod quadrature;
+pub mod riemann;
+pub mod system;
 
 pub use material::{Material, MaterialError, Plane};

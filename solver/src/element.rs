@@ -1,0 +1,162 @@
+//! Spacetime elements: affine tetrahedra in scaled coordinates `(x, y, tau)`, and the solution on
+//! the elements whose top faces form the current front.
+
+use crate::basis::Basis;
+
+/// A point `(x, y, tau)` in scaled spacetime, metres.
+pub type SpacePoint = [f64; 3];
+
+/// The affine map `X = P0 + J xi` of a tetrahedron from the reference tetrahedron.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Geometry {
+    origin: SpacePoint,
+    jacobian: [[f64; 3]; 3],
+    inverse: [[f64; 3]; 3],
+    det: f64,
+}
+
+impl Geometry {
+    /// The map sending reference vertices `0, e1, e2, e3` to `vertices`. The tetrahedron must
+    /// be non-degenerate.
+    pub fn new(vertices: &[SpacePoint; 4]) -> Self {
+        let p0 = vertices[0];
+        let mut j = [[0.0; 3]; 3];
+        for (col, v) in vertices[1..].iter().enumerate() {
+            for row in 0..3 {
+                j[row][col] = v[row] - p0[row];
+            }
+        }
+        let cof = |r: usize, c: usize| {
+            let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+            let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+            j[r1][c1] * j[r2][c2] - j[r1][c2] * j[r2][c1]
+        };
+        let det = j[0][0] * cof(0, 0) + j[0][1] * cof(0, 1) + j[0][2] * cof(0, 2);
+        let mut inverse = [[0.0; 3]; 3];
+        for (r, row) in inverse.iter_mut().enumerate() {
+            for (c, x) in row.iter_mut().enumerate() {
+                *x = cof(c, r) / det;
+            }
+        }
+        Self {
+            origin: p0,
+            jacobian: j,
+            inverse,
+            det,
+        }
+    }
+
+    /// Reference coordinates of the point `x`.
+    pub fn to_reference(&self, x: SpacePoint) -> [f64; 3] {
+        let d = [0, 1, 2].map(|i| x[i] - self.origin[i]);
+        self.inverse
+            .map(|row| row[0] * d[0] + row[1] * d[1] + row[2] * d[2])
+    }
+
+    /// The point with reference coordinates `xi`.
+    pub fn from_reference(&self, xi: [f64; 3]) -> SpacePoint {
+        let mut x = self.origin;
+        for (i, xi_i) in x.iter_mut().enumerate() {
+            *xi_i += (0..3).map(|c| self.jacobian[i][c] * xi[c]).sum::<f64>();
+        }
+        x
+    }
+
+    /// `d xi_r / d X_mu` as `inverse[r][mu]`.
+    pub fn inverse(&self) -> &[[f64; 3]; 3] {
+        &self.inverse
+    }
+
+    /// Determinant of `J`: six times the signed volume.
+    pub fn det(&self) -> f64 {
+        self.det
+    }
+}
+
+/// The solution on the elements under the front: per front triangle, the element whose top face
+/// it is, or nothing while the triangle still carries initial data.
+///
+/// Coefficients are stored per basis function, `width` values each (the scaled fields, then the
+/// displacement components), in the orthonormal basis of the element's reference tetrahedron.
+#[derive(Clone, Debug)]
+pub struct FrontSolution {
+    basis_len: usize,
+    width: usize,
+    solved: Vec<bool>,
+    geometry: Vec<Geometry>,
+    coefficients: Vec<f64>,
+}
+
+impl FrontSolution {
+    /// Initial data everywhere on a front of `triangles` triangles.
+    pub fn new(triangles: usize, basis_len: usize, width: usize) -> Self {
+        Self {
+            basis_len,
+            width,
+            solved: vec![false; triangles],
+            geometry: vec![Geometry::default(); triangles],
+            coefficients: vec![0.0; triangles * basis_len * width],
+        }
+    }
+
+    /// Values per basis function.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// The element under triangle `t`, if one has been solved.
+    pub fn element(&self, t: usize) -> Option<(&Geometry, &[f64])> {
+        let n = self.basis_len * self.width;
+        self.solved[t].then(|| (&self.geometry[t], &self.coefficients[t * n..(t + 1) * n]))
+    }
+
+    /// Replaces the element under triangle `t`.
+    pub fn set(&mut self, t: usize, geometry: Geometry, coefficients: &[f64]) {
+        let n = self.basis_len * self.width;
+        self.solved[t] = true;
+        self.geometry[t] = geometry;
+        self.coefficients[t * n..(t + 1) * n].copy_from_slice(coefficients);
+    }
+}
+
+/// Evaluates an element's `width` values at the point `x` into `out`; `phi` is scratch of the
+/// basis length.
+pub fn evaluate(
+    basis: &Basis,
+    geometry: &Geometry,
+    coefficients: &[f64],
+    x: SpacePoint,
+    phi: &mut [f64],
+    out: &mut [f64],
+) {
+    basis.eval(geometry.to_reference(x), phi);
+    let width = out.len();
+    out.fill(0.0);
+    for (k, &p) in phi.iter().enumerate() {
+        for (o, c) in out
+            .iter_mut()
+            .zip(&coefficients[k * width..(k + 1) * width])
+        {
+            *o += p * c;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn maps_round_trip() {
+        let g = Geometry::new(&[
+            [0.1, 0.2, 0.0],
+            [1.0, 0.3, 0.1],
+            [0.2, 1.1, 0.2],
+            [0.1, 0.2, 0.7],
+        ]);
+        let xi = [0.2, 0.3, 0.1];
+        let back = g.to_reference(g.from_reference(xi));
+        assert!((0..3).all(|i| (back[i] - xi[i]).abs() < 1e-14));
+        assert!(g.det() > 0.0);
+    }
+}

@@ -1,0 +1,76 @@
+//! Norms of the solution on a flat front, against an exact solution.
+
+use sdg_mesh::Mesh;
+
+use crate::basis::Basis;
+use crate::element::{FrontSolution, evaluate};
+use crate::exact::PlaneWave;
+use crate::quadrature;
+use crate::system::System;
+
+/// Relative L2 errors on a flat front at time `t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SliceErrors {
+    /// `||v - v_exact|| / ||v_exact||`.
+    pub velocity: f64,
+    /// `||sigma - sigma_exact|| / ||sigma_exact||` (Frobenius norm of the stored components).
+    pub stress: f64,
+}
+
+/// Relative L2 errors of velocity and stress over the domain on the flat front at time `t` (s):
+/// every front triangle is the top face of its element, evaluated there with a rule exact to
+/// degree `2 p + 4`. Triangles that still carry initial data are skipped (none at the end time).
+pub fn slice_errors(
+    mesh: &Mesh,
+    front: &FrontSolution,
+    basis: &Basis,
+    system: &System,
+    t: f64,
+    exact: &PlaneWave,
+) -> SliceErrors {
+    let rule = quadrature::triangle(2 * basis.degree() + 4);
+    let mut phi = vec![0.0; basis.len()];
+    let mut values = vec![0.0; front.width()];
+    let nv = system.displacement_components();
+    let fields = system.fields();
+    let (mut ev, mut nvel, mut es, mut ns) = (0.0, 0.0, 0.0, 0.0);
+    for (tri, corners) in mesh.triangles().iter().enumerate() {
+        let Some((geometry, coefficients)) = front.element(tri) else {
+            continue;
+        };
+        let p = corners.map(|v| mesh.vertex(v));
+        let area2 =
+            (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+        for (xi, &w) in rule.points.iter().zip(&rule.weights) {
+            let x =
+                [0, 1].map(|i| p[0][i] + xi[0] * (p[1][i] - p[0][i]) + xi[1] * (p[2][i] - p[0][i]));
+            let wa = w * area2.abs();
+            evaluate(
+                basis,
+                geometry,
+                coefficients,
+                [x[0], x[1], system.c_ref() * t],
+                &mut phi,
+                &mut values,
+            );
+            let mut q = [0.0; crate::system::MAX_FIELDS];
+            q[..fields].copy_from_slice(&values[..fields]);
+            let q = system.to_physical(&q);
+            let e = exact.state(x, t);
+            for c in 0..fields {
+                let (d, r) = ((q[c] - e[c]).powi(2), e[c].powi(2));
+                if c < nv {
+                    ev += wa * d;
+                    nvel += wa * r;
+                } else {
+                    es += wa * d;
+                    ns += wa * r;
+                }
+            }
+        }
+    }
+    SliceErrors {
+        velocity: (ev / nvel).sqrt(),
+        stress: (es / ns).sqrt(),
+    }
+}

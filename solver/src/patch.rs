@@ -1,0 +1,766 @@
+//! One tent's patch: the spacetime DG equations on its tetrahedra, assembled and solved at once.
+//!
+//! Weak form (see `docs/method.md`): on every element `K` of the patch, for every test function
+//! `phi` in the complete polynomials of degree `p`,
+//!
+//! `int_K phi . (A0 q_tau + Ax q_x + Ay q_y) + sum over faces F of int_F phi . (F* - A_n q) = 0`
+//!
+//! with the target flux `F*`: the earlier side's flux `A_n q_prev` on the inflow (bottom) face,
+//! the element's own `A_n q` on the outflow (top) face, and the Riemann flux `A_m q*` on the
+//! vertical faces, which couple the ring of elements around the tent pole, or carry the boundary
+//! data. All elements of a patch are solved by one dense LU factorization.
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::{MatMut, MatRef, Par};
+
+use sdg_mesh::{Mesh, TagId, Tent, TriangleId};
+
+use crate::basis::Basis;
+use crate::boundary::{Boundary, Condition};
+use crate::element::{FrontSolution, Geometry, SpacePoint, evaluate};
+use crate::exact::PlaneWave;
+use crate::quadrature::{self, Rule};
+use crate::riemann;
+use crate::system::{FrameTrace, MAX_FIELDS, Matrix, State, System};
+
+/// Energy terms and diagnostics of one solved element, in scaled units (physical: times the
+/// density; see [`crate::system`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ElementReport {
+    /// Energy entering through the inflow face.
+    pub energy_in: f64,
+    /// Energy leaving through the outflow face (now part of the front).
+    pub energy_out: f64,
+    /// Net power entering through the vertical faces, integrated over them.
+    pub vertical_work: f64,
+    /// Part of `vertical_work` through the domain boundary.
+    pub boundary_work: f64,
+    /// Numerical dissipation from the jumps against the targets: a sum of non-negative terms.
+    pub dissipation: f64,
+    /// Dissipation from the energy balance `energy_in - energy_out + vertical_work`; equal to
+    /// `dissipation` to round-off when the element equations hold.
+    pub dissipation_balance: f64,
+    /// `|sum over faces of the momentum target flux| / sum over faces of its magnitude`: zero to
+    /// round-off when the element balances linear momentum.
+    pub momentum_residual: f64,
+}
+
+/// Totals over one patch.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PatchReport {
+    /// Elements solved.
+    pub elements: usize,
+    /// Unknowns of the linear system.
+    pub dofs: usize,
+    /// Sum of the element reports' fields.
+    pub energy_in: f64,
+    /// See [`ElementReport::energy_out`].
+    pub energy_out: f64,
+    /// See [`ElementReport::boundary_work`].
+    pub boundary_work: f64,
+    /// See [`ElementReport::dissipation`].
+    pub dissipation: f64,
+}
+
+/// Initial data: the state at `t = 0`, a plane wave or rest.
+#[derive(Clone, Copy, Debug)]
+pub enum Initial<'a> {
+    /// Zero velocity, stress and displacement.
+    Rest,
+    /// The exact solution at `t = 0`.
+    Wave(&'a PlaneWave),
+}
+
+/// Per element of the patch being solved.
+#[derive(Clone, Copy, Debug, Default)]
+struct Slot {
+    triangle: TriangleId,
+    /// Position of the tent vertex in the triangle.
+    corner: usize,
+    vertices: [SpacePoint; 4],
+    geometry: Geometry,
+}
+
+/// A face of a tetrahedron: its corners (indices into the element's vertices) and the opposite one.
+type Face = ([usize; 3], usize);
+const BOTTOM: Face = ([0, 1, 2], 3);
+const TOP: Face = ([1, 2, 3], 0);
+/// Vertical face over the edge from the tent vertex to corner `a` (vertex 1), then to `b`.
+const SIDE_A: Face = ([0, 1, 3], 2);
+const SIDE_B: Face = ([0, 2, 3], 1);
+
+/// A face's first corner, its two edge vectors from there, its outward unit normal and twice
+/// its area.
+fn face_geometry(
+    vertices: &[SpacePoint; 4],
+    (corners, opposite): Face,
+) -> (SpacePoint, [f64; 3], [f64; 3], [f64; 3], f64) {
+    let [q0, q1, q2] = corners.map(|i| vertices[i]);
+    let e1 = [0, 1, 2].map(|i| q1[i] - q0[i]);
+    let e2 = [0, 1, 2].map(|i| q2[i] - q0[i]);
+    let n = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let away = [0, 1, 2].map(|i| q0[i] - vertices[opposite][i]);
+    let sign = if n[0] * away[0] + n[1] * away[1] + n[2] * away[2] < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    (q0, e1, e2, n.map(|c| sign * c / norm), norm)
+}
+
+/// Visits the quadrature points of a face in physical coordinates with physical weights and the
+/// outward unit normal.
+fn face_points(
+    rule: &Rule<2>,
+    vertices: &[SpacePoint; 4],
+    face: Face,
+    mut visit: impl FnMut(SpacePoint, f64, [f64; 3]),
+) {
+    let (q0, e1, e2, n, area2) = face_geometry(vertices, face);
+    for (p, &w) in rule.points.iter().zip(&rule.weights) {
+        let x = [0, 1, 2].map(|i| q0[i] + p[0] * e1[i] + p[1] * e2[i]);
+        visit(x, w * area2, n);
+    }
+}
+
+/// Solves tent patches of one physical problem; holds all scratch memory, so solving a patch
+/// allocates nothing.
+pub struct PatchSolver {
+    system: System,
+    basis: Basis,
+    face_rule: Rule<2>,
+    /// `H[r][k * n + l] = int_ref phi_k d(phi_l)/d(xi_r)`.
+    h_ref: [Vec<f64>; 3],
+    slots: Vec<Slot>,
+    matrix: Vec<f64>,
+    rhs: Vec<f64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    stack: MemBuffer,
+    small: Vec<f64>,
+    small_rhs: Vec<f64>,
+    mass: Vec<f64>,
+    coupling: Vec<f64>,
+    phi: Vec<f64>,
+    phi_other: Vec<f64>,
+    values: Vec<f64>,
+    output: Vec<f64>,
+    reports: Vec<ElementReport>,
+    used: usize,
+}
+
+impl std::fmt::Debug for PatchSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PatchSolver")
+            .field("system", &self.system)
+            .field("order", &self.basis.degree())
+            .field("max_star", &self.slots.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl PatchSolver {
+    /// A solver for polynomial order `order` (1 to 4) on meshes whose vertex stars have at most
+    /// `max_star` triangles.
+    pub fn new(system: System, order: usize, max_star: usize) -> Self {
+        let basis = Basis::new(order);
+        let n = basis.len();
+        let fields = system.fields();
+        let width = fields + system.displacement_components();
+        let dofs = max_star * n * fields;
+        let vol_rule = quadrature::tetrahedron(2 * order);
+        let mut h_ref = [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]];
+        let mut phi = vec![0.0; n];
+        let mut grads = vec![[0.0; 3]; n];
+        for (xi, &w) in vol_rule.points.iter().zip(&vol_rule.weights) {
+            basis.eval_with_gradient(*xi, &mut phi, &mut grads);
+            for (r, h) in h_ref.iter_mut().enumerate() {
+                for k in 0..n {
+                    for l in 0..n {
+                        h[k * n + l] += w * phi[k] * grads[l][r];
+                    }
+                }
+            }
+        }
+        let lu = |m: usize| {
+            StackReq::any_of(&[
+                factor::lu_in_place_scratch::<usize, f64>(m, m, Par::Seq, Default::default()),
+                solve::solve_in_place_scratch::<usize, f64>(m, 2, Par::Seq),
+            ])
+        };
+        Self {
+            face_rule: quadrature::triangle(2 * order + 2),
+            h_ref,
+            slots: vec![Slot::default(); max_star],
+            matrix: vec![0.0; dofs * dofs],
+            rhs: vec![0.0; dofs],
+            perm: vec![0; dofs],
+            perm_inv: vec![0; dofs],
+            stack: MemBuffer::new(StackReq::any_of(&[lu(dofs), lu(n)])),
+            small: vec![0.0; n * n],
+            small_rhs: vec![0.0; 2 * n],
+            mass: vec![0.0; n * n],
+            coupling: vec![0.0; n * n],
+            phi,
+            phi_other: vec![0.0; n],
+            values: vec![0.0; width],
+            output: vec![0.0; max_star * n * width],
+            reports: vec![ElementReport::default(); max_star],
+            used: 0,
+            system,
+            basis,
+        }
+    }
+
+    /// The system solved.
+    pub fn system(&self) -> &System {
+        &self.system
+    }
+
+    /// The basis of every element.
+    pub fn basis(&self) -> &Basis {
+        &self.basis
+    }
+
+    /// Values stored per basis function: the fields, then the displacement components.
+    pub fn width(&self) -> usize {
+        self.system.fields() + self.system.displacement_components()
+    }
+
+    /// Reports of the elements of the last patch, in the order of the vertex star.
+    pub fn element_reports(&self) -> &[ElementReport] {
+        &self.reports[..self.used]
+    }
+
+    /// Solves the patch of `tent` (already pitched: `times` are the front times in seconds before
+    /// the tent, except that the tent vertex's entry is ignored) and replaces the elements under
+    /// the star's front triangles in `front`.
+    pub fn solve(
+        &mut self,
+        mesh: &Mesh,
+        times: &[f64],
+        tent: &Tent,
+        boundary: &Boundary,
+        initial: Initial,
+        front: &mut FrontSolution,
+    ) -> PatchReport {
+        let c = self.system.c_ref();
+        let v = tent.vertex;
+        let star = mesh.vertex_triangles(v);
+        let d = star.len();
+        let n = self.basis.len();
+        let fields = self.system.fields();
+        let m = n * fields;
+        let dofs = d * m;
+        assert!(
+            d <= self.slots.len(),
+            "vertex star larger than the solver was sized for"
+        );
+        self.used = d;
+        let pv = mesh.vertex(v);
+        for (slot, &t) in self.slots.iter_mut().zip(star) {
+            let tri = mesh.triangles()[t as usize];
+            let corner = tri
+                .iter()
+                .position(|&w| w == v)
+                .expect("star triangle contains v");
+            let (a, b) = (tri[(corner + 1) % 3], tri[(corner + 2) % 3]);
+            let at = |w: u32| {
+                let p = mesh.vertex(w);
+                [p[0], p[1], c * times[w as usize]]
+            };
+            let vertices = [
+                [pv[0], pv[1], c * tent.t_old],
+                at(a),
+                at(b),
+                [pv[0], pv[1], c * tent.t_new],
+            ];
+            *slot = Slot {
+                triangle: t,
+                corner,
+                vertices,
+                geometry: Geometry::new(&vertices),
+            };
+        }
+
+        let matrix = &mut self.matrix[..dofs * dofs];
+        matrix.fill(0.0);
+        let rhs = &mut self.rhs[..dofs];
+        rhs.fill(0.0);
+        // Column-major: entry (row, col) at col * dofs + row.
+        let at = |row: usize, col: usize| col * dofs + row;
+        let a_mu = [
+            self.system.a_n([1.0, 0.0, 0.0]),
+            self.system.a_n([0.0, 1.0, 0.0]),
+            self.system.a_n([0.0, 0.0, 1.0]),
+        ];
+        for i in 0..d {
+            let slot = self.slots[i];
+            let base = i * m;
+            // Volume: det * sum_r H_r (x) B_r with B_r = sum_mu inverse[r][mu] A_mu.
+            let inv = slot.geometry.inverse();
+            let det = slot.geometry.det();
+            for (h, inv_r) in self.h_ref.iter().zip(inv) {
+                let mut b = [[0.0; MAX_FIELDS]; MAX_FIELDS];
+                for (a, &factor) in a_mu.iter().zip(inv_r) {
+                    for (brow, arow) in b.iter_mut().zip(a) {
+                        for (x, y) in brow.iter_mut().zip(arow) {
+                            *x += det * factor * y;
+                        }
+                    }
+                }
+                add_kron(matrix, at, (base, base), n, fields, h, &b);
+            }
+            // Inflow face: target is the earlier side's trace.
+            let under = front.element(slot.triangle as usize);
+            let (system, basis) = (&self.system, &self.basis);
+            let (phi, values) = (&mut self.phi, &mut self.values);
+            let mass = &mut self.mass[..n * n];
+            mass.fill(0.0);
+            let mut an = [[0.0; MAX_FIELDS]; MAX_FIELDS];
+            face_points(&self.face_rule, &slot.vertices, BOTTOM, |x, w, nrm| {
+                an = system.a_n(nrm);
+                let q_prev = inflow_state(system, basis, under, initial, x, phi, values);
+                basis.eval(slot.geometry.to_reference(x), phi);
+                let aq = system.apply(&an, &q_prev);
+                add_outer(mass, -w, phi, phi);
+                for (k, p) in phi.iter().enumerate() {
+                    for (r, a) in rhs[base + k * fields..][..fields].iter_mut().zip(&aq) {
+                        *r -= w * p * a;
+                    }
+                }
+            });
+            add_kron(matrix, at, (base, base), n, fields, mass, &an);
+            // Vertical faces: Riemann fluxes with the ring neighbour or the boundary data.
+            for (face, neighbour, tag) in vertical_faces(mesh, star, &slot) {
+                let condition = boundary.condition(tag);
+                let normal = face_normal(&slot.vertices, face);
+                let (m_a, m_b) =
+                    face_matrices(system, boundary, condition, neighbour.is_some(), normal);
+                let a_m = system.a_n([normal[0], normal[1], 0.0]);
+                let mut self_block = m_a;
+                for (srow, arow) in self_block.iter_mut().zip(&a_m) {
+                    for (x, y) in srow.iter_mut().zip(arow) {
+                        *x -= y;
+                    }
+                }
+                let phi_j = &mut self.phi_other;
+                let coupling = &mut self.coupling[..n * n];
+                mass.fill(0.0);
+                coupling.fill(0.0);
+                let slots = &self.slots;
+                face_points(&self.face_rule, &slot.vertices, face, |x, w, _| {
+                    basis.eval(slot.geometry.to_reference(x), phi);
+                    add_outer(mass, w, phi, phi);
+                    match neighbour {
+                        Some(j) => {
+                            basis.eval(slots[j].geometry.to_reference(x), phi_j);
+                            add_outer(coupling, w, phi, phi_j);
+                        }
+                        None => {
+                            let sides = boundary.sides(
+                                system,
+                                condition,
+                                [x[0], x[1]],
+                                x[2] / c,
+                                normal,
+                                false,
+                            );
+                            let g = system.flux(
+                                &riemann::solve(system, &FrameTrace::default(), &sides),
+                                normal,
+                            );
+                            for (k, p) in phi.iter().enumerate() {
+                                for (r, gc) in rhs[base + k * fields..][..fields].iter_mut().zip(&g)
+                                {
+                                    *r -= w * p * gc;
+                                }
+                            }
+                        }
+                    }
+                });
+                add_kron(matrix, at, (base, base), n, fields, mass, &self_block);
+                if let Some(j) = neighbour {
+                    add_kron(matrix, at, (base, j * m), n, fields, coupling, &m_b);
+                }
+            }
+        }
+
+        let stack = MemStack::new(&mut self.stack);
+        let lu = MatMut::from_column_major_slice_mut(matrix, dofs, dofs);
+        let (_, perm) = factor::lu_in_place(
+            lu,
+            &mut self.perm[..dofs],
+            &mut self.perm_inv[..dofs],
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
+        let lu = MatRef::from_column_major_slice(&self.matrix[..dofs * dofs], dofs, dofs);
+        let x = MatMut::from_column_major_slice_mut(&mut self.rhs[..dofs], dofs, 1);
+        solve::solve_in_place(lu, lu, perm, x, Par::Seq, stack);
+
+        let width = self.width();
+        let mut report = PatchReport {
+            elements: d,
+            dofs,
+            ..Default::default()
+        };
+        for i in 0..d {
+            let r = self.element_post(mesh, star, i, boundary, initial, front);
+            report.energy_in += r.energy_in;
+            report.energy_out += r.energy_out;
+            report.boundary_work += r.boundary_work;
+            report.dissipation += r.dissipation;
+            self.reports[i] = r;
+            self.displacement(i, initial, front);
+        }
+        for (i, slot) in self.slots[..d].iter().enumerate() {
+            let size = n * width;
+            front.set(
+                slot.triangle as usize,
+                slot.geometry,
+                &self.output[i * size..(i + 1) * size],
+            );
+        }
+        report
+    }
+
+    /// Energy terms and diagnostics of element `i` after the solve; also copies its field
+    /// coefficients into the output buffer.
+    fn element_post(
+        &mut self,
+        mesh: &Mesh,
+        star: &[TriangleId],
+        i: usize,
+        boundary: &Boundary,
+        initial: Initial,
+        front: &FrontSolution,
+    ) -> ElementReport {
+        let n = self.basis.len();
+        let fields = self.system.fields();
+        let nv = self.system.displacement_components();
+        let m = n * fields;
+        let width = self.width();
+        let c = self.system.c_ref();
+        let slot = self.slots[i];
+        let solution = &self.rhs[..self.used * m];
+        for k in 0..n {
+            let out = &mut self.output[i * n * width + k * width..][..fields];
+            out.copy_from_slice(&solution[i * m + k * fields..][..fields]);
+        }
+        let (system, basis) = (&self.system, &self.basis);
+        let (phi, phi_j, values) = (&mut self.phi, &mut self.phi_other, &mut self.values);
+        let own = |x: SpacePoint, phi: &mut [f64]| {
+            basis.eval(slot.geometry.to_reference(x), phi);
+            combine(&solution[i * m..(i + 1) * m], phi, fields)
+        };
+        let mut r = ElementReport::default();
+        let mut momentum = [0.0; 2];
+        let mut scale = 0.0;
+        let mut add_momentum = |face: [f64; 2]| {
+            for (a, b) in momentum.iter_mut().zip(face) {
+                *a += b;
+            }
+            scale += face[0].hypot(face[1]);
+        };
+        let face_rule = &self.face_rule;
+        let mut face_momentum = [0.0; 2];
+        face_points(face_rule, &slot.vertices, TOP, |x, w, nrm| {
+            let q = own(x, phi);
+            let aq = system.apply(&system.a_n(nrm), &q);
+            r.energy_out += 0.5 * w * system.dot(&q, &aq);
+            for (f, a) in face_momentum.iter_mut().zip(&aq[..nv]) {
+                *f += w * a;
+            }
+        });
+        add_momentum(face_momentum);
+        let under = front.element(slot.triangle as usize);
+        face_momentum = [0.0; 2];
+        face_points(face_rule, &slot.vertices, BOTTOM, |x, w, nrm| {
+            let an = system.a_n(nrm);
+            let q_prev = inflow_state(system, basis, under, initial, x, phi_j, values);
+            let q = own(x, phi);
+            let aq_prev = system.apply(&an, &q_prev);
+            r.energy_in -= 0.5 * w * system.dot(&q_prev, &aq_prev);
+            let jump = std::array::from_fn(|k| q[k] - q_prev[k]);
+            r.dissipation -= 0.5 * w * system.dot(&jump, &system.apply(&an, &jump));
+            for (f, a) in face_momentum.iter_mut().zip(&aq_prev[..nv]) {
+                *f += w * a;
+            }
+        });
+        add_momentum(face_momentum);
+        for (face, neighbour, tag) in vertical_faces(mesh, star, &slot) {
+            let condition = boundary.condition(tag);
+            face_momentum = [0.0; 2];
+            face_points(face_rule, &slot.vertices, face, |x, w, nrm| {
+                let normal = [nrm[0], nrm[1]];
+                let a = system.frame(&own(x, phi), normal);
+                let star_trace = match neighbour {
+                    Some(j) => {
+                        basis.eval(self.slots[j].geometry.to_reference(x), phi_j);
+                        let q_b = combine(&solution[j * m..(j + 1) * m], phi_j, fields);
+                        riemann::bonded(system, &a, &system.frame(&q_b, normal))
+                    }
+                    None => {
+                        let sides = boundary.sides(
+                            system,
+                            condition,
+                            [x[0], x[1]],
+                            x[2] / c,
+                            normal,
+                            false,
+                        );
+                        riemann::solve(system, &a, &sides)
+                    }
+                };
+                let power = w
+                    * (0..system.directions())
+                        .map(|k| star_trace.v[k] * star_trace.s[k])
+                        .sum::<f64>();
+                r.vertical_work += power;
+                if neighbour.is_none() {
+                    r.boundary_work += power;
+                }
+                r.dissipation += w * riemann::dissipation(system, &a, &star_trace);
+                let f = system.flux(&star_trace, normal);
+                for (fm, a) in face_momentum.iter_mut().zip(&f[..nv]) {
+                    *fm += w * a;
+                }
+            });
+            add_momentum(face_momentum);
+        }
+        r.dissipation_balance = r.energy_in - r.energy_out + r.vertical_work;
+        r.momentum_residual = momentum[0].hypot(momentum[1]) / scale.max(f64::MIN_POSITIVE);
+        r
+    }
+
+    /// Solves `du/dtau = v / c_ref` on element `i` (upwind in time from the element below) and
+    /// stores the displacement coefficients in the output buffer.
+    fn displacement(&mut self, i: usize, initial: Initial, front: &FrontSolution) {
+        let n = self.basis.len();
+        let fields = self.system.fields();
+        let nv = self.system.displacement_components();
+        let width = self.width();
+        let c = self.system.c_ref();
+        let slot = self.slots[i];
+        let det = slot.geometry.det();
+        let inv_tau = [0, 1, 2].map(|r| slot.geometry.inverse()[r][2]);
+        let small = &mut self.small[..n * n];
+        let rhs = &mut self.small_rhs[..n * nv];
+        for k in 0..n {
+            for l in 0..n {
+                small[l * n + k] = det
+                    * (0..3)
+                        .map(|r| self.h_ref[r][k * n + l] * inv_tau[r])
+                        .sum::<f64>();
+            }
+            for d in 0..nv {
+                rhs[d * n + k] = det * self.output[i * n * width + k * width + d] / c;
+            }
+        }
+        let under = front.element(slot.triangle as usize);
+        let (system, basis) = (&self.system, &self.basis);
+        let (phi, phi_prev, values) = (&mut self.phi, &mut self.phi_other, &mut self.values);
+        face_points(&self.face_rule, &slot.vertices, BOTTOM, |x, w, nrm| {
+            let u_prev = inflow_displacement(system, basis, under, initial, x, phi_prev, values);
+            basis.eval(slot.geometry.to_reference(x), phi);
+            for k in 0..n {
+                for l in 0..n {
+                    small[l * n + k] -= w * nrm[2] * phi[k] * phi[l];
+                }
+                for d in 0..nv {
+                    rhs[d * n + k] -= w * nrm[2] * phi[k] * u_prev[d];
+                }
+            }
+        });
+        let stack = MemStack::new(&mut self.stack);
+        let lu = MatMut::from_column_major_slice_mut(small, n, n);
+        let (_, perm) = factor::lu_in_place(
+            lu,
+            &mut self.perm[..n],
+            &mut self.perm_inv[..n],
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
+        let lu = MatRef::from_column_major_slice(&self.small[..n * n], n, n);
+        let x = MatMut::from_column_major_slice_mut(&mut self.small_rhs[..n * nv], n, nv);
+        solve::solve_in_place(lu, lu, perm, x, Par::Seq, stack);
+        for k in 0..n {
+            for d in 0..nv {
+                self.output[i * n * width + k * width + fields + d] = self.small_rhs[d * n + k];
+            }
+        }
+    }
+}
+
+/// Adds the Kronecker product `scalar (x) block` at `(row0, col0)`: entry `(k, l)` of the
+/// `n x n` row-major `scalar` scales `block` at rows `row0 + k fields`, columns
+/// `col0 + l fields`.
+fn add_kron(
+    matrix: &mut [f64],
+    at: impl Fn(usize, usize) -> usize,
+    (row0, col0): (usize, usize),
+    n: usize,
+    fields: usize,
+    scalar: &[f64],
+    block: &Matrix,
+) {
+    for (k, row) in scalar.chunks_exact(n).enumerate() {
+        for (l, &s) in row.iter().enumerate() {
+            if s == 0.0 {
+                continue;
+            }
+            for (b, col) in (col0 + l * fields..).take(fields).enumerate() {
+                for (a, r) in (row0 + k * fields..).take(fields).enumerate() {
+                    matrix[at(r, col)] += s * block[a][b];
+                }
+            }
+        }
+    }
+}
+
+/// `out[k n + l] += w a[k] b[l]`.
+fn add_outer(out: &mut [f64], w: f64, a: &[f64], b: &[f64]) {
+    for (row, &ak) in out.chunks_exact_mut(b.len()).zip(a) {
+        for (o, &bl) in row.iter_mut().zip(b) {
+            *o += w * ak * bl;
+        }
+    }
+}
+
+/// The two vertical faces of an element: the face, the index in the star of the element across
+/// it (none on the domain boundary), and the tag of its space edge.
+fn vertical_faces(
+    mesh: &Mesh,
+    star: &[TriangleId],
+    slot: &Slot,
+) -> [(Face, Option<usize>, Option<TagId>); 2] {
+    [(SIDE_A, 2), (SIDE_B, 1)].map(|(face, opposite_corner)| {
+        let e = mesh.triangle_edges(slot.triangle)[(slot.corner + opposite_corner) % 3];
+        let edge = mesh.edges()[e as usize];
+        let neighbour = edge
+            .triangles
+            .iter()
+            .flatten()
+            .find(|&&t| t != slot.triangle)
+            .map(|&t| {
+                star.iter()
+                    .position(|&s| s == t)
+                    .expect("edge neighbour is in the star")
+            });
+        (face, neighbour, edge.tag)
+    })
+}
+
+/// The spatial outward unit normal of a vertical face.
+fn face_normal(vertices: &[SpacePoint; 4], face: Face) -> [f64; 2] {
+    let n = face_geometry(vertices, face).3;
+    [n[0], n[1]]
+}
+
+/// The state `sum_k phi_k q_k` of coefficients stored `fields` per basis function.
+fn combine(coefficients: &[f64], phi: &[f64], fields: usize) -> State {
+    let mut q = [0.0; MAX_FIELDS];
+    for (k, p) in phi.iter().enumerate() {
+        for (qc, c) in q
+            .iter_mut()
+            .zip(&coefficients[k * fields..(k + 1) * fields])
+        {
+            *qc += p * c;
+        }
+    }
+    q
+}
+
+/// The scaled state below the front at `x`: the element under the triangle, or initial data.
+fn inflow_state(
+    system: &System,
+    basis: &Basis,
+    under: Option<(&Geometry, &[f64])>,
+    initial: Initial,
+    x: SpacePoint,
+    phi: &mut [f64],
+    values: &mut [f64],
+) -> State {
+    match (under, initial) {
+        (Some((geometry, coefficients)), _) => {
+            evaluate(basis, geometry, coefficients, x, phi, values);
+            let mut q = [0.0; MAX_FIELDS];
+            q[..system.fields()].copy_from_slice(&values[..system.fields()]);
+            q
+        }
+        (None, Initial::Rest) => [0.0; MAX_FIELDS],
+        (None, Initial::Wave(w)) => system.to_scaled(&w.state([x[0], x[1]], 0.0)),
+    }
+}
+
+/// The displacement (m) below the front at `x`, like [`inflow_state`].
+fn inflow_displacement(
+    system: &System,
+    basis: &Basis,
+    under: Option<(&Geometry, &[f64])>,
+    initial: Initial,
+    x: SpacePoint,
+    phi: &mut [f64],
+    values: &mut [f64],
+) -> [f64; 2] {
+    match (under, initial) {
+        (Some((geometry, coefficients)), _) => {
+            evaluate(basis, geometry, coefficients, x, phi, values);
+            let f = system.fields();
+            [
+                values[f],
+                if system.displacement_components() > 1 {
+                    values[f + 1]
+                } else {
+                    0.0
+                },
+            ]
+        }
+        (None, Initial::Rest) => [0.0; 2],
+        (None, Initial::Wave(w)) => w.displacement([x[0], x[1]], 0.0),
+    }
+}
+
+/// The flux matrices of a vertical face with outward normal `m`: `F* = M_a q_a + M_b q_b + g`,
+/// with `g` the boundary data's part (zero between elements).
+fn face_matrices(
+    system: &System,
+    boundary: &Boundary,
+    condition: &Condition,
+    interior: bool,
+    m: [f64; 2],
+) -> (Matrix, Matrix) {
+    let homogeneous = boundary.sides(system, condition, [0.0; 2], 0.0, m, true);
+    let flux = |qa: &State, qb: &State| -> State {
+        let a = system.frame(qa, m);
+        let star = if interior {
+            riemann::bonded(system, &a, &system.frame(qb, m))
+        } else {
+            riemann::solve(system, &a, &homogeneous)
+        };
+        system.flux(&star, m)
+    };
+    let mut m_a = [[0.0; MAX_FIELDS]; MAX_FIELDS];
+    let mut m_b = [[0.0; MAX_FIELDS]; MAX_FIELDS];
+    let zero = [0.0; MAX_FIELDS];
+    for j in 0..system.fields() {
+        let mut e = zero;
+        e[j] = 1.0;
+        let fa = flux(&e, &zero);
+        let fb = if interior { flux(&zero, &e) } else { zero };
+        for i in 0..system.fields() {
+            m_a[i][j] = fa[i];
+            m_b[i][j] = fb[i];
+        }
+    }
+    (m_a, m_b)
+}
