@@ -99,10 +99,28 @@ fn execute(cli: &Cli) -> Result<(), EngineError> {
             }
             Ok(())
         }
-        Command::Run { .. } => Err(EngineError::Runtime(
-            "`sdg run` needs the patch solver, which is not in this release yet; \
-             `sdg mesh` pitches the spacetime mesh"
-                .into(),
-        )),
+        Command::Run { .. } => {
+            let (summary, dir) = sdg_engine::solve_job(&problem, &options)?;
+            if !cli.quiet {
+                let error = summary.error.map_or(String::new(), |e| {
+                    format!(
+                        ", error: velocity {:.3e}, stress {:.3e}",
+                        e.velocity_l2_rel, e.stress_l2_rel
+                    )
+                });
+                println!(
+                    "{} patches (order {}, {:.0} dofs each) to t = {} s in {:.3} s{error}; \
+                     energy balance residual {:.1e}; outputs in {}",
+                    summary.patches,
+                    summary.order,
+                    summary.dofs_per_patch,
+                    summary.final_time,
+                    summary.wall_time_s,
+                    summary.energy.balance_residual_rel,
+                    dir.display()
+                );
+            }
+            Ok(())
+        }
     }
 }

@@ -37,6 +37,160 @@ pub struct Config {
     /// Outputs.
     #[serde(default)]
     pub output: OutputConfig,
+    /// The patch solver.
+    #[serde(default)]
+    pub solver: SolverConfig,
+    /// Boundary conditions, one entry per group of sides (`[[boundary]]`). Sides without an
+    /// entry are traction-free.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub boundary: Vec<BoundaryConfig>,
+    /// An exact solution: initial data, `exact` boundaries and the error at the end time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exact: Option<ExactConfig>,
+}
+
+/// `[solver]`: discretization.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SolverConfig {
+    /// Complete polynomial order on each spacetime tetrahedron, 1 to 4. Default 2.
+    #[serde(default = "default_order")]
+    pub order: usize,
+}
+
+fn default_order() -> usize {
+    2
+}
+
+impl Default for SolverConfig {
+    fn default() -> Self {
+        Self {
+            order: default_order(),
+        }
+    }
+}
+
+/// Kind of a boundary condition.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundaryKind {
+    /// Zero traction.
+    Free,
+    /// Zero normal velocity and zero tangential traction.
+    Roller,
+    /// Prescribed traction `value` (Pa) times `history`.
+    Traction,
+    /// Prescribed velocity `value` (m/s) times `history`.
+    Velocity,
+    /// Prescribed incoming characteristic `incoming` (Pa) times `history`; absorbing when zero.
+    Transmitting,
+    /// Exterior state from `[exact]`.
+    Exact,
+}
+
+/// `[[boundary]]`: one condition on one or more tagged sides.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BoundaryConfig {
+    /// Boundary tags (`left`, `right`, `bottom`, `top`, or Gmsh physical names).
+    pub sides: Vec<String>,
+    /// The condition.
+    pub kind: BoundaryKind,
+    /// Traction (Pa) or velocity (m/s): `[x, y]` in-plane, `[z]` anti-plane.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<Vec<f64>>,
+    /// Transmitting: incoming characteristic (Pa), `[normal, tangential]` in-plane, `[z]`
+    /// anti-plane. Default zero (absorbing).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub incoming: Option<Vec<f64>>,
+    /// Time history multiplying `value` or `incoming`. Default constant.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub history: Option<HistoryConfig>,
+}
+
+/// Kind of a time history.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum HistoryKind {
+    /// 1 at all times.
+    Constant,
+    /// Linear ramp to 1 over `ramp`.
+    Linear,
+    /// Cubic C1 ramp `3 r^2 - 2 r^3` to 1 over `ramp`.
+    Smooth,
+    /// Piecewise linear through `points`.
+    Table,
+}
+
+/// A time history: `{ kind = "smooth", ramp = 2e-6 }` or `{ kind = "table", points = [[0, 0],
+/// [1e-6, 1]] }`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HistoryConfig {
+    /// The shape.
+    pub kind: HistoryKind,
+    /// Ramp time, s (linear, smooth).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ramp: Option<f64>,
+    /// `[t (s), multiplier]` pairs with increasing `t` (table).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub points: Option<Vec<[f64; 2]>>,
+}
+
+/// Kind of exact solution.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ExactKind {
+    /// A plane P or S wave.
+    PlaneWave,
+}
+
+/// Wave type of a plane wave.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+pub enum WaveName {
+    /// Dilatational.
+    P,
+    /// Shear.
+    S,
+}
+
+/// Profile of a plane wave.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ProfileName {
+    /// Periodic sine.
+    #[default]
+    Sine,
+    /// Compact smooth pulse.
+    Pulse,
+}
+
+/// `[exact]`: an exact solution of the unbounded medium.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ExactConfig {
+    /// `"plane_wave"`.
+    pub kind: ExactKind,
+    /// `"P"` or `"S"`.
+    pub wave: WaveName,
+    /// Propagation direction from the x axis, degrees. Default 0.
+    #[serde(default)]
+    pub angle_deg: f64,
+    /// Wavelength (sine) or pulse width, m.
+    pub wavelength: f64,
+    /// Velocity amplitude, m/s. Default 1.
+    #[serde(default = "default_amplitude")]
+    pub amplitude: f64,
+    /// `"sine"` or `"pulse"`. Default sine.
+    #[serde(default)]
+    pub profile: ProfileName,
+    /// Pulse centre at t = 0 along the propagation direction, m (`d . x`). Default 0.
+    #[serde(default)]
+    pub center: f64,
+}
+
+fn default_amplitude() -> f64 {
+    1.0
 }
 
 /// Where the space mesh comes from.
@@ -179,6 +333,9 @@ pub struct OutputConfig {
     /// Write the spacetime mesh as `spacetime.vtu` (small runs only). Default false.
     #[serde(default)]
     pub spacetime_mesh: bool,
+    /// Times (s) of solution snapshots (`snapshot_NNNN.vtu` and `snapshots.pvd`). Default none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub snapshot_times: Vec<f64>,
 }
 
 fn default_output_dir() -> PathBuf {
@@ -190,6 +347,7 @@ impl Default for OutputConfig {
         Self {
             dir: default_output_dir(),
             spacetime_mesh: false,
+            snapshot_times: Vec::new(),
         }
     }
 }
@@ -298,6 +456,7 @@ impl Config {
                 ),
             );
         }
+        self.validate_physics()?;
         let m = &self.mesh;
         let rectangle_keys = [
             ("mesh.width", m.width.is_some()),
@@ -332,6 +491,110 @@ impl Config {
                     return fail(key, "is only used with mesh.kind = \"rectangle\"".into());
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// Checks `[solver]`, `[[boundary]]`, `[exact]` and `output.snapshot_times`.
+    fn validate_physics(&self) -> Result<(), (String, String)> {
+        let order = self.solver.order;
+        if !(1..=4).contains(&order) {
+            return Err((
+                "solver.order".into(),
+                format!("must be 1 to 4, got {order}"),
+            ));
+        }
+        let antiplane = self.material.plane == PlaneName::Antiplane;
+        let components = if antiplane { 1 } else { 2 };
+        let mut seen: Vec<&str> = Vec::new();
+        for (i, b) in self.boundary.iter().enumerate() {
+            let key = |k: &str| format!("boundary[{i}].{k}");
+            if b.sides.is_empty() {
+                return Err((key("sides"), "lists no side".into()));
+            }
+            for side in &b.sides {
+                if seen.contains(&side.as_str()) {
+                    return Err((
+                        key("sides"),
+                        format!("side `{side}` has a condition already"),
+                    ));
+                }
+                seen.push(side);
+            }
+            let needs_value = matches!(b.kind, BoundaryKind::Traction | BoundaryKind::Velocity);
+            let takes_history = needs_value || b.kind == BoundaryKind::Transmitting;
+            match (&b.value, needs_value) {
+                (None, true) => return Err((key("value"), "is required for this kind".into())),
+                (Some(_), false) => {
+                    return Err((key("value"), "is only used by traction and velocity".into()));
+                }
+                _ => {}
+            }
+            if b.incoming.is_some() && b.kind != BoundaryKind::Transmitting {
+                return Err((key("incoming"), "is only used by transmitting".into()));
+            }
+            for (name, v) in [("value", &b.value), ("incoming", &b.incoming)] {
+                if let Some(v) = v {
+                    if v.len() != components || v.iter().any(|x| !x.is_finite()) {
+                        let want = if antiplane {
+                            "[z] in anti-plane"
+                        } else {
+                            "[x, y] (or [normal, tangential])"
+                        };
+                        return Err((
+                            key(name),
+                            format!("must be {components} finite numbers: {want}"),
+                        ));
+                    }
+                }
+            }
+            if let Some(h) = &b.history {
+                if !takes_history {
+                    return Err((
+                        key("history"),
+                        "is only used by traction, velocity and transmitting".into(),
+                    ));
+                }
+                h.to_history()
+                    .map_err(|(k, r)| (key(&format!("history.{k}")), r))?;
+            }
+            if b.kind == BoundaryKind::Exact && self.exact.is_none() {
+                return Err((key("kind"), "\"exact\" needs an [exact] section".into()));
+            }
+        }
+        if let Some(e) = &self.exact {
+            if e.wave == WaveName::P && antiplane {
+                return Err((
+                    "exact.wave".into(),
+                    "anti-plane shear carries S waves only".into(),
+                ));
+            }
+            if !(e.wavelength > 0.0 && e.wavelength.is_finite()) {
+                return Err((
+                    "exact.wavelength".into(),
+                    format!("must be a positive length in m, got {}", e.wavelength),
+                ));
+            }
+            for (k, v) in [
+                ("angle_deg", e.angle_deg),
+                ("amplitude", e.amplitude),
+                ("center", e.center),
+            ] {
+                if !v.is_finite() {
+                    return Err((format!("exact.{k}"), "must be finite".into()));
+                }
+            }
+        }
+        if let Some(t) = self
+            .output
+            .snapshot_times
+            .iter()
+            .find(|t| !(0.0..=self.time.end).contains(*t))
+        {
+            return Err((
+                "output.snapshot_times".into(),
+                format!("{t} s is outside [0, time.end]"),
+            ));
         }
         Ok(())
     }
@@ -403,6 +666,36 @@ fn apply_override(table: &mut toml::Table, spec: &str) -> Result<(), ConfigError
     }
     node.insert(last.to_string(), value);
     Ok(())
+}
+
+impl HistoryConfig {
+    /// The history, or `(key, reason)` for a missing or invalid parameter.
+    pub fn to_history(&self) -> Result<sdg_solver::history::History, (String, String)> {
+        use sdg_solver::history::History;
+        let ramp = || {
+            self.ramp
+                .ok_or_else(|| ("ramp".to_string(), "is required for this kind".to_string()))
+        };
+        let history = match self.kind {
+            HistoryKind::Constant => History::Constant,
+            HistoryKind::Linear => History::Linear { ramp: ramp()? },
+            HistoryKind::Smooth => History::Smooth { ramp: ramp()? },
+            HistoryKind::Table => {
+                let points = self
+                    .points
+                    .as_ref()
+                    .ok_or_else(|| ("points".to_string(), "is required for a table".to_string()))?;
+                History::Table(points.iter().map(|p| (p[0], p[1])).collect())
+            }
+        };
+        let key = if self.kind == HistoryKind::Table {
+            "points"
+        } else {
+            "ramp"
+        };
+        history.validate().map_err(|r| (key.to_string(), r))?;
+        Ok(history)
+    }
 }
 
 #[cfg(test)]

@@ -6,10 +6,11 @@ pub mod error;
 pub mod output;
 pub mod problem;
 pub mod run;
+pub mod snapshot;
 pub mod spacetime;
 
 pub use config::{Config, ConfigError, LoadedConfig};
 pub use error::EngineError;
 pub use problem::Problem;
-pub use run::{MeshSummary, RunOptions, mesh_job, pitch_to_end};
+pub use run::{MeshSummary, RunOptions, RunSummary, mesh_job, pitch_to_end, solve_job};
 pub use spacetime::SpacetimeMesh;

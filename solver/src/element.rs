@@ -62,6 +62,12 @@ impl Geometry {
         x
     }
 
+    /// The four vertices: images of `0, e1, e2, e3`.
+    pub fn vertices(&self) -> [SpacePoint; 4] {
+        [[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+            .map(|xi| self.from_reference(xi))
+    }
+
     /// `d xi_r / d X_mu` as `inverse[r][mu]`.
     pub fn inverse(&self) -> &[[f64; 3]; 3] {
         &self.inverse

@@ -74,6 +74,11 @@ impl Material {
         self.plane
     }
 
+    /// Poisson ratio.
+    pub fn poisson(&self) -> f64 {
+        self.poisson
+    }
+
     /// Mass density, kg/m^3.
     pub fn density(&self) -> f64 {
         self.density

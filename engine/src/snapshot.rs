@@ -1,0 +1,686 @@
+//! Snapshots: the solution on planes `t = const`, cut from the spacetime elements as they are
+//! solved and written as VTK triangle grids (`snapshot_NNNN.vtu`) with a ParaView collection
+//! (`snapshots.pvd`).
+//!
+//! # Slicing rule
+//! A snapshot at `t_s` is the plane `tau = tau_s = c_ref t_s`. Each element vertex is classified
+//! as below, on or above the plane, "on" meaning within `8 eps |tau_s|` of it (so that a front
+//! time equal to `t_s` up to rounding counts as exactly on the plane). The plane is covered
+//! exactly once by the slices of
+//!
+//! 1. the elements with a vertex below and a vertex on or above the plane, i.e.
+//!    `min tau < tau_s <= max tau` ("taken from below"). An element whose top face lies in the
+//!    plane contributes that face; one that touches the plane with a vertex or an edge
+//!    contributes a degenerate polygon, which is dropped. This covers every `t_s` in
+//!    `(t_start, t_end]`, including a flat front at `t_s` and the end time itself.
+//! 2. Only when no element satisfies rule 1 — the plane is the initial front, `t_s = t_start` —
+//!    the elements whose bottom face lies in the plane (three vertices on it, one above). Such
+//!    faces are held as a fallback while rule 1 has produced nothing yet and dropped as soon as
+//!    it does, whatever the order in which elements arrive.
+//!
+//! # Completeness
+//! Every later element has all its vertices on or above the current front, so once the front's
+//! minimum time reaches `t_s` no element can satisfy rule 1 any more: the snapshot is written
+//! when `front_min_time >= t_s`. The start-time snapshot (rule 2) is complete only when the front
+//! has left `t_s` everywhere, `front_min_time > t_s`. A snapshot later than the end time is never
+//! written.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use crate::error::EngineError;
+use crate::output::write_atomic;
+
+/// Field values at a point of a slice, physical SI units.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointValues {
+    /// Velocity, m/s.
+    pub velocity: [f64; 3],
+    /// Stress, Pa, in VTK symmetric-tensor order XX, YY, ZZ, XY, YZ, XZ.
+    pub stress: [f64; 6],
+    /// Displacement, m.
+    pub displacement: [f64; 3],
+    /// Strain energy density, J/m^3.
+    pub strain_energy_density: f64,
+}
+
+/// A slice triangle: corners `(x, y)` counter-clockwise, metres, and the fields there.
+#[derive(Clone, Copy, Debug)]
+struct Triangle {
+    xy: [[f64; 2]; 3],
+    values: [PointValues; 3],
+}
+
+impl Triangle {
+    fn area(&self) -> f64 {
+        signed_area(self.xy[0], self.xy[1], self.xy[2])
+    }
+}
+
+/// A snapshot not written yet.
+#[derive(Clone, Debug)]
+struct Pending {
+    /// Index in the sorted list of times, for the file name.
+    index: usize,
+    /// Time, s.
+    time: f64,
+    /// `c_ref * time`, m.
+    tau: f64,
+    /// Half-width of the band around `tau` counted as on the plane, m.
+    tol: f64,
+    /// Slices of rule 1 (see the module docs).
+    triangles: Vec<Triangle>,
+    /// Bottom faces in the plane (rule 2), kept while `triangles` is empty.
+    fallback: Vec<Triangle>,
+}
+
+/// Collects the t = const slices of spacetime elements as they are solved and writes each snapshot
+/// as `snapshot_NNNN.vtu` plus a ParaView collection `snapshots.pvd` once it is complete.
+///
+/// Points are stored per triangle (no merging), which is exact for discontinuous fields.
+pub struct Snapshots {
+    c_ref: f64,
+    dir: PathBuf,
+    /// All snapshots in increasing time; those from `next` on are pending.
+    snapshots: Vec<Pending>,
+    next: usize,
+    written: Vec<(f64, String)>,
+}
+
+impl std::fmt::Debug for Snapshots {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Snapshots")
+            .field("c_ref", &self.c_ref)
+            .field("dir", &self.dir)
+            .field(
+                "pending_times",
+                &self.snapshots[self.next..]
+                    .iter()
+                    .map(|s| s.time)
+                    .collect::<Vec<_>>(),
+            )
+            .field(
+                "pending_triangles",
+                &self.snapshots[self.next..]
+                    .iter()
+                    .map(|s| s.triangles.len() + s.fallback.len())
+                    .sum::<usize>(),
+            )
+            .field("written", &self.written)
+            .finish()
+    }
+}
+
+impl Snapshots {
+    /// `times` in seconds (any order; sorted and deduplicated, non-finite times dropped; file
+    /// numbers follow the sorted order), `c_ref` m/s (positive), output folder `dir`.
+    pub fn new(times: &[f64], c_ref: f64, dir: PathBuf) -> Self {
+        assert!(
+            c_ref.is_finite() && c_ref > 0.0,
+            "c_ref must be positive, got {c_ref}"
+        );
+        let mut sorted: Vec<f64> = times.iter().copied().filter(|t| t.is_finite()).collect();
+        sorted.sort_by(f64::total_cmp);
+        sorted.dedup();
+        let snapshots = sorted
+            .into_iter()
+            .enumerate()
+            .map(|(index, time)| {
+                let tau = c_ref * time;
+                Pending {
+                    index,
+                    time,
+                    tau,
+                    tol: 8.0 * f64::EPSILON * tau.abs(),
+                    triangles: Vec::new(),
+                    fallback: Vec::new(),
+                }
+            })
+            .collect();
+        Self {
+            c_ref,
+            dir,
+            snapshots,
+            next: 0,
+            written: Vec::new(),
+        }
+    }
+
+    /// Cuts the element with vertices `vertices` ([x, y, tau]) by every pending snapshot plane it
+    /// crosses and records the slice polygons (a triangle, or a quadrilateral split into two
+    /// triangles), evaluating `eval` at each polygon corner (a point `[x, y, tau_s]` of the
+    /// element). Cheap when no snapshot plane crosses the element: no allocation then.
+    pub fn add_element(
+        &mut self,
+        vertices: &[[f64; 3]; 4],
+        mut eval: impl FnMut([f64; 3]) -> PointValues,
+    ) {
+        let pending = &mut self.snapshots[self.next..];
+        let (lo, hi) = vertices
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v[2]), hi.max(v[2]))
+            });
+        // A plane is relevant when some vertex is on or below it and some on or above it.
+        let first = pending.partition_point(|s| s.tau + s.tol < lo);
+        for snap in &mut pending[first..] {
+            if snap.tau - snap.tol > hi {
+                break;
+            }
+            let Some(corners) = slice(vertices, snap.tau, snap.tol) else {
+                continue;
+            };
+            let fallback = match corners.rule {
+                Rule::Crossing => {
+                    if !snap.fallback.is_empty() {
+                        snap.fallback = Vec::new();
+                    }
+                    false
+                }
+                Rule::BottomFace if snap.triangles.is_empty() => true,
+                Rule::BottomFace => continue,
+            };
+            let values = corners.points[..corners.len].iter().map(|&p| eval(p));
+            let mut v = [PointValues::default(); 4];
+            for (slot, value) in v.iter_mut().zip(values) {
+                *slot = value;
+            }
+            let xy = corners.points.map(|p| [p[0], p[1]]);
+            let out = if fallback {
+                &mut snap.fallback
+            } else {
+                &mut snap.triangles
+            };
+            // Fan triangulation of the convex, counter-clockwise polygon.
+            let scale = (1..corners.len)
+                .map(|i| (xy[i][0] - xy[0][0]).powi(2) + (xy[i][1] - xy[0][1]).powi(2))
+                .fold(0.0, f64::max);
+            for i in 1..corners.len - 1 {
+                let tri = Triangle {
+                    xy: [xy[0], xy[i], xy[i + 1]],
+                    values: [v[0], v[i], v[i + 1]],
+                };
+                if tri.area() > 16.0 * f64::EPSILON * scale {
+                    out.push(tri);
+                }
+            }
+        }
+    }
+
+    /// Writes every pending snapshot whose time is `<= front_min_time` (s), except that the
+    /// start-time snapshot waits for `front_min_time > t_s` (see the module docs), frees its
+    /// triangles and rewrites `snapshots.pvd`. Returns how many were written.
+    pub fn flush(&mut self, front_min_time: f64) -> Result<usize, EngineError> {
+        let mut count = 0;
+        while let Some(snap) = self.snapshots.get_mut(self.next) {
+            let tol = 4.0 * f64::EPSILON * snap.time.abs();
+            let reached = front_min_time >= snap.time - tol;
+            let passed = front_min_time > snap.time + tol;
+            if !(passed || reached && !snap.triangles.is_empty()) {
+                break;
+            }
+            let triangles = if snap.triangles.is_empty() {
+                std::mem::take(&mut snap.fallback)
+            } else {
+                snap.fallback = Vec::new();
+                std::mem::take(&mut snap.triangles)
+            };
+            let name = format!("snapshot_{:04}.vtu", snap.index);
+            write_atomic(&self.dir, &name, triangles_vtu(&triangles).as_bytes())?;
+            self.written.push((snap.time, name));
+            self.next += 1;
+            count += 1;
+        }
+        if count > 0 {
+            write_atomic(&self.dir, "snapshots.pvd", self.pvd().as_bytes())?;
+        }
+        Ok(count)
+    }
+
+    /// Snapshot files written so far: (time in s, file name).
+    pub fn written(&self) -> &[(f64, String)] {
+        &self.written
+    }
+
+    /// The ParaView collection of the files written so far.
+    fn pvd(&self) -> String {
+        let mut s = String::from(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" \
+             byte_order=\"LittleEndian\">\n<Collection>\n",
+        );
+        for (time, name) in &self.written {
+            let _ = writeln!(
+                s,
+                "<DataSet timestep=\"{time}\" part=\"0\" file=\"{name}\"/>"
+            );
+        }
+        s.push_str("</Collection>\n</VTKFile>\n");
+        s
+    }
+}
+
+/// Which rule of the module docs a slice comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Rule {
+    Crossing,
+    BottomFace,
+}
+
+/// Corners of the slice of one element, counter-clockwise in `(x, y)`; `points[len..]` unused.
+#[derive(Clone, Copy, Debug)]
+struct Corners {
+    points: [[f64; 3]; 4],
+    len: usize,
+    rule: Rule,
+}
+
+/// The slice of the element `v` by the plane `tau = tau_s` (vertices within `tol` of it are on
+/// it), or `None` when neither rule applies or the slice has fewer than three corners.
+fn slice(v: &[[f64; 3]; 4], tau_s: f64, tol: f64) -> Option<Corners> {
+    let side = |p: &[f64; 3]| {
+        if p[2] < tau_s - tol {
+            -1
+        } else if p[2] > tau_s + tol {
+            1
+        } else {
+            0
+        }
+    };
+    let sides = v.each_ref().map(side);
+    let below = sides.iter().filter(|&&s| s < 0).count();
+    let on = sides.iter().filter(|&&s| s == 0).count();
+    let rule = match (below, on) {
+        (0, 3) => Rule::BottomFace,
+        (0, _) | (4, _) => return None,
+        _ => Rule::Crossing,
+    };
+    let mut points = [[0.0; 3]; 4];
+    let mut len = 0;
+    let mut push = |p: [f64; 3]| {
+        points[len] = p;
+        len += 1;
+    };
+    if below == 2 && on == 0 {
+        // Quadrilateral: cut edges in cyclic order b0a0, b0a1, b1a1, b1a0 (consecutive ones share
+        // a face of the tetrahedron).
+        let (mut b, mut a) = ([0; 2], [0; 2]);
+        let (mut nb, mut na) = (0, 0);
+        for (i, &s) in sides.iter().enumerate() {
+            if s < 0 {
+                b[nb] = i;
+                nb += 1;
+            } else {
+                a[na] = i;
+                na += 1;
+            }
+        }
+        for (i, j) in [(b[0], a[0]), (b[0], a[1]), (b[1], a[1]), (b[1], a[0])] {
+            push(cut(v[i], v[j], tau_s));
+        }
+    } else {
+        for i in 0..4 {
+            match sides[i] {
+                0 => push(v[i]),
+                s if s < 0 => {
+                    for j in 0..4 {
+                        if sides[j] > 0 {
+                            push(cut(v[i], v[j], tau_s));
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    if len < 3 {
+        return None;
+    }
+    let xy = |p: [f64; 3]| [p[0], p[1]];
+    let twice_area: f64 = (1..len - 1)
+        .map(|i| signed_area(xy(points[0]), xy(points[i]), xy(points[i + 1])))
+        .sum();
+    if twice_area < 0.0 {
+        points[..len].reverse();
+    }
+    Some(Corners { points, len, rule })
+}
+
+/// The point of the edge from `below` to `above` at `tau = tau_s`. Always interpolated from the
+/// lower end, so the elements sharing an edge get the same point to the last bit.
+fn cut(below: [f64; 3], above: [f64; 3], tau_s: f64) -> [f64; 3] {
+    let w = (tau_s - below[2]) / (above[2] - below[2]);
+    [
+        below[0] + w * (above[0] - below[0]),
+        below[1] + w * (above[1] - below[1]),
+        tau_s,
+    ]
+}
+
+/// Signed area of the triangle `a, b, c`: positive when counter-clockwise.
+fn signed_area(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+}
+
+/// The triangles as a VTK XML unstructured grid (ASCII, version 1.0, the layout of
+/// [`crate::output::UnstructuredGrid`]) with points `[x, y, 0]`, multi-component point data
+/// `velocity`, `stress`, `displacement`, `strain_energy_density` and cell data `area`.
+fn triangles_vtu(triangles: &[Triangle]) -> String {
+    let n = triangles.len();
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" \
+         byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n",
+    );
+    let _ = writeln!(
+        s,
+        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{n}\">",
+        3 * n
+    );
+    let values = || triangles.iter().flat_map(|t| t.values.iter());
+    s.push_str("<PointData>\n");
+    type Get = for<'a> fn(&'a PointValues) -> &'a [f64];
+    let fields: [(&str, usize, Get); 4] = [
+        ("velocity", 3, |p| &p.velocity),
+        ("stress", 6, |p| &p.stress),
+        ("displacement", 3, |p| &p.displacement),
+        ("strain_energy_density", 1, |p| {
+            std::slice::from_ref(&p.strain_energy_density)
+        }),
+    ];
+    for (name, comps, get) in fields {
+        let attrs = match comps {
+            1 => format!("Name=\"{name}\""),
+            _ => format!("Name=\"{name}\" NumberOfComponents=\"{comps}\""),
+        };
+        let data = values().flat_map(|p| get(p).iter());
+        data_array(&mut s, "Float64", &attrs, data, comps);
+    }
+    s.push_str("</PointData>\n<CellData>\n");
+    let areas = triangles.iter().map(Triangle::area);
+    data_array(&mut s, "Float64", "Name=\"area\"", areas, 1);
+    s.push_str("</CellData>\n<Points>\n");
+    let points = triangles
+        .iter()
+        .flat_map(|t| t.xy.iter().flat_map(|p| [p[0], p[1], 0.0]));
+    data_array(&mut s, "Float64", "NumberOfComponents=\"3\"", points, 3);
+    s.push_str("</Points>\n<Cells>\n");
+    data_array(&mut s, "Int64", "Name=\"connectivity\"", 0..3 * n, 3);
+    let offsets = (1..=n).map(|c| 3 * c);
+    data_array(&mut s, "Int64", "Name=\"offsets\"", offsets, 10);
+    let types = std::iter::repeat_n(5u8, n);
+    data_array(&mut s, "UInt8", "Name=\"types\"", types, 20);
+    s.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    s
+}
+
+/// Appends an ASCII `DataArray` of type `ty` with extra attributes `attrs`, `per_line` values to
+/// a line, floats in Rust's shortest round-trip form.
+fn data_array<T: std::fmt::Display>(
+    out: &mut String,
+    ty: &str,
+    attrs: &str,
+    values: impl Iterator<Item = T>,
+    per_line: usize,
+) {
+    let _ = writeln!(out, "<DataArray type=\"{ty}\" {attrs} format=\"ascii\">");
+    let mut count = 0;
+    for v in values {
+        if count > 0 {
+            out.push(if count % per_line == 0 { '\n' } else { ' ' });
+        }
+        let _ = write!(out, "{v}");
+        count += 1;
+    }
+    if count > 0 {
+        out.push('\n');
+    }
+    out.push_str("</DataArray>\n");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Unit square: 4 vertices, 2 counter-clockwise triangles.
+    const SQUARE: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    const TRIANGLES: [[usize; 3]; 2] = [[0, 1, 2], [0, 2, 3]];
+
+    /// Tetrahedra tiling the square times the layers between consecutive fronts (`fronts[k][v]`
+    /// is the tau of vertex `v` on front `k`, increasing in `k`). Each prism is split into three
+    /// tetrahedra by vertex index, which makes the splits of shared faces agree.
+    fn tets(fronts: &[[f64; 4]]) -> Vec<[[f64; 3]; 4]> {
+        let mut out = Vec::new();
+        for layer in fronts.windows(2) {
+            for tri in TRIANGLES {
+                let mut t = tri;
+                t.sort_unstable();
+                let [a, b, c] = t;
+                let lo = |v: usize| [SQUARE[v][0], SQUARE[v][1], layer[0][v]];
+                let hi = |v: usize| [SQUARE[v][0], SQUARE[v][1], layer[1][v]];
+                out.push([lo(a), lo(b), lo(c), hi(c)]);
+                out.push([lo(a), lo(b), hi(b), hi(c)]);
+                out.push([lo(a), hi(a), hi(b), hi(c)]);
+            }
+        }
+        out
+    }
+
+    fn linear(p: [f64; 3]) -> PointValues {
+        let [x, y, tau] = p;
+        PointValues {
+            velocity: [1.0 + 2.0 * x - y, 3.0 * y + tau, -tau],
+            stress: [x, y, tau, x + y, y - tau, 2.0 * x + 0.5 * tau],
+            displacement: [x * 0.25, -y, x + y + tau],
+            strain_energy_density: 7.0 - x + 4.0 * tau,
+        }
+    }
+
+    /// The numbers of the `DataArray` whose opening tag contains `key`.
+    fn array(text: &str, key: &str) -> Vec<f64> {
+        let start = text.find(key).unwrap_or_else(|| panic!("no {key}"));
+        let mut body = &text[start..];
+        if key.starts_with('<') {
+            body = &body[body.find("<DataArray").unwrap()..];
+        }
+        let body = &body[body.find('>').unwrap() + 1..body.find("</DataArray>").unwrap()];
+        body.split_whitespace()
+            .map(|w| w.parse().unwrap())
+            .collect()
+    }
+
+    /// Reads `file`, checks that the corner values are `linear` at `tau` and returns the total
+    /// triangle area and the number of triangles.
+    fn check_file(dir: &std::path::Path, file: &str, tau: f64) -> (f64, usize) {
+        let text = std::fs::read_to_string(dir.join(file)).unwrap();
+        let points = array(&text, "<Points>");
+        let velocity = array(&text, "Name=\"velocity\"");
+        let stress = array(&text, "Name=\"stress\"");
+        let displacement = array(&text, "Name=\"displacement\"");
+        let sed = array(&text, "Name=\"strain_energy_density\"");
+        let areas = array(&text, "Name=\"area\"");
+        let n = points.len() / 3;
+        assert_eq!(n % 3, 0);
+        assert_eq!(velocity.len(), 3 * n);
+        assert_eq!(stress.len(), 6 * n);
+        assert_eq!(areas.len(), n / 3);
+        for k in 0..n {
+            let p = [points[3 * k], points[3 * k + 1], tau];
+            assert_eq!(points[3 * k + 2], 0.0);
+            let want = linear(p);
+            let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(a, b)| (a - b).abs() <= 1e-12);
+            assert!(close(&velocity[3 * k..3 * k + 3], &want.velocity));
+            assert!(close(&stress[6 * k..6 * k + 6], &want.stress));
+            assert!(close(&displacement[3 * k..3 * k + 3], &want.displacement));
+            assert!((sed[k] - want.strain_energy_density).abs() <= 1e-12);
+        }
+        let mut total = 0.0;
+        for (c, &area) in areas.iter().enumerate() {
+            let q = |i: usize| [points[9 * c + 3 * i], points[9 * c + 3 * i + 1]];
+            let a = signed_area(q(0), q(1), q(2));
+            assert!(a > 0.0, "triangle {c} of {file} is not counter-clockwise");
+            assert_eq!(a, area);
+            total += a;
+        }
+        (total, n / 3)
+    }
+
+    fn timesteps(pvd: &str) -> Vec<(f64, String)> {
+        pvd.lines()
+            .filter(|l| l.starts_with("<DataSet"))
+            .map(|l| {
+                let attr = |k: &str| {
+                    let s = &l[l.find(k).unwrap() + k.len()..];
+                    s[..s.find('"').unwrap()].to_string()
+                };
+                (attr("timestep=\"").parse().unwrap(), attr("file=\""))
+            })
+            .collect()
+    }
+
+    const TIMES: [f64; 5] = [0.0, 0.3, 1.0, 1.7, 2.0];
+
+    /// Feeds `elements` in the given order and checks the five snapshots of `TIMES`.
+    fn run(elements: &[[[f64; 3]; 4]]) {
+        let dir = tempfile::tempdir().unwrap();
+        // Unsorted, with a duplicate.
+        let times = [1.7, 0.3, 2.0, 0.0, 1.0, 0.3];
+        let mut snaps = Snapshots::new(&times, 1.0, dir.path().to_path_buf());
+        assert_eq!(snaps.flush(0.0).unwrap(), 0, "start-time snapshot waits");
+        for e in elements {
+            snaps.add_element(e, linear);
+        }
+        assert_eq!(snaps.flush(0.5).unwrap(), 2);
+        let names = ["snapshot_0000.vtu", "snapshot_0001.vtu"];
+        assert_eq!(
+            snaps.written(),
+            &[(0.0, names[0].to_string()), (0.3, names[1].to_string())]
+        );
+        assert!(!dir.path().join("snapshot_0002.vtu").exists());
+        let pvd = std::fs::read_to_string(dir.path().join("snapshots.pvd")).unwrap();
+        assert_eq!(timesteps(&pvd).len(), 2);
+
+        assert_eq!(snaps.flush(2.0).unwrap(), 3);
+        assert_eq!(snaps.flush(2.0).unwrap(), 0);
+        let pvd = std::fs::read_to_string(dir.path().join("snapshots.pvd")).unwrap();
+        let listed = timesteps(&pvd);
+        assert_eq!(listed.len(), 5);
+        for (i, (time, file)) in listed.iter().enumerate() {
+            assert_eq!(*time, TIMES[i]);
+            assert_eq!(file, &format!("snapshot_{i:04}.vtu"));
+            let (area, _) = check_file(dir.path(), file, TIMES[i]);
+            assert!((area - 1.0).abs() <= 1e-12, "t = {time}: area {area}");
+        }
+        assert_eq!(snaps.written().len(), 5);
+        assert!(snaps.snapshots.iter().all(|s| s.triangles.capacity() == 0));
+    }
+
+    #[test]
+    fn flat_layers_are_sliced_exactly_once() {
+        let elements = tets(&[[0.0; 4], [1.0; 4], [2.0; 4]]);
+        run(&elements);
+        // Reversed order: the bottom faces of the upper layer at tau = 1 arrive first and must
+        // be dropped once the top faces of the lower layer come.
+        let reversed: Vec<_> = elements.into_iter().rev().collect();
+        run(&reversed);
+    }
+
+    #[test]
+    fn flat_front_slices_are_the_faces_in_the_plane() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut snaps = Snapshots::new(&TIMES, 1.0, dir.path().to_path_buf());
+        for e in tets(&[[0.0; 4], [1.0; 4], [2.0; 4]]) {
+            snaps.add_element(&e, linear);
+        }
+        // tau = 0, 1, 2: the two square triangles (one face per prism); tau = 0.3: 4 per prism.
+        let counts: Vec<usize> = snaps.snapshots.iter().map(|s| s.triangles.len()).collect();
+        assert_eq!(counts, [0, 8, 2, 8, 2]);
+        assert_eq!(snaps.snapshots[0].fallback.len(), 2);
+        assert!(snaps.snapshots[2].fallback.is_empty());
+    }
+
+    #[test]
+    fn curved_fronts_tile_every_plane() {
+        // The middle front is not flat: planes at 0.95..1.15 cut both layers.
+        let fronts = [[0.0; 4], [0.9, 1.2, 1.0, 1.1], [2.0; 4]];
+        let elements = tets(&fronts);
+        let times = [0.5, 0.9, 0.95, 1.0, 1.05, 1.1, 1.15, 1.2, 1.5];
+        let dir = tempfile::tempdir().unwrap();
+        // c_ref = 2: tau = 2 t.
+        let times_s: Vec<f64> = times.iter().map(|t| t / 2.0).collect();
+        let mut snaps = Snapshots::new(&times_s, 2.0, dir.path().to_path_buf());
+        for e in &elements {
+            snaps.add_element(e, linear);
+        }
+        assert_eq!(snaps.flush(1.0).unwrap(), times.len());
+        for (i, (time, file)) in snaps.written().iter().enumerate() {
+            assert_eq!(*time, times_s[i]);
+            let (area, _) = check_file(dir.path(), file, times[i]);
+            assert!(
+                (area - 1.0).abs() <= 1e-12,
+                "tau = {}: area {area}",
+                times[i]
+            );
+        }
+    }
+
+    #[test]
+    fn elements_away_from_the_planes_are_skipped() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut snaps = Snapshots::new(&[5.0], 1.0, dir.path().to_path_buf());
+        let mut calls = 0;
+        for e in tets(&[[0.0; 4], [1.0; 4]]) {
+            snaps.add_element(&e, |p| {
+                calls += 1;
+                linear(p)
+            });
+        }
+        assert_eq!(calls, 0);
+        assert_eq!(snaps.flush(1.0).unwrap(), 0);
+        assert!(snaps.written().is_empty());
+        assert!(!dir.path().join("snapshots.pvd").exists());
+    }
+
+    #[test]
+    fn meshio_reads_a_snapshot() {
+        let have_meshio = std::process::Command::new("python3")
+            .args(["-c", "import meshio"])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if !have_meshio {
+            assert!(
+                std::env::var_os("CI").is_none(),
+                "meshio is required on CI (python3 -c 'import meshio' failed)"
+            );
+            eprintln!("skipping: python3 with meshio not available");
+            return;
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let mut snaps = Snapshots::new(&[0.3], 1.0, dir.path().to_path_buf());
+        for e in tets(&[[0.0; 4], [1.0; 4]]) {
+            snaps.add_element(&e, linear);
+        }
+        snaps.flush(1.0).unwrap();
+        let path = dir.path().join(&snaps.written()[0].1);
+        let script = "import sys, meshio\n\
+                      m = meshio.read(sys.argv[1])\n\
+                      print(sum(len(b.data) for b in m.cells), m.cells[0].type)\n\
+                      for k in ('velocity', 'stress', 'displacement', 'strain_energy_density'):\n    \
+                          print(k, *m.point_data[k].shape)\n";
+        let out = std::process::Command::new("python3")
+            .args(["-c", script])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], "8 triangle");
+        assert_eq!(lines[1], "velocity 24 3");
+        assert_eq!(lines[2], "stress 24 6");
+        assert_eq!(lines[3], "displacement 24 3");
+        assert_eq!(lines[4], "strain_energy_density 24");
+    }
+}

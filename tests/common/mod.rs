@@ -1,0 +1,86 @@
+// Each test binary uses a different subset of these helpers.
+#![allow(dead_code)]
+
+//! Helpers shared by the integration tests: run a config text through the engine.
+
+use sdg_engine::{Config, LoadedConfig, Problem, RunOptions, RunSummary};
+
+/// Parses `text` with `overrides`, solves it with outputs in a fresh temporary folder, and
+/// returns the summary and the folder (kept alive by the returned guard).
+pub fn run(text: &str, overrides: &[String]) -> (RunSummary, tempfile::TempDir) {
+    let config = Config::parse(text, "test.toml", overrides).expect("valid config");
+    let loaded = LoadedConfig {
+        config,
+        file: "test.toml".into(),
+    };
+    let problem = Problem::setup(loaded).expect("valid problem");
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let options = RunOptions {
+        output_dir: Some(dir.path().to_path_buf()),
+    };
+    let (summary, _) = sdg_engine::solve_job(&problem, &options).expect("run succeeds");
+    (summary, dir)
+}
+
+/// `key=value` overrides from pairs.
+pub fn set(pairs: &[(&str, String)]) -> Vec<String> {
+    pairs.iter().map(|(k, v)| format!("{k}={v}")).collect()
+}
+
+use sdg_mesh::{Front, Mesh, Pitcher};
+use sdg_solver::Material;
+use sdg_solver::boundary::Boundary;
+use sdg_solver::element::FrontSolution;
+use sdg_solver::exact::PlaneWave;
+use sdg_solver::patch::{ElementReport, Initial, PatchSolver};
+use sdg_solver::system::System;
+
+/// The state of a run driven directly through the solver API.
+pub struct Direct {
+    pub mesh: Mesh,
+    pub system: System,
+    pub solver: PatchSolver,
+    pub solution: FrontSolution,
+    pub front: Front,
+    /// Sum of all patches' dissipation (scaled units).
+    pub dissipation: f64,
+}
+
+/// Solves `mesh` to `t_end` with `boundary`, initial data `initial` (rest if none) and order
+/// `order`, calling `check` on every element report.
+pub fn solve_direct(
+    mesh: Mesh,
+    material: &Material,
+    boundary: &Boundary,
+    initial: Option<&PlaneWave>,
+    order: usize,
+    t_end: f64,
+    mut check: impl FnMut(&ElementReport),
+) -> Direct {
+    let system = System::new(material);
+    let max_star = (0..mesh.vertices().len() as u32)
+        .map(|v| mesh.vertex_triangles(v).len())
+        .max()
+        .unwrap();
+    let mut solver = PatchSolver::new(system.clone(), order, max_star);
+    let mut solution =
+        FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
+    let pitcher = Pitcher::new(&mesh, system.c_ref(), 0.9, t_end).unwrap();
+    let mut front = Front::flat(mesh.vertices().len(), 0.0);
+    let init = initial.map_or(Initial::Rest, Initial::Wave);
+    let mut dissipation = 0.0;
+    sdg_engine::pitch_to_end(&mesh, &pitcher, &mut front, |tent, front| {
+        let r = solver.solve(&mesh, front.times(), tent, boundary, init, &mut solution);
+        dissipation += r.dissipation;
+        solver.element_reports().iter().for_each(&mut check);
+    })
+    .unwrap();
+    Direct {
+        mesh,
+        system,
+        solver,
+        solution,
+        front,
+        dissipation,
+    }
+}
