@@ -3,19 +3,48 @@
 use std::path::Path;
 use std::process::Command;
 
-/// Stored results of `sdg mesh` per shipped config: (file, tents, tetrahedra). Pitching is
+/// Stored results of `sdg mesh` per pitching config: (file, tents, tetrahedra). Pitching is
 /// deterministic, so these are exact.
 const EXPECTED: [(&str, u64, u64); 2] = [
     ("plate_mesh.toml", 35212, 203162),
     ("plate_with_hole.toml", 590, 2844),
 ];
 
+/// Stored results of `sdg run` per solver config, run to a shorter end time (s): (file, end
+/// time, patches, velocity error, stress error). Errors are compared to 1e-6 relative.
+const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 2] = [
+    (
+        "plane_wave.toml",
+        5e-7,
+        850,
+        5.437164358389692e-4,
+        5.280764054298261e-4,
+    ),
+    (
+        "antiplane_pulse.toml",
+        2.5e-6,
+        3483,
+        4.5546812168404223e-4,
+        4.751844003760794e-4,
+    ),
+];
+
 fn run_mesh(config: &str, out: &Path) -> serde_json::Value {
+    run_sdg("mesh", config, &[], out)
+}
+
+/// Runs `sdg COMMAND configs/CONFIG --set ...` into `out` and reads its summary.
+fn run_sdg(command: &str, config: &str, set: &[String], out: &Path) -> serde_json::Value {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("configs")
         .join(config);
+    let mut args = vec![command.to_string(), path.to_str().unwrap().to_string()];
+    for s in set {
+        args.extend(["--set".to_string(), s.clone()]);
+    }
     let status = Command::new(env!("CARGO_BIN_EXE_sdg"))
-        .args(["mesh", path.to_str().unwrap(), "--quiet", "--output"])
+        .args(&args)
+        .args(["--quiet", "--output"])
         .arg(out)
         .status()
         .unwrap();
@@ -24,13 +53,13 @@ fn run_mesh(config: &str, out: &Path) -> serde_json::Value {
 }
 
 #[test]
-fn shipped_configs_match_stored_results() {
+fn pitching_configs_match_stored_results() {
     let shipped = std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs"))
         .unwrap()
         .count();
     assert_eq!(
         shipped,
-        EXPECTED.len(),
+        EXPECTED.len() + EXPECTED_RUNS.len(),
         "every shipped config has stored results"
     );
     for (config, tents, tetrahedra) in EXPECTED {
@@ -39,6 +68,35 @@ fn shipped_configs_match_stored_results() {
         assert_eq!(s["tents"].as_u64(), Some(tents), "{config}");
         assert_eq!(s["tetrahedra"].as_u64(), Some(tetrahedra), "{config}");
         assert!(s["max_slope_ratio"].as_f64().unwrap() < s["safety"].as_f64().unwrap());
+    }
+}
+
+#[test]
+fn solver_configs_match_stored_results() {
+    for (config, end, patches, velocity, stress) in EXPECTED_RUNS {
+        let dir = tempfile::tempdir().unwrap();
+        let set = [
+            format!("time.end={end:e}"),
+            format!("output.snapshot_times=[{end:e}]"),
+        ];
+        let s = run_sdg("run", config, &set, dir.path());
+        assert_eq!(s["patches"].as_u64(), Some(patches), "{config}");
+        let close = |got: &serde_json::Value, want: f64| {
+            (got.as_f64().unwrap() - want).abs() <= 1e-6 * want
+        };
+        assert!(
+            close(&s["error"]["velocity_l2_rel"], velocity),
+            "{config}: {}",
+            s["error"]
+        );
+        assert!(
+            close(&s["error"]["stress_l2_rel"], stress),
+            "{config}: {}",
+            s["error"]
+        );
+        assert!(s["energy"]["balance_residual_rel"].as_f64().unwrap().abs() < 1e-10);
+        assert!(dir.path().join("snapshot_0000.vtu").exists());
+        assert!(dir.path().join("history.csv").exists());
     }
 }
 

@@ -1,0 +1,115 @@
+//! Snapshots: time slices cut from the spacetime elements agree with the exact plane wave at
+//! every written point, and open in meshio.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+/// The values of the ASCII `DataArray` whose opening tag contains `marker`.
+fn data_array(text: &str, marker: &str) -> Vec<f64> {
+    let start = text
+        .find(marker)
+        .unwrap_or_else(|| panic!("{marker} not found"));
+    let body = &text[start..];
+    let open = body.find('>').unwrap() + 1;
+    let close = body.find("</DataArray>").unwrap();
+    body[open..close]
+        .split_whitespace()
+        .map(|w| w.parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn snapshots_agree_with_the_exact_solution() {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/plane_wave.toml"),
+    )
+    .unwrap();
+    let times = [0.0, 2.5e-7, 5e-7];
+    let overrides = common::set(&[
+        ("time.end", "5e-7".into()),
+        ("output.snapshot_times", format!("{times:?}")),
+    ]);
+    let (summary, dir) = common::run(&text, &overrides);
+    assert_eq!(summary.snapshots.len(), 3);
+    let config = sdg_engine::Config::parse(&text, "plane_wave.toml", &overrides).unwrap();
+    let loaded = sdg_engine::LoadedConfig {
+        config,
+        file: "plane_wave.toml".into(),
+    };
+    let problem = sdg_engine::Problem::setup(loaded).unwrap();
+    let wave = problem.exact.as_ref().unwrap();
+    let stress_scale = problem.material.c_d() * problem.material.density();
+    for (t, file) in &summary.snapshots {
+        let vtu = std::fs::read_to_string(dir.path().join(file)).unwrap();
+        let points = data_array(&vtu[vtu.find("<Points>").unwrap()..], "<DataArray");
+        let velocity = data_array(&vtu, "Name=\"velocity\"");
+        let stress = data_array(&vtu, "Name=\"stress\"");
+        let displacement = data_array(&vtu, "Name=\"displacement\"");
+        let area: f64 = data_array(&vtu, "Name=\"area\"").iter().sum();
+        assert!((area - 1e-4).abs() < 1e-14, "t = {t}: slice area {area}");
+        let (mut ev, mut es, mut eu): (f64, f64, f64) = (0.0, 0.0, 0.0);
+        for (i, p) in points.chunks(3).enumerate() {
+            let exact = wave.state([p[0], p[1]], *t);
+            let u = wave.displacement([p[0], p[1]], *t);
+            ev = ev.max((velocity[3 * i] - exact[0]).hypot(velocity[3 * i + 1] - exact[1]));
+            for (k, c) in [(0, 2), (1, 3), (3, 4)] {
+                es = es.max((stress[6 * i + k] - exact[c]).abs() / stress_scale);
+            }
+            eu = eu.max((displacement[3 * i] - u[0]).hypot(displacement[3 * i + 1] - u[1]));
+        }
+        // Pointwise at slice corners, for unit velocity amplitude and a wavelength of 10 mm
+        // (displacement amplitude 0.76 um).
+        eprintln!(
+            "t = {t}: max errors velocity {ev:.2e}, stress/Z {es:.2e}, displacement {eu:.2e}"
+        );
+        assert!(ev < 1e-2 && es < 1e-2 && eu < 1e-2 * 0.76e-6, "t = {t}");
+    }
+}
+
+#[test]
+fn snapshots_open_in_meshio() {
+    let has_meshio = Command::new("python3")
+        .args(["-c", "import meshio"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !has_meshio {
+        assert!(std::env::var_os("CI").is_none(), "CI must install meshio");
+        eprintln!("skipped: python3 with meshio is not available");
+        return;
+    }
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/antiplane_pulse.toml"),
+    )
+    .unwrap();
+    let overrides = common::set(&[
+        ("time.end", "1e-6".into()),
+        ("output.snapshot_times", "[1e-6]".into()),
+        ("solver.order", "1".into()),
+    ]);
+    let (summary, dir) = common::run(&text, &overrides);
+    let script = "import sys, meshio\n\
+                  m = meshio.read(sys.argv[1])\n\
+                  print(m.cells_dict['triangle'].shape[0], m.point_data['velocity'].shape[1], \
+                  m.point_data['stress'].shape[1], m.point_data['strain_energy_density'].ndim)";
+    let out = Command::new("python3")
+        .args(["-c", script])
+        .arg(dir.path().join(&summary.snapshots[0].1))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let fields: Vec<usize> = String::from_utf8(out.stdout)
+        .unwrap()
+        .split_whitespace()
+        .map(|w| w.parse().unwrap())
+        .collect();
+    assert!(fields[0] >= 800, "{fields:?}");
+    assert_eq!(&fields[1..], [3, 6, 1]);
+    let pvd = std::fs::read_to_string(dir.path().join("snapshots.pvd")).unwrap();
+    assert!(pvd.contains("snapshot_0000.vtu"));
+}
