@@ -14,6 +14,7 @@ pub mod norms;
 pub mod patch;
 pub mod quadrature;
 pub mod riemann;
+pub mod ring;
 pub mod system;
 
 pub use material::{Material, MaterialError, Plane};

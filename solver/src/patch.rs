@@ -8,7 +8,8 @@
 //! with the target flux `F*`: the earlier side's flux `A_n q_prev` on the inflow (bottom) face,
 //! the element's own `A_n q` on the outflow (top) face, and the Riemann flux `A_m q*` on the
 //! vertical faces, which couple the ring of elements around the tent pole, or carry the boundary
-//! data. All elements of a patch are solved by one dense LU factorization.
+//! data. The patch system is solved by block elimination around the ring of elements
+//! ([`crate::ring`]).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
@@ -22,6 +23,7 @@ use crate::element::{FrontSolution, Geometry, SpacePoint, evaluate};
 use crate::exact::PlaneWave;
 use crate::quadrature::{self, Rule};
 use crate::riemann;
+use crate::ring::BlockSystem;
 use crate::system::{FrameTrace, MAX_FIELDS, Matrix, State, System};
 
 /// Energy terms and diagnostics of one solved element, in scaled units (physical: times the
@@ -138,8 +140,8 @@ pub struct PatchSolver {
     /// `H[r][k * n + l] = int_ref phi_k d(phi_l)/d(xi_r)`.
     h_ref: [Vec<f64>; 3],
     slots: Vec<Slot>,
-    matrix: Vec<f64>,
-    rhs: Vec<f64>,
+    blocks: BlockSystem,
+    order: Vec<usize>,
     perm: Vec<usize>,
     perm_inv: Vec<usize>,
     stack: MemBuffer,
@@ -173,7 +175,6 @@ impl PatchSolver {
         let n = basis.len();
         let fields = system.fields();
         let width = fields + system.displacement_components();
-        let dofs = max_star * n * fields;
         let vol_rule = quadrature::tetrahedron(2 * order);
         let mut h_ref = [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]];
         let mut phi = vec![0.0; n];
@@ -198,11 +199,11 @@ impl PatchSolver {
             face_rule: quadrature::triangle(2 * order + 2),
             h_ref,
             slots: vec![Slot::default(); max_star],
-            matrix: vec![0.0; dofs * dofs],
-            rhs: vec![0.0; dofs],
-            perm: vec![0; dofs],
-            perm_inv: vec![0; dofs],
-            stack: MemBuffer::new(StackReq::any_of(&[lu(dofs), lu(n)])),
+            blocks: BlockSystem::new(max_star, n * fields),
+            order: Vec::with_capacity(max_star),
+            perm: vec![0; n],
+            perm_inv: vec![0; n],
+            stack: MemBuffer::new(lu(n)),
             small: vec![0.0; n * n],
             small_rhs: vec![0.0; 2 * n],
             mass: vec![0.0; n * n],
@@ -289,12 +290,7 @@ impl PatchSolver {
             };
         }
 
-        let matrix = &mut self.matrix[..dofs * dofs];
-        matrix.fill(0.0);
-        let rhs = &mut self.rhs[..dofs];
-        rhs.fill(0.0);
-        // Column-major: entry (row, col) at col * dofs + row.
-        let at = |row: usize, col: usize| col * dofs + row;
+        self.blocks.reset(d, m);
         let a_mu = [
             self.system.a_n([1.0, 0.0, 0.0]),
             self.system.a_n([0.0, 1.0, 0.0]),
@@ -302,7 +298,6 @@ impl PatchSolver {
         ];
         for i in 0..d {
             let slot = self.slots[i];
-            let base = i * m;
             // Volume: det * sum_r H_r (x) B_r with B_r = sum_mu inverse[r][mu] A_mu.
             let inv = slot.geometry.inverse();
             let det = slot.geometry.det();
@@ -315,7 +310,7 @@ impl PatchSolver {
                         }
                     }
                 }
-                add_kron(matrix, at, (base, base), n, fields, h, &b);
+                add_kron(self.blocks.block_mut(i, i), m, n, fields, h, &b);
             }
             // Inflow face: target is the earlier side's trace.
             let under = front.element(slot.triangle as usize);
@@ -324,6 +319,7 @@ impl PatchSolver {
             let mass = &mut self.mass[..n * n];
             mass.fill(0.0);
             let mut an = [[0.0; MAX_FIELDS]; MAX_FIELDS];
+            let rhs = self.blocks.rhs_mut(i);
             face_points(&self.face_rule, &slot.vertices, BOTTOM, |x, w, nrm| {
                 an = system.a_n(nrm);
                 let q_prev = inflow_state(system, basis, under, initial, x, phi, values);
@@ -331,12 +327,12 @@ impl PatchSolver {
                 let aq = system.apply(&an, &q_prev);
                 add_outer(mass, -w, phi, phi);
                 for (k, p) in phi.iter().enumerate() {
-                    for (r, a) in rhs[base + k * fields..][..fields].iter_mut().zip(&aq) {
+                    for (r, a) in rhs[k * fields..][..fields].iter_mut().zip(&aq) {
                         *r -= w * p * a;
                     }
                 }
             });
-            add_kron(matrix, at, (base, base), n, fields, mass, &an);
+            add_kron(self.blocks.block_mut(i, i), m, n, fields, mass, &an);
             // Vertical faces: Riemann fluxes with the ring neighbour or the boundary data.
             for (face, neighbour, tag) in vertical_faces(mesh, star, &slot) {
                 let condition = boundary.condition(tag);
@@ -355,6 +351,7 @@ impl PatchSolver {
                 mass.fill(0.0);
                 coupling.fill(0.0);
                 let slots = &self.slots;
+                let rhs = self.blocks.rhs_mut(i);
                 face_points(&self.face_rule, &slot.vertices, face, |x, w, _| {
                     basis.eval(slot.geometry.to_reference(x), phi);
                     add_outer(mass, w, phi, phi);
@@ -377,34 +374,22 @@ impl PatchSolver {
                                 normal,
                             );
                             for (k, p) in phi.iter().enumerate() {
-                                for (r, gc) in rhs[base + k * fields..][..fields].iter_mut().zip(&g)
-                                {
+                                for (r, gc) in rhs[k * fields..][..fields].iter_mut().zip(&g) {
                                     *r -= w * p * gc;
                                 }
                             }
                         }
                     }
                 });
-                add_kron(matrix, at, (base, base), n, fields, mass, &self_block);
+                add_kron(self.blocks.block_mut(i, i), m, n, fields, mass, &self_block);
                 if let Some(j) = neighbour {
-                    add_kron(matrix, at, (base, j * m), n, fields, coupling, &m_b);
+                    add_kron(self.blocks.block_mut(i, j), m, n, fields, coupling, &m_b);
                 }
             }
         }
 
-        let stack = MemStack::new(&mut self.stack);
-        let lu = MatMut::from_column_major_slice_mut(matrix, dofs, dofs);
-        let (_, perm) = factor::lu_in_place(
-            lu,
-            &mut self.perm[..dofs],
-            &mut self.perm_inv[..dofs],
-            Par::Seq,
-            stack,
-            Default::default(),
-        );
-        let lu = MatRef::from_column_major_slice(&self.matrix[..dofs * dofs], dofs, dofs);
-        let x = MatMut::from_column_major_slice_mut(&mut self.rhs[..dofs], dofs, 1);
-        solve::solve_in_place(lu, lu, perm, x, Par::Seq, stack);
+        ring_order(mesh, star, &self.slots[..d], &mut self.order);
+        self.blocks.solve(&self.order[..d]);
 
         let width = self.width();
         let mut report = PatchReport {
@@ -450,7 +435,7 @@ impl PatchSolver {
         let width = self.width();
         let c = self.system.c_ref();
         let slot = self.slots[i];
-        let solution = &self.rhs[..self.used * m];
+        let solution = self.blocks.rhs();
         for k in 0..n {
             let out = &mut self.output[i * n * width + k * width..][..fields];
             out.copy_from_slice(&solution[i * m + k * fields..][..fields]);
@@ -601,26 +586,45 @@ impl PatchSolver {
     }
 }
 
-/// Adds the Kronecker product `scalar (x) block` at `(row0, col0)`: entry `(k, l)` of the
-/// `n x n` row-major `scalar` scales `block` at rows `row0 + k fields`, columns
-/// `col0 + l fields`.
-fn add_kron(
-    matrix: &mut [f64],
-    at: impl Fn(usize, usize) -> usize,
-    (row0, col0): (usize, usize),
-    n: usize,
-    fields: usize,
-    scalar: &[f64],
-    block: &Matrix,
-) {
+/// Adds the Kronecker product `scalar (x) block` to the column-major `m x m` matrix `target`:
+/// entry `(k, l)` of the `n x n` row-major `scalar` scales `block` at rows `k fields..`, columns
+/// `l fields..`.
+fn add_kron(target: &mut [f64], m: usize, n: usize, fields: usize, scalar: &[f64], block: &Matrix) {
     for (k, row) in scalar.chunks_exact(n).enumerate() {
         for (l, &s) in row.iter().enumerate() {
             if s == 0.0 {
                 continue;
             }
-            for (b, col) in (col0 + l * fields..).take(fields).enumerate() {
-                for (a, r) in (row0 + k * fields..).take(fields).enumerate() {
-                    matrix[at(r, col)] += s * block[a][b];
+            for (b, col) in (l * fields..).take(fields).enumerate() {
+                let column = &mut target[col * m + k * fields..][..fields];
+                for (a, t) in column.iter_mut().enumerate() {
+                    *t += s * block[a][b];
+                }
+            }
+        }
+    }
+}
+
+/// Orders the star's elements along the ring around the pole: each chain from its element
+/// without a neighbour across `SIDE_A` (boundary tents), then closed rings, walking across
+/// `SIDE_B` (counter-clockwise). Elimination in this order fills only blocks that couple to a
+/// ring's last element.
+fn ring_order(mesh: &Mesh, star: &[TriangleId], slots: &[Slot], order: &mut Vec<usize>) {
+    order.clear();
+    let d = slots.len();
+    let next = |i: usize| vertical_faces(mesh, star, &slots[i])[1].1;
+    let starts_chain = |i: usize| vertical_faces(mesh, star, &slots[i])[0].1.is_none();
+    for pass in [true, false] {
+        for first in 0..d {
+            if order.contains(&first) || (pass && !starts_chain(first)) {
+                continue;
+            }
+            let mut i = first;
+            loop {
+                order.push(i);
+                match next(i) {
+                    Some(j) if !order.contains(&j) => i = j,
+                    _ => break,
                 }
             }
         }

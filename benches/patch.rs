@@ -1,0 +1,130 @@
+//! Patch solves per second on one core for p = 1..4, and a dense LU of the same size.
+//!
+//! Run: `cargo bench --bench patch`. The mesh is a 12 x 12 right-diagonal mesh (interior vertex
+//! stars of 6 tetrahedra, so an interior patch of order p has 6 x 5 x (p+1)(p+2)(p+3)/6 unknowns),
+//! plane strain, exact plane-wave boundaries. One iteration pitches and solves the first 50
+//! tents from a flat front; criterion reports patches per second. `lu/N` factors and solves a
+//! random diagonally dominant N x N system with faer's in-place partial-pivoting LU.
+
+use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::{MatMut, MatRef, Par};
+
+use sdg_mesh::{Diagonal, Front, Mesh, Pitcher, Rectangle};
+use sdg_solver::boundary::{Boundary, Condition};
+use sdg_solver::element::FrontSolution;
+use sdg_solver::exact::{PlaneWave, Profile, Wave};
+use sdg_solver::patch::{Initial, PatchSolver};
+use sdg_solver::system::System;
+use sdg_solver::{Material, Plane};
+
+const PATCHES: u64 = 50;
+
+fn mesh() -> Mesh {
+    Rectangle {
+        width: 1.0,
+        height: 1.0,
+        nx: 12,
+        ny: 12,
+        diagonal: Diagonal::Right,
+        interface: None,
+        perturb: 0.0,
+        seed: 0,
+    }
+    .build()
+    .expect("valid rectangle")
+}
+
+fn patches(c: &mut Criterion) {
+    let mesh = mesh();
+    let material = Material::new(3.24e9, 0.35, 1190.0, Plane::Strain).expect("PMMA");
+    let wave =
+        PlaneWave::new(&material, Wave::P, 30.0, 1.0, 1.0, Profile::Sine, 0.0).expect("wave");
+    let boundary = Boundary::new(vec![Some(Condition::Exact); 4], Some(wave.clone()));
+    let system = System::new(&material);
+    let pitcher = Pitcher::new(&mesh, system.c_ref(), 0.9, 1.0).expect("pitcher");
+    let mut group = c.benchmark_group("patch");
+    group.throughput(Throughput::Elements(PATCHES));
+    group.sample_size(10);
+    for order in 1..=4 {
+        let mut solver = PatchSolver::new(system.clone(), order, 6);
+        let empty =
+            FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
+        group.bench_function(format!("p{order}"), |b| {
+            b.iter_batched_ref(
+                || (Front::flat(mesh.vertices().len(), 0.0), empty.clone()),
+                |(front, solution)| {
+                    for _ in 0..PATCHES {
+                        let v = (0..mesh.vertices().len() as u32)
+                            .min_by(|&a, &b| front.time(a).total_cmp(&front.time(b)))
+                            .expect("vertices");
+                        let tent = pitcher.pitch(&mesh, front, v).expect("local minimum");
+                        solver.solve(
+                            &mesh,
+                            front.times(),
+                            &tent,
+                            &boundary,
+                            Initial::Wave(&wave),
+                            solution,
+                        );
+                    }
+                },
+                BatchSize::LargeInput,
+            )
+        });
+    }
+    group.finish();
+}
+
+fn dense_lu(c: &mut Criterion) {
+    let mut group = c.benchmark_group("lu");
+    group.sample_size(10);
+    for n in [120usize, 300, 600, 1050] {
+        let mut a = vec![0.0; n * n];
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for (i, x) in a.iter_mut().enumerate() {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            *x = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+                + if i % (n + 1) == 0 { n as f64 } else { 0.0 };
+        }
+        let mut work = a.clone();
+        let mut rhs = vec![1.0; n];
+        let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
+        let mut buffer = MemBuffer::new(StackReq::any_of(&[
+            factor::lu_in_place_scratch::<usize, f64>(n, n, Par::Seq, Default::default()),
+            solve::solve_in_place_scratch::<usize, f64>(n, 1, Par::Seq),
+        ]));
+        group.throughput(Throughput::Elements(1));
+        group.bench_function(format!("{n}"), |b| {
+            b.iter(|| {
+                work.copy_from_slice(&a);
+                rhs.fill(1.0);
+                let stack = MemStack::new(&mut buffer);
+                let (_, p) = factor::lu_in_place(
+                    MatMut::from_column_major_slice_mut(&mut work, n, n),
+                    &mut perm,
+                    &mut perm_inv,
+                    Par::Seq,
+                    stack,
+                    Default::default(),
+                );
+                let lu = MatRef::from_column_major_slice(&work, n, n);
+                solve::solve_in_place(
+                    lu,
+                    lu,
+                    p,
+                    MatMut::from_column_major_slice_mut(&mut rhs, n, 1),
+                    Par::Seq,
+                    stack,
+                );
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, patches, dense_lu);
+criterion_main!(benches);

@@ -1,0 +1,103 @@
+//! The patch solve allocates nothing: all scratch memory lives in the `PatchSolver`.
+//!
+//! This binary holds a single test, so the counting allocator sees only its allocations.
+
+// A counting global allocator is the standard way to observe heap allocations; it forwards to the
+// system allocator unchanged.
+#![allow(unsafe_code)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use sdg_mesh::{Diagonal, Front, Pitcher, Rectangle};
+use sdg_solver::boundary::{Boundary, Condition};
+use sdg_solver::element::FrontSolution;
+use sdg_solver::exact::{PlaneWave, Profile, Wave};
+use sdg_solver::history::History;
+use sdg_solver::patch::{Initial, PatchSolver};
+use sdg_solver::system::System as Elastodynamics;
+use sdg_solver::{Material, Plane};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: every call forwards to `System` with the caller's arguments.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as ours.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as ours.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn patch_solves_do_not_allocate() {
+    let mesh = Rectangle {
+        width: 1.0,
+        height: 1.0,
+        nx: 8,
+        ny: 8,
+        diagonal: Diagonal::Alternate,
+        interface: None,
+        perturb: 0.1,
+        seed: 5,
+    }
+    .build()
+    .unwrap();
+    let material = Material::new(3.24e9, 0.35, 1190.0, Plane::Strain).unwrap();
+    let wave = PlaneWave::new(&material, Wave::S, 30.0, 1.0, 1.0, Profile::Sine, 0.0).unwrap();
+    let boundary = Boundary::new(
+        vec![
+            Some(Condition::Exact),
+            Some(Condition::Traction {
+                value: [1e6, 0.0],
+                history: History::Smooth { ramp: 1e-5 },
+            }),
+            Some(Condition::Transmitting {
+                incoming: [1e6, 0.0],
+                history: History::Constant,
+            }),
+            Some(Condition::Roller),
+        ],
+        Some(wave.clone()),
+    );
+    let system = Elastodynamics::new(&material);
+    let mut solver = PatchSolver::new(system.clone(), 3, 8);
+    let mut solution =
+        FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
+    let pitcher = Pitcher::new(&mesh, system.c_ref(), 0.9, 1.0).unwrap();
+    let mut front = Front::flat(mesh.vertices().len(), 0.0);
+    let mut counts = Vec::with_capacity(200);
+    for _ in 0..200 {
+        let v = (0..mesh.vertices().len() as u32)
+            .min_by(|&a, &b| front.time(a).total_cmp(&front.time(b)))
+            .unwrap();
+        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let tent = pitcher.pitch(&mesh, &mut front, v).unwrap();
+        solver.solve(
+            &mesh,
+            front.times(),
+            &tent,
+            &boundary,
+            Initial::Wave(&wave),
+            &mut solution,
+        );
+        counts.push(ALLOCATIONS.load(Ordering::Relaxed) - before);
+    }
+    // The very first solve of the process may allocate once inside the linear algebra library
+    // (lazy initialisation of its kernel dispatch); every later patch must allocate nothing.
+    assert!(counts[0] <= 1, "first patch: {} allocations", counts[0]);
+    assert!(
+        counts[1..].iter().all(|&c| c == 0),
+        "allocations per patch: {counts:?}"
+    );
+}
