@@ -68,7 +68,7 @@ fn execute(cli: &Cli) -> Result<(), EngineError> {
         output_dir: cli.output.clone(),
     };
     if cli.threads.is_some_and(|n| n.get() > 1) && !cli.quiet {
-        eprintln!("note: this release pitches tents on one thread; --threads is not used yet");
+        eprintln!("note: this release runs on one thread; --threads is not used yet");
     }
     match cli.command {
         Command::Validate { .. } => {

@@ -76,6 +76,7 @@ fn every_element_balances_momentum_and_dissipates() {
             },
         );
         assert!(checked > 400, "{plane:?}: {checked} elements");
+        eprintln!("{plane:?}: {checked} elements, worst momentum residual {worst_momentum:.1e}");
         assert!(
             worst_momentum < 1e-10,
             "{plane:?}: momentum residual {worst_momentum}"
