@@ -62,7 +62,7 @@ fn patches(c: &mut Criterion) {
                         let tent = pitcher.pitch(&mesh, front, v).expect("local minimum");
                         solver.solve(
                             &mesh,
-                            front.times(),
+                            front,
                             &tent,
                             &boundary,
                             Initial::Wave(&wave),

@@ -22,12 +22,27 @@ struct Cli {
     /// Worker threads (default: all available cores).
     #[arg(long, global = true, value_name = "N")]
     threads: Option<NonZeroUsize>,
-    /// Print nothing but errors.
+    /// Results independent of thread count and timing (sets `scheduler.deterministic`).
+    #[arg(long, global = true)]
+    deterministic: bool,
+    /// Print nothing but errors; no progress bar.
     #[arg(long, global = true)]
     quiet: bool,
+    /// Log level on stderr: error, warn, info, debug or trace.
+    #[arg(long, global = true, value_name = "LEVEL", default_value = "warn")]
+    log_level: tracing::Level,
+    /// Log format: text, or json (one object per line, for job scripts).
+    #[arg(long, global = true, value_enum, default_value_t = LogFormat::Text)]
+    log_format: LogFormat,
     /// Override a config key, e.g. `--set mesh.nx=64` (repeatable, applied in order).
     #[arg(long = "set", global = true, value_name = "KEY=VALUE")]
     set: Vec<String>,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum LogFormat {
+    Text,
+    Json,
 }
 
 #[derive(Debug, Subcommand)]
@@ -51,6 +66,13 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let logs = tracing_subscriber::fmt()
+        .with_max_level(cli.log_level)
+        .with_writer(std::io::stderr);
+    match cli.log_format {
+        LogFormat::Text => logs.init(),
+        LogFormat::Json => logs.json().init(),
+    }
     match execute(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -66,10 +88,10 @@ fn execute(cli: &Cli) -> Result<(), EngineError> {
     let problem = Problem::setup(LoadedConfig::load(config, &cli.set)?)?;
     let options = RunOptions {
         output_dir: cli.output.clone(),
+        threads: cli.threads.map(NonZeroUsize::get),
+        deterministic: cli.deterministic,
+        progress: !cli.quiet,
     };
-    if cli.threads.is_some_and(|n| n.get() > 1) && !cli.quiet {
-        eprintln!("note: this release runs on one thread; --threads is not used yet");
-    }
     match cli.command {
         Command::Validate { .. } => {
             if !cli.quiet {
@@ -109,13 +131,15 @@ fn execute(cli: &Cli) -> Result<(), EngineError> {
                     )
                 });
                 println!(
-                    "{} patches (order {}, {:.0} dofs each) to t = {} s in {:.3} s{error}; \
-                     energy balance residual {:.1e}; outputs in {}",
+                    "{} patches (order {}, {:.0} dofs each) to t = {} s in {:.3} s on {} \
+                     threads ({}){error}; energy balance residual {:.1e}; outputs in {}",
                     summary.patches,
                     summary.order,
                     summary.dofs_per_patch,
                     summary.final_time,
                     summary.wall_time_s,
+                    summary.threads,
+                    summary.mode,
                     summary.energy.balance_residual_rel,
                     dir.display()
                 );

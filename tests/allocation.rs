@@ -72,24 +72,23 @@ fn patch_solves_do_not_allocate() {
     );
     let system = Elastodynamics::new(&material);
     let mut solver = PatchSolver::new(system.clone(), 3, 8);
-    let mut solution =
-        FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
+    let solution = FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
     let pitcher = Pitcher::new(&mesh, system.c_ref(), 0.9, 1.0).unwrap();
-    let mut front = Front::flat(mesh.vertices().len(), 0.0);
+    let front = Front::flat(mesh.vertices().len(), 0.0);
     let mut counts = Vec::with_capacity(200);
     for _ in 0..200 {
         let v = (0..mesh.vertices().len() as u32)
             .min_by(|&a, &b| front.time(a).total_cmp(&front.time(b)))
             .unwrap();
         let before = ALLOCATIONS.load(Ordering::Relaxed);
-        let tent = pitcher.pitch(&mesh, &mut front, v).unwrap();
+        let tent = pitcher.pitch(&mesh, &front, v).unwrap();
         solver.solve(
             &mesh,
-            front.times(),
+            &front,
             &tent,
             &boundary,
             Initial::Wave(&wave),
-            &mut solution,
+            &solution,
         );
         counts.push(ALLOCATIONS.load(Ordering::Relaxed) - before);
     }

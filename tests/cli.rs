@@ -69,6 +69,8 @@ fn mesh_writes_summary_and_spacetime_mesh() {
         "output.spacetime_mesh=true",
         "--set",
         "mesh.nx=16",
+        "--threads",
+        "2",
         "--quiet",
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
@@ -85,7 +87,7 @@ fn mesh_writes_summary_and_spacetime_mesh() {
     assert!(ratio > 0.0 && ratio < 0.9, "{ratio}");
     assert!(s["tents"].as_u64().unwrap() > 0);
     assert!(s["tetrahedra"].as_u64().unwrap() > s["tents"].as_u64().unwrap());
-    assert!(s["wall_time_s"].as_f64().is_some() && s["threads"].as_u64() == Some(1));
+    assert!(s["wall_time_s"].as_f64().is_some() && s["threads"].as_u64() == Some(2));
     let vtu = std::fs::read_to_string(out_dir.join("spacetime.vtu")).unwrap();
     let cells = format!("NumberOfCells=\"{}\"", s["tetrahedra"]);
     assert!(vtu.contains(&cells));
@@ -183,9 +185,32 @@ fn missing_config_file_and_bad_arguments() {
 }
 
 #[test]
-fn run_without_a_solver_is_a_runtime_failure() {
-    let (_dir, config) = config_file(CONFIG);
-    let out = sdg(&["run", &config]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(stderr(&out).contains("sdg mesh"));
+fn run_solves_and_reports() {
+    let (dir, config) = config_file(CONFIG);
+    let out_dir = dir.path().join("out");
+    let out = sdg(&[
+        "run",
+        &config,
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(out_dir.join("summary.json")).unwrap();
+    let s: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(s["command"], "run");
+    assert_eq!(s["final_time"].as_f64(), Some(1e-7));
+    assert!(s["patches"].as_u64().unwrap() > 0);
+    assert!(out_dir.join("history.csv").exists());
+}
+
+#[test]
+fn unwritable_output_is_a_runtime_failure() {
+    let (dir, config) = config_file(CONFIG);
+    // A file where the output folder should be: creating the folder fails.
+    let blocker = dir.path().join("blocker");
+    std::fs::write(&blocker, b"").unwrap();
+    let out = sdg(&["run", &config, "--output", blocker.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("blocker"), "{}", stderr(&out));
 }

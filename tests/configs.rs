@@ -3,29 +3,30 @@
 use std::path::Path;
 use std::process::Command;
 
-/// Stored results of `sdg mesh` per pitching config: (file, tents, tetrahedra). Pitching is
-/// deterministic, so these are exact.
+/// Stored results of `sdg mesh --deterministic` per pitching config: (file, tents, tetrahedra),
+/// exact for any thread count.
 const EXPECTED: [(&str, u64, u64); 2] = [
-    ("plate_mesh.toml", 35212, 203162),
-    ("plate_with_hole.toml", 590, 2844),
+    ("plate_mesh.toml", 31697, 181814),
+    ("plate_with_hole.toml", 581, 2781),
 ];
 
-/// Stored results of `sdg run` per solver config, run to a shorter end time (s): (file, end
-/// time, patches, velocity error, stress error). Errors are compared to 1e-6 relative.
+/// Stored results of `sdg run --deterministic` per solver config, run to a shorter end time
+/// (s): (file, end time, patches, velocity error, stress error). Errors are compared to 1e-6
+/// relative.
 const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 2] = [
     (
         "plane_wave.toml",
         5e-7,
-        850,
-        5.437164358389692e-4,
-        5.280764054298261e-4,
+        795,
+        5.023772144749525e-4,
+        4.833846733322162e-4,
     ),
     (
         "antiplane_pulse.toml",
         2.5e-6,
-        3483,
-        4.5546812168404223e-4,
-        4.751844003760794e-4,
+        3011,
+        5.622745121166161e-4,
+        5.780000038761202e-4,
     ),
 ];
 
@@ -44,7 +45,7 @@ fn run_sdg(command: &str, config: &str, set: &[String], out: &Path) -> serde_jso
     }
     let status = Command::new(env!("CARGO_BIN_EXE_sdg"))
         .args(&args)
-        .args(["--quiet", "--output"])
+        .args(["--quiet", "--deterministic", "--output"])
         .arg(out)
         .status()
         .unwrap();

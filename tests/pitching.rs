@@ -58,10 +58,10 @@ struct Outcome {
 /// the tent has positive height, and every new front facet satisfies the slope bound.
 fn pitch_checked(mesh: &Mesh, t_end: f64) -> Outcome {
     let pitcher = Pitcher::new(mesh, C, SAFETY, t_end).unwrap();
-    let mut front = Front::flat(mesh.vertices().len(), 0.0);
+    let front = Front::flat(mesh.vertices().len(), 0.0);
     let mut spacetime = SpacetimeMesh::new(mesh, &front);
     let mut max_ratio: f64 = 0.0;
-    let tents = pitch_to_end(mesh, &pitcher, &mut front, |tent, front| {
+    let tents = pitch_to_end(mesh, &pitcher, &front, |tent, front| {
         let v = tent.vertex;
         assert!(tent.t_new > tent.t_old, "tent {tent:?} has no height");
         for &w in mesh.vertex_neighbors(v) {
@@ -82,7 +82,7 @@ fn pitch_checked(mesh: &Mesh, t_end: f64) -> Outcome {
     })
     .unwrap();
     assert!(
-        front.times().iter().all(|&t| t == t_end),
+        front.snapshot().iter().all(|&t| t == t_end),
         "the front ends exactly flat at the end time"
     );
     Outcome {

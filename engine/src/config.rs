@@ -40,6 +40,9 @@ pub struct Config {
     /// The patch solver.
     #[serde(default)]
     pub solver: SolverConfig,
+    /// Parallel execution.
+    #[serde(default)]
+    pub scheduler: SchedulerConfig,
     /// Boundary conditions, one entry per group of sides (`[[boundary]]`). Sides without an
     /// entry are traction-free.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -47,6 +50,16 @@ pub struct Config {
     /// An exact solution: initial data, `exact` boundaries and the error at the end time.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub exact: Option<ExactConfig>,
+}
+
+/// `[scheduler]`: parallel execution.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SchedulerConfig {
+    /// Results depend only on the config, never on thread count or timing (rounds of independent
+    /// tents instead of asynchronous claiming). Default false.
+    #[serde(default)]
+    pub deterministic: bool,
 }
 
 /// `[solver]`: discretization.

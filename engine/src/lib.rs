@@ -5,12 +5,15 @@ pub mod config;
 pub mod error;
 pub mod output;
 pub mod problem;
+pub mod progress;
 pub mod run;
 pub mod snapshot;
+pub mod solve;
 pub mod spacetime;
 
 pub use config::{Config, ConfigError, LoadedConfig};
 pub use error::EngineError;
 pub use problem::Problem;
-pub use run::{MeshSummary, RunOptions, RunSummary, mesh_job, pitch_to_end, solve_job};
+pub use run::{MeshSummary, RunOptions, mesh_job, pitch_to_end};
+pub use solve::{RunSummary, solve_job};
 pub use spacetime::SpacetimeMesh;

@@ -25,8 +25,8 @@ impl SpacetimeMesh {
         let points = mesh
             .vertices()
             .iter()
-            .zip(front.times())
-            .map(|(p, &t)| [p[0], p[1], t])
+            .zip(front.snapshot())
+            .map(|(p, t)| [p[0], p[1], t])
             .collect();
         Self {
             points,

@@ -1,42 +1,76 @@
 //! The advancing front: a time value per space vertex, linear on each triangle.
+//!
+//! Times are atomics so that worker threads can share one front: a vertex's time is written only
+//! by the thread that holds its tent claim (release store) and read by others after they claim
+//! (acquire load), see `scheduler/README.md`.
+
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::geometry;
 use crate::mesh::{Mesh, TriangleId, VertexId};
 
 /// The front `t = tau(x)`: one time (seconds) per mesh vertex, interpolated linearly on each
 /// triangle. Every front triangle is a facet of the spacetime mesh built so far.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Debug)]
 pub struct Front {
-    times: Vec<f64>,
+    times: Vec<AtomicU64>,
+}
+
+impl Clone for Front {
+    fn clone(&self) -> Self {
+        Self {
+            times: self
+                .snapshot()
+                .into_iter()
+                .map(|t| AtomicU64::new(t.to_bits()))
+                .collect(),
+        }
+    }
 }
 
 impl Front {
     /// A flat front at time `t0` (seconds) over `vertex_count` vertices.
     pub fn flat(vertex_count: usize, t0: f64) -> Self {
         Self {
-            times: vec![t0; vertex_count],
+            times: (0..vertex_count)
+                .map(|_| AtomicU64::new(t0.to_bits()))
+                .collect(),
         }
     }
 
-    /// Times of all vertices, seconds.
-    pub fn times(&self) -> &[f64] {
-        &self.times
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.times.len()
+    }
+
+    /// True for a front over no vertices.
+    pub fn is_empty(&self) -> bool {
+        self.times.is_empty()
     }
 
     /// Time of vertex `v`, seconds.
     pub fn time(&self, v: VertexId) -> f64 {
-        self.times[v as usize]
+        f64::from_bits(self.times[v as usize].load(Ordering::Acquire))
     }
 
-    /// Moves vertex `v` to time `t` (seconds). Callers keep the front causal: use
-    /// [`crate::Pitcher::pitch`].
-    pub fn set_time(&mut self, v: VertexId, t: f64) {
-        self.times[v as usize] = t;
+    /// Moves vertex `v` to time `t` (seconds). Callers keep the front causal ([`crate::Pitcher`])
+    /// and hold the vertex's claim when threads share the front.
+    pub fn set_time(&self, v: VertexId, t: f64) {
+        self.times[v as usize].store(t.to_bits(), Ordering::Release);
+    }
+
+    /// A copy of all times, seconds.
+    pub fn snapshot(&self) -> Vec<f64> {
+        (0..self.times.len() as VertexId)
+            .map(|v| self.time(v))
+            .collect()
     }
 
     /// Earliest time on the front.
     pub fn min_time(&self) -> f64 {
-        self.times.iter().copied().fold(f64::INFINITY, f64::min)
+        (0..self.times.len() as VertexId)
+            .map(|v| self.time(v))
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// True when no neighbour of `v` is earlier than `v`.

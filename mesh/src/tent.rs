@@ -117,15 +117,15 @@ impl Pitcher {
         self.budgets[t as usize]
     }
 
-    /// The pole-top time for vertex `v` on the front `times`, or `None` when `v` is not a local
-    /// minimum or has reached the end time.
-    pub fn pole_height(&self, mesh: &Mesh, times: &[f64], v: VertexId) -> Option<f64> {
-        let t_v = times[v as usize];
+    /// The pole-top time for vertex `v` on `front`, or `None` when `v` is not a local minimum or
+    /// has reached the end time.
+    pub fn pole_height(&self, mesh: &Mesh, front: &Front, v: VertexId) -> Option<f64> {
+        let t_v = front.time(v);
         if t_v >= self.t_end
             || mesh
                 .vertex_neighbors(v)
                 .iter()
-                .any(|&w| times[w as usize] < t_v)
+                .any(|&w| front.time(w) < t_v)
         {
             return None;
         }
@@ -134,7 +134,7 @@ impl Pitcher {
             let others = mesh.triangles()[t as usize]
                 .into_iter()
                 .filter(|&w| w != v)
-                .map(|w| times[w as usize])
+                .map(|w| front.time(w))
                 .fold(f64::INFINITY, f64::min);
             top = top.min(others + self.budgets[t as usize]);
         }
@@ -148,8 +148,8 @@ impl Pitcher {
 
     /// Pitches a tent at `v` and advances the front, or returns `None` (front unchanged) when `v`
     /// is not a local minimum below the end time.
-    pub fn pitch(&self, mesh: &Mesh, front: &mut Front, v: VertexId) -> Option<Tent> {
-        let t_new = self.pole_height(mesh, front.times(), v)?;
+    pub fn pitch(&self, mesh: &Mesh, front: &Front, v: VertexId) -> Option<Tent> {
+        let t_new = self.pole_height(mesh, front, v)?;
         let tent = Tent {
             vertex: v,
             t_old: front.time(v),
@@ -184,8 +184,8 @@ mod tests {
     fn first_tent_reaches_the_slope_bound() {
         let m = mesh();
         let p = Pitcher::new(&m, 2.0, 0.5, 10.0).unwrap();
-        let mut front = Front::flat(m.vertices().len(), 0.0);
-        let tent = p.pitch(&m, &mut front, 4).unwrap();
+        let front = Front::flat(m.vertices().len(), 0.0);
+        let tent = p.pitch(&m, &front, 4).unwrap();
         let h_min = 0.5 / 2f64.sqrt();
         assert!((tent.t_new - 0.5 * h_min / 2.0).abs() < 1e-9 * tent.t_new);
         let ratio = m
@@ -200,16 +200,13 @@ mod tests {
     fn only_local_minima_below_the_end_are_pitched() {
         let m = mesh();
         let p = Pitcher::new(&m, 1.0, 0.9, 0.01).unwrap();
-        let mut front = Front::flat(m.vertices().len(), 0.0);
-        let tent = p.pitch(&m, &mut front, 4).unwrap();
+        let front = Front::flat(m.vertices().len(), 0.0);
+        let tent = p.pitch(&m, &front, 4).unwrap();
         assert_eq!(tent.t_new, 0.01, "capped exactly at the end time");
-        assert!(p.pitch(&m, &mut front, 4).is_none(), "at the end time");
-        assert!(p.pitch(&m, &mut front, 0).is_some());
-        assert!(
-            p.pitch(&m, &mut front, 0).is_none(),
-            "neighbour 1 is earlier"
-        );
-        assert!(p.pitch(&m, &mut front, 1).is_some());
+        assert!(p.pitch(&m, &front, 4).is_none(), "at the end time");
+        assert!(p.pitch(&m, &front, 0).is_some());
+        assert!(p.pitch(&m, &front, 0).is_none(), "neighbour 1 is earlier");
+        assert!(p.pitch(&m, &front, 1).is_some());
     }
 
     #[test]

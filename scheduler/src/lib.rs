@@ -1,117 +1,165 @@
-//! Physics-agnostic ordering of tent pitches on an advancing front.
+//! Physics-agnostic concurrent scheduling of tent pitches on an advancing front.
 //!
-//! The scheduler knows vertex times only; what a pitch does (tent height, patch solve) is the
-//! caller's callback. This release drives one thread in order of increasing front time: the
-//! earliest vertex of the front is always a local minimum, so it can always be pitched, and the
-//! order depends only on the times and vertex ids (ties go to the smaller id), never on timing.
+//! Worker threads advance one shared [`Front`] together. A worker claims a vertex that is a local
+//! minimum of the front (exclusive on the vertex, shared on its neighbours, see [`claim`]),
+//! pitches its tent and solves its patch through [`Work::tent`], records it, releases the claim
+//! and offers the vertex and its neighbours as new candidates. Topology changes are [`Event`]s
+//! that claim a whole region the same way. The design, its invariants and why it cannot deadlock
+//! or race are in `scheduler/README.md`.
+//!
+//! Two modes:
+//! - asynchronous (default): candidates flow through work-stealing deques; results are equally
+//!   accurate but the order of tents, hence the spacetime mesh, depends on timing;
+//! - deterministic: rounds of a deterministically chosen independent set of ready vertices, solved
+//!   in parallel and recorded in a fixed order, so results depend only on the inputs, never on the
+//!   thread count or timing.
 
-use std::cmp::{Ordering, Reverse};
-use std::collections::BinaryHeap;
+pub mod claim;
+mod pool;
+mod rounds;
+mod serial;
+mod sync;
 
-/// Index of a front vertex.
-pub type VertexId = u32;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use parking_lot::Mutex;
+use sdg_mesh::{Front, Mesh};
+
+pub use claim::{ClaimTable, VertexId};
+pub use serial::run_serial;
+
+/// How to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Options {
+    /// Worker threads, at least 1.
+    pub threads: usize,
+    /// Rounds of independent sets instead of asynchronous claiming.
+    pub deterministic: bool,
+}
+
+/// What the engine does for each tent; `'a` is the lifetime of the data its events borrow.
+pub trait Work<'a>: Sync {
+    /// Per-worker scratch memory (the patch solver's buffers).
+    type Scratch: Send;
+    /// What a tent produces for [`Work::record`].
+    type Outcome: Send;
+    /// A failure that stops the run.
+    type Error: Send;
+
+    /// Pitches the tent at `v` and solves its patch; returns the vertex's new time (s) and the
+    /// outcome. Called with `v` claimed exclusively and its neighbours shared, and `v` a local
+    /// minimum of the front below the end time. May queue topology events.
+    fn tent(
+        &self,
+        scratch: &mut Self::Scratch,
+        v: VertexId,
+        events: &Events<'a>,
+    ) -> Result<(f64, Self::Outcome), Self::Error>;
+
+    /// Records a finished tent (outputs, energy sums). Asynchronous mode: called by the worker
+    /// while it still holds the claim. Deterministic mode: called on one thread after each round,
+    /// in the round's order. May queue topology events.
+    fn record(
+        &'a self,
+        v: VertexId,
+        outcome: Self::Outcome,
+        events: &Events<'a>,
+    ) -> Result<(), Self::Error>;
+}
+
+/// A topology change: runs once no tent overlaps `region` (the vertices it modifies; their
+/// neighbours are claimed shared), with no tent starting in the region meanwhile.
+pub struct Event<'a> {
+    /// Vertices whose star the event may change.
+    pub region: Vec<VertexId>,
+    /// The change.
+    pub action: Box<dyn FnOnce() + Send + 'a>,
+}
+
+impl std::fmt::Debug for Event<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Event")
+            .field("region", &self.region)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The queue of pending topology events.
+#[derive(Debug, Default)]
+pub struct Events<'a> {
+    queue: Mutex<Vec<Event<'a>>>,
+    /// Events pushed and not yet run.
+    pending: AtomicUsize,
+}
+
+impl<'a> Events<'a> {
+    /// Queues `action` to run exclusively on `region`.
+    pub fn push(&self, region: Vec<VertexId>, action: Box<dyn FnOnce() + Send + 'a>) {
+        self.queue.lock().push(Event { region, action });
+        self.pending.fetch_add(1, Ordering::AcqRel);
+    }
+}
+
+/// Counts of a completed run.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Tents pitched.
+    pub tents: u64,
+    /// Tents per worker thread.
+    pub tents_per_thread: Vec<u64>,
+    /// Deterministic rounds (zero in asynchronous mode).
+    pub rounds: u64,
+    /// Topology events run.
+    pub events: u64,
+}
 
 /// What stopped a run before the front reached the end time.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError<E> {
-    /// The callback did not advance the vertex: the pitching rule lost progress.
-    #[error("no progress: pitching vertex {vertex} at t = {time} s did not advance it")]
+    /// No vertex below the end time can be pitched: the pitching rule lost progress.
+    #[error("no progress: {remaining} vertices are below the end time but none can be pitched")]
     Stalled {
-        /// The vertex that did not move.
-        vertex: VertexId,
-        /// Its time, seconds.
-        time: f64,
+        /// Vertices not yet at the end time.
+        remaining: usize,
     },
-    /// The callback failed.
+    /// A tent or a record failed.
     #[error(transparent)]
-    Pitch(E),
+    Work(E),
 }
 
-/// Counts of a completed run.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RunStats {
-    /// Tents pitched.
-    pub tents: u64,
+/// True when `v` is below `t_end` and no neighbour is earlier.
+fn is_ready(mesh: &Mesh, front: &Front, t_end: f64, v: VertexId) -> bool {
+    front.time(v) < t_end && front.is_local_minimum(mesh, v)
 }
 
-/// A front time with a total order (times are finite).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Time(f64);
-
-impl Eq for Time {}
-
-impl PartialOrd for Time {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Time {
-    fn cmp(&self, other: &Self) -> Ordering {
-        self.0.total_cmp(&other.0)
-    }
-}
-
-/// Advances every vertex from `times` (seconds) to `t_end` on one thread. `pitch(v)` must pitch
-/// a tent at `v`, which is then a minimum of the whole front, and return its new time; it is
-/// called until every vertex has reached `t_end`.
-pub fn run_serial<E>(
-    times: &[f64],
-    t_end: f64,
-    mut pitch: impl FnMut(VertexId) -> Result<f64, E>,
-) -> Result<RunStats, RunError<E>> {
-    let mut queue: BinaryHeap<Reverse<(Time, VertexId)>> = times
+/// The vertices of `region` and, separately, their neighbours outside it, sorted.
+fn region_and_halo(mesh: &Mesh, region: &[VertexId]) -> (Vec<VertexId>, Vec<VertexId>) {
+    let mut owned = region.to_vec();
+    owned.sort_unstable();
+    owned.dedup();
+    let mut halo: Vec<VertexId> = owned
         .iter()
-        .enumerate()
-        .filter(|&(_, &t)| t < t_end)
-        .map(|(v, &t)| Reverse((Time(t), v as VertexId)))
+        .flat_map(|&v| mesh.vertex_neighbors(v).iter().copied())
+        .filter(|w| owned.binary_search(w).is_err())
         .collect();
-    let mut stats = RunStats::default();
-    while let Some(Reverse((Time(time), vertex))) = queue.pop() {
-        let next = pitch(vertex).map_err(RunError::Pitch)?;
-        if next.partial_cmp(&time) != Some(Ordering::Greater) {
-            return Err(RunError::Stalled { vertex, time });
-        }
-        stats.tents += 1;
-        if next < t_end {
-            queue.push(Reverse((Time(next), vertex)));
-        }
-    }
-    Ok(stats)
+    halo.sort_unstable();
+    halo.dedup();
+    (owned, halo)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn pitches_in_time_order_until_the_end() {
-        let mut times = vec![0.0, 0.5, 0.0];
-        let mut order = Vec::new();
-        let stats = run_serial::<()>(&times.clone(), 1.0, |v| {
-            order.push(v);
-            let min = times.iter().copied().fold(f64::INFINITY, f64::min);
-            assert_eq!(times[v as usize], min, "pitched vertex is a front minimum");
-            times[v as usize] = (times[v as usize] + 0.4).min(1.0);
-            Ok(times[v as usize])
-        })
-        .unwrap();
-        assert_eq!(order, [0, 2, 0, 2, 1, 0, 2, 1]);
-        assert_eq!(stats.tents, 8);
-        assert!(times.iter().all(|&t| t == 1.0));
-    }
-
-    #[test]
-    fn reports_a_stall_and_callback_errors() {
-        let err = run_serial::<()>(&[0.0], 1.0, |_| Ok(0.0)).unwrap_err();
-        assert!(matches!(
-            err,
-            RunError::Stalled {
-                vertex: 0,
-                time: 0.0
-            }
-        ));
-        let err = run_serial(&[0.0], 1.0, |_| Err("boom")).unwrap_err();
-        assert!(matches!(err, RunError::Pitch("boom")));
+/// Advances every vertex of `front` to `t_end` with one worker per element of `scratch`.
+pub fn run<'a, W: Work<'a>>(
+    mesh: &Mesh,
+    front: &Front,
+    t_end: f64,
+    work: &'a W,
+    scratch: Vec<W::Scratch>,
+    options: &Options,
+) -> Result<Stats, RunError<W::Error>> {
+    assert!(!scratch.is_empty(), "at least one worker");
+    if options.deterministic {
+        rounds::run(mesh, front, t_end, work, scratch)
+    } else {
+        pool::run(mesh, front, t_end, work, scratch)
     }
 }

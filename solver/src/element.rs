@@ -1,6 +1,8 @@
 //! Spacetime elements: affine tetrahedra in scaled coordinates `(x, y, tau)`, and the solution on
 //! the elements whose top faces form the current front.
 
+use parking_lot::Mutex;
+
 use crate::basis::Basis;
 
 /// A point `(x, y, tau)` in scaled spacetime, metres.
@@ -84,24 +86,49 @@ impl Geometry {
 ///
 /// Coefficients are stored per basis function, `width` values each (the scaled fields, then the
 /// displacement components), in the orthonormal basis of the element's reference tetrahedron.
-#[derive(Clone, Debug)]
+/// Each triangle's entry has its own lock, so threads whose tents own disjoint triangles work on
+/// one `FrontSolution` without waiting for each other.
+#[derive(Debug)]
 pub struct FrontSolution {
     basis_len: usize,
     width: usize,
-    solved: Vec<bool>,
-    geometry: Vec<Geometry>,
-    coefficients: Vec<f64>,
+    cells: Vec<Mutex<Cell>>,
+}
+
+/// The element under one front triangle.
+#[derive(Clone, Debug)]
+struct Cell {
+    solved: bool,
+    geometry: Geometry,
+    coefficients: Box<[f64]>,
+}
+
+impl Clone for FrontSolution {
+    fn clone(&self) -> Self {
+        Self {
+            basis_len: self.basis_len,
+            width: self.width,
+            cells: self
+                .cells
+                .iter()
+                .map(|c| Mutex::new(c.lock().clone()))
+                .collect(),
+        }
+    }
 }
 
 impl FrontSolution {
     /// Initial data everywhere on a front of `triangles` triangles.
     pub fn new(triangles: usize, basis_len: usize, width: usize) -> Self {
+        let cell = Cell {
+            solved: false,
+            geometry: Geometry::default(),
+            coefficients: vec![0.0; basis_len * width].into_boxed_slice(),
+        };
         Self {
             basis_len,
             width,
-            solved: vec![false; triangles],
-            geometry: vec![Geometry::default(); triangles],
-            coefficients: vec![0.0; triangles * basis_len * width],
+            cells: (0..triangles).map(|_| Mutex::new(cell.clone())).collect(),
         }
     }
 
@@ -110,18 +137,46 @@ impl FrontSolution {
         self.width
     }
 
-    /// The element under triangle `t`, if one has been solved.
-    pub fn element(&self, t: usize) -> Option<(&Geometry, &[f64])> {
-        let n = self.basis_len * self.width;
-        self.solved[t].then(|| (&self.geometry[t], &self.coefficients[t * n..(t + 1) * n]))
+    /// Number of front triangles.
+    pub fn len(&self) -> usize {
+        self.cells.len()
+    }
+
+    /// True for a front of no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.cells.is_empty()
+    }
+
+    /// Copies the element under triangle `t` into `geometry` and `coefficients` (basis length
+    /// times width values); returns false, copying nothing, while `t` carries initial data.
+    pub fn load(&self, t: usize, geometry: &mut Geometry, coefficients: &mut [f64]) -> bool {
+        let cell = self.cells[t].lock();
+        if cell.solved {
+            *geometry = cell.geometry;
+            coefficients.copy_from_slice(&cell.coefficients);
+        }
+        cell.solved
     }
 
     /// Replaces the element under triangle `t`.
-    pub fn set(&mut self, t: usize, geometry: Geometry, coefficients: &[f64]) {
-        let n = self.basis_len * self.width;
-        self.solved[t] = true;
-        self.geometry[t] = geometry;
-        self.coefficients[t * n..(t + 1) * n].copy_from_slice(coefficients);
+    pub fn store(&self, t: usize, geometry: &Geometry, coefficients: &[f64]) {
+        let mut cell = self.cells[t].lock();
+        cell.solved = true;
+        cell.geometry = *geometry;
+        cell.coefficients.copy_from_slice(coefficients);
+    }
+
+    /// Calls `f` with the element under triangle `t`, or `None` while it carries initial data.
+    pub fn with_element<R>(&self, t: usize, f: impl FnOnce(Option<(&Geometry, &[f64])>) -> R) -> R {
+        let cell = self.cells[t].lock();
+        f(cell
+            .solved
+            .then_some((&cell.geometry, &cell.coefficients[..])))
+    }
+
+    /// Number of basis functions per element.
+    pub fn basis_len(&self) -> usize {
+        self.basis_len
     }
 }
 

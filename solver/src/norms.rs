@@ -1,9 +1,9 @@
 //! Norms of the solution on a flat front, against an exact solution.
 
-use sdg_mesh::Mesh;
+use sdg_mesh::{Front, Mesh};
 
 use crate::basis::Basis;
-use crate::element::{FrontSolution, evaluate};
+use crate::element::{FrontSolution, Geometry, evaluate};
 use crate::exact::PlaneWave;
 use crate::quadrature;
 use crate::system::System;
@@ -34,10 +34,12 @@ pub fn slice_errors(
     let nv = system.displacement_components();
     let fields = system.fields();
     let (mut ev, mut nvel, mut es, mut ns) = (0.0, 0.0, 0.0, 0.0);
+    let mut geometry = Geometry::default();
+    let mut coefficients = vec![0.0; basis.len() * front.width()];
     for (tri, corners) in mesh.triangles().iter().enumerate() {
-        let Some((geometry, coefficients)) = front.element(tri) else {
+        if !front.load(tri, &mut geometry, &mut coefficients) {
             continue;
-        };
+        }
         let p = corners.map(|v| mesh.vertex(v));
         let area2 =
             (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
@@ -47,8 +49,8 @@ pub fn slice_errors(
             let wa = w * area2.abs();
             evaluate(
                 basis,
-                geometry,
-                coefficients,
+                &geometry,
+                &coefficients,
                 [x[0], x[1], system.c_ref() * t],
                 &mut phi,
                 &mut values,
@@ -90,13 +92,13 @@ pub struct FrontEnergy {
     pub total: f64,
 }
 
-/// Energy on the front with vertex times `times` (s): every triangle's facet carries the solution
+/// Energy on `front` (vertex times): every triangle's facet carries the solution
 /// of the element under it, or the initial state `initial(x)` (scaled) if none. The rule is the
 /// patch solver's face rule (degree `2 p + 2`), so that energies of initial data match the
 /// solver's inflow energies exactly.
 pub fn front_energy(
     mesh: &Mesh,
-    times: &[f64],
+    times: &Front,
     front: &FrontSolution,
     basis: &Basis,
     system: &System,
@@ -109,9 +111,12 @@ pub fn front_energy(
     let ax = system.a_n([1.0, 0.0, 0.0]);
     let ay = system.a_n([0.0, 1.0, 0.0]);
     let mut e = FrontEnergy::default();
+    let mut geometry = Geometry::default();
+    let mut coefficients = vec![0.0; basis.len() * front.width()];
     for (tri, corners) in mesh.triangles().iter().enumerate() {
+        let solved = front.load(tri, &mut geometry, &mut coefficients);
         let p = corners.map(|v| mesh.vertex(v));
-        let tau = corners.map(|v| system.c_ref() * times[v as usize]);
+        let tau = corners.map(|v| system.c_ref() * times.time(v));
         let grad = sdg_mesh::geometry::linear_gradient(p, tau);
         let area2 =
             (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
@@ -119,21 +124,20 @@ pub fn front_energy(
             let x =
                 [0, 1].map(|i| p[0][i] + xi[0] * (p[1][i] - p[0][i]) + xi[1] * (p[2][i] - p[0][i]));
             let t = tau[0] + xi[0] * (tau[1] - tau[0]) + xi[1] * (tau[2] - tau[0]);
-            let q = match front.element(tri) {
-                Some((geometry, coefficients)) => {
-                    evaluate(
-                        basis,
-                        geometry,
-                        coefficients,
-                        [x[0], x[1], t],
-                        &mut phi,
-                        &mut values,
-                    );
-                    let mut q = [0.0; crate::system::MAX_FIELDS];
-                    q[..fields].copy_from_slice(&values[..fields]);
-                    q
-                }
-                None => initial(x),
+            let q = if solved {
+                evaluate(
+                    basis,
+                    &geometry,
+                    &coefficients,
+                    [x[0], x[1], t],
+                    &mut phi,
+                    &mut values,
+                );
+                let mut q = [0.0; crate::system::MAX_FIELDS];
+                q[..fields].copy_from_slice(&values[..fields]);
+                q
+            } else {
+                initial(x)
             };
             let wa = w * area2.abs();
             let kinetic = system.kinetic_density(&q);

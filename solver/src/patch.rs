@@ -15,7 +15,7 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::{MatMut, MatRef, Par};
 
-use sdg_mesh::{Mesh, TagId, Tent, TriangleId};
+use sdg_mesh::{Front, Mesh, TagId, Tent, TriangleId};
 
 use crate::basis::Basis;
 use crate::boundary::{Boundary, Condition};
@@ -86,11 +86,21 @@ struct Slot {
 
 /// A face of a tetrahedron: its corners (indices into the element's vertices) and the opposite one.
 type Face = ([usize; 3], usize);
-const BOTTOM: Face = ([0, 1, 2], 3);
 const TOP: Face = ([1, 2, 3], 0);
 /// Vertical face over the edge from the tent vertex to corner `a` (vertex 1), then to `b`.
 const SIDE_A: Face = ([0, 1, 3], 2);
 const SIDE_B: Face = ([0, 2, 3], 1);
+
+impl Slot {
+    /// The inflow face, its corners in the front triangle's own vertex order: quadrature points
+    /// on a front triangle are then the same whichever vertex pitches it, so integrals of initial
+    /// data match [`crate::norms::front_energy`] exactly.
+    fn bottom(&self) -> Face {
+        // Tetrahedron vertex k (k < 3) is triangle corner (corner + k) mod 3.
+        let c = self.corner;
+        ([0, 1, 2].map(|k| (k + 3 - c) % 3), 3)
+    }
+}
 
 /// A face's first corner, its two edge vectors from there, its outward unit normal and twice
 /// its area.
@@ -153,6 +163,9 @@ pub struct PatchSolver {
     phi_other: Vec<f64>,
     values: Vec<f64>,
     output: Vec<f64>,
+    inflow: Vec<f64>,
+    inflow_geometry: Vec<Geometry>,
+    inflow_solved: Vec<bool>,
     reports: Vec<ElementReport>,
     used: usize,
 }
@@ -212,6 +225,9 @@ impl PatchSolver {
             phi_other: vec![0.0; n],
             values: vec![0.0; width],
             output: vec![0.0; max_star * n * width],
+            inflow: vec![0.0; max_star * n * width],
+            inflow_geometry: vec![Geometry::default(); max_star],
+            inflow_solved: vec![false; max_star],
             reports: vec![ElementReport::default(); max_star],
             used: 0,
             system,
@@ -239,17 +255,18 @@ impl PatchSolver {
         &self.reports[..self.used]
     }
 
-    /// Solves the patch of `tent` (already pitched: `times` are the front times in seconds before
-    /// the tent, except that the tent vertex's entry is ignored) and replaces the elements under
-    /// the star's front triangles in `front`.
+    /// Solves the patch of `tent`, already pitched on `front` (only the times of the tent
+    /// vertex's neighbours are read; the tent gives its own), and replaces the elements under the
+    /// star's front triangles in `solution`. The caller owns the star: no other thread touches
+    /// these triangles or the neighbours' times meanwhile.
     pub fn solve(
         &mut self,
         mesh: &Mesh,
-        times: &[f64],
+        front: &Front,
         tent: &Tent,
         boundary: &Boundary,
         initial: Initial,
-        front: &mut FrontSolution,
+        solution: &FrontSolution,
     ) -> PatchReport {
         let c = self.system.c_ref();
         let v = tent.vertex;
@@ -274,7 +291,7 @@ impl PatchSolver {
             let (a, b) = (tri[(corner + 1) % 3], tri[(corner + 2) % 3]);
             let at = |w: u32| {
                 let p = mesh.vertex(w);
-                [p[0], p[1], c * times[w as usize]]
+                [p[0], p[1], c * front.time(w)]
             };
             let vertices = [
                 [pv[0], pv[1], c * tent.t_old],
@@ -290,6 +307,14 @@ impl PatchSolver {
             };
         }
 
+        let size = n * self.width();
+        for (i, slot) in self.slots[..d].iter().enumerate() {
+            self.inflow_solved[i] = solution.load(
+                slot.triangle as usize,
+                &mut self.inflow_geometry[i],
+                &mut self.inflow[i * size..(i + 1) * size],
+            );
+        }
         self.blocks.reset(d, m);
         let a_mu = [
             self.system.a_n([1.0, 0.0, 0.0]),
@@ -313,25 +338,36 @@ impl PatchSolver {
                 add_kron(self.blocks.block_mut(i, i), m, n, fields, h, &b);
             }
             // Inflow face: target is the earlier side's trace.
-            let under = front.element(slot.triangle as usize);
+            let under = below(
+                &self.inflow_solved,
+                &self.inflow_geometry,
+                &self.inflow,
+                i,
+                size,
+            );
             let (system, basis) = (&self.system, &self.basis);
             let (phi, values) = (&mut self.phi, &mut self.values);
             let mass = &mut self.mass[..n * n];
             mass.fill(0.0);
             let mut an = [[0.0; MAX_FIELDS]; MAX_FIELDS];
             let rhs = self.blocks.rhs_mut(i);
-            face_points(&self.face_rule, &slot.vertices, BOTTOM, |x, w, nrm| {
-                an = system.a_n(nrm);
-                let q_prev = inflow_state(system, basis, under, initial, x, phi, values);
-                basis.eval(slot.geometry.to_reference(x), phi);
-                let aq = system.apply(&an, &q_prev);
-                add_outer(mass, -w, phi, phi);
-                for (k, p) in phi.iter().enumerate() {
-                    for (r, a) in rhs[k * fields..][..fields].iter_mut().zip(&aq) {
-                        *r -= w * p * a;
+            face_points(
+                &self.face_rule,
+                &slot.vertices,
+                slot.bottom(),
+                |x, w, nrm| {
+                    an = system.a_n(nrm);
+                    let q_prev = inflow_state(system, basis, under, initial, x, phi, values);
+                    basis.eval(slot.geometry.to_reference(x), phi);
+                    let aq = system.apply(&an, &q_prev);
+                    add_outer(mass, -w, phi, phi);
+                    for (k, p) in phi.iter().enumerate() {
+                        for (r, a) in rhs[k * fields..][..fields].iter_mut().zip(&aq) {
+                            *r -= w * p * a;
+                        }
                     }
-                }
-            });
+                },
+            );
             add_kron(self.blocks.block_mut(i, i), m, n, fields, mass, &an);
             // Vertical faces: Riemann fluxes with the ring neighbour or the boundary data.
             for (face, neighbour, tag) in vertical_faces(mesh, star, &slot) {
@@ -398,19 +434,19 @@ impl PatchSolver {
             ..Default::default()
         };
         for i in 0..d {
-            let r = self.element_post(mesh, star, i, boundary, initial, front);
+            let r = self.element_post(mesh, star, i, boundary, initial);
             report.energy_in += r.energy_in;
             report.energy_out += r.energy_out;
             report.boundary_work += r.boundary_work;
             report.dissipation += r.dissipation;
             self.reports[i] = r;
-            self.displacement(i, initial, front);
+            self.displacement(i, initial);
         }
         for (i, slot) in self.slots[..d].iter().enumerate() {
             let size = n * width;
-            front.set(
+            solution.store(
                 slot.triangle as usize,
-                slot.geometry,
+                &slot.geometry,
                 &self.output[i * size..(i + 1) * size],
             );
         }
@@ -426,7 +462,6 @@ impl PatchSolver {
         i: usize,
         boundary: &Boundary,
         initial: Initial,
-        front: &FrontSolution,
     ) -> ElementReport {
         let n = self.basis.len();
         let fields = self.system.fields();
@@ -466,9 +501,16 @@ impl PatchSolver {
             }
         });
         add_momentum(face_momentum);
-        let under = front.element(slot.triangle as usize);
+        let size = n * width;
+        let under = below(
+            &self.inflow_solved,
+            &self.inflow_geometry,
+            &self.inflow,
+            i,
+            size,
+        );
         face_momentum = [0.0; 2];
-        face_points(face_rule, &slot.vertices, BOTTOM, |x, w, nrm| {
+        face_points(face_rule, &slot.vertices, slot.bottom(), |x, w, nrm| {
             let an = system.a_n(nrm);
             let q_prev = inflow_state(system, basis, under, initial, x, phi_j, values);
             let q = own(x, phi);
@@ -528,7 +570,7 @@ impl PatchSolver {
 
     /// Solves `du/dtau = v / c_ref` on element `i` (upwind in time from the element below) and
     /// stores the displacement coefficients in the output buffer.
-    fn displacement(&mut self, i: usize, initial: Initial, front: &FrontSolution) {
+    fn displacement(&mut self, i: usize, initial: Initial) {
         let n = self.basis.len();
         let fields = self.system.fields();
         let nv = self.system.displacement_components();
@@ -550,21 +592,34 @@ impl PatchSolver {
                 rhs[d * n + k] = det * self.output[i * n * width + k * width + d] / c;
             }
         }
-        let under = front.element(slot.triangle as usize);
+        let size = n * width;
+        let under = below(
+            &self.inflow_solved,
+            &self.inflow_geometry,
+            &self.inflow,
+            i,
+            size,
+        );
         let (system, basis) = (&self.system, &self.basis);
         let (phi, phi_prev, values) = (&mut self.phi, &mut self.phi_other, &mut self.values);
-        face_points(&self.face_rule, &slot.vertices, BOTTOM, |x, w, nrm| {
-            let u_prev = inflow_displacement(system, basis, under, initial, x, phi_prev, values);
-            basis.eval(slot.geometry.to_reference(x), phi);
-            for k in 0..n {
-                for l in 0..n {
-                    small[l * n + k] -= w * nrm[2] * phi[k] * phi[l];
+        face_points(
+            &self.face_rule,
+            &slot.vertices,
+            slot.bottom(),
+            |x, w, nrm| {
+                let u_prev =
+                    inflow_displacement(system, basis, under, initial, x, phi_prev, values);
+                basis.eval(slot.geometry.to_reference(x), phi);
+                for k in 0..n {
+                    for l in 0..n {
+                        small[l * n + k] -= w * nrm[2] * phi[k] * phi[l];
+                    }
+                    for d in 0..nv {
+                        rhs[d * n + k] -= w * nrm[2] * phi[k] * u_prev[d];
+                    }
                 }
-                for d in 0..nv {
-                    rhs[d * n + k] -= w * nrm[2] * phi[k] * u_prev[d];
-                }
-            }
-        });
+            },
+        );
         let stack = MemStack::new(&mut self.stack);
         let lu = MatMut::from_column_major_slice_mut(small, n, n);
         let (_, perm) = factor::lu_in_place(
@@ -668,6 +723,18 @@ fn vertical_faces(
 fn face_normal(vertices: &[SpacePoint; 4], face: Face) -> [f64; 2] {
     let n = face_geometry(vertices, face).3;
     [n[0], n[1]]
+}
+
+/// The element below element `i` of the current patch (copied from the front solution when the
+/// patch started; `size` values each), or `None` for initial data.
+fn below<'a>(
+    solved: &[bool],
+    geometry: &'a [Geometry],
+    coefficients: &'a [f64],
+    i: usize,
+    size: usize,
+) -> Option<(&'a Geometry, &'a [f64])> {
+    solved[i].then(|| (&geometry[i], &coefficients[i * size..(i + 1) * size]))
 }
 
 /// The state `sum_k phi_k q_k` of coefficients stored `fields` per basis function.

@@ -5,8 +5,9 @@
 
 use sdg_engine::{Config, LoadedConfig, Problem, RunOptions, RunSummary};
 
-/// Parses `text` with `overrides`, solves it with outputs in a fresh temporary folder, and
-/// returns the summary and the folder (kept alive by the returned guard).
+/// Parses `text` with `overrides`, solves it in deterministic mode on two threads with outputs in
+/// a fresh temporary folder, and returns the summary and the folder (kept alive by the returned
+/// guard).
 pub fn run(text: &str, overrides: &[String]) -> (RunSummary, tempfile::TempDir) {
     let config = Config::parse(text, "test.toml", overrides).expect("valid config");
     let loaded = LoadedConfig {
@@ -17,6 +18,9 @@ pub fn run(text: &str, overrides: &[String]) -> (RunSummary, tempfile::TempDir) 
     let dir = tempfile::tempdir().expect("temporary folder");
     let options = RunOptions {
         output_dir: Some(dir.path().to_path_buf()),
+        threads: Some(2),
+        deterministic: true,
+        progress: false,
     };
     let (summary, _) = sdg_engine::solve_job(&problem, &options).expect("run succeeds");
     (summary, dir)
@@ -63,14 +67,13 @@ pub fn solve_direct(
         .max()
         .unwrap();
     let mut solver = PatchSolver::new(system.clone(), order, max_star);
-    let mut solution =
-        FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
+    let solution = FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
     let pitcher = Pitcher::new(&mesh, system.c_ref(), 0.9, t_end).unwrap();
-    let mut front = Front::flat(mesh.vertices().len(), 0.0);
+    let front = Front::flat(mesh.vertices().len(), 0.0);
     let init = initial.map_or(Initial::Rest, Initial::Wave);
     let mut dissipation = 0.0;
-    sdg_engine::pitch_to_end(&mesh, &pitcher, &mut front, |tent, front| {
-        let r = solver.solve(&mesh, front.times(), tent, boundary, init, &mut solution);
+    sdg_engine::pitch_to_end(&mesh, &pitcher, &front, |tent, front| {
+        let r = solver.solve(&mesh, front, tent, boundary, init, &solution);
         dissipation += r.dissipation;
         solver.element_reports().iter().for_each(&mut check);
     })

@@ -1,0 +1,140 @@
+//! Deterministic mode: rounds of an independent set of ready vertices.
+//!
+//! Each round scans the front for ready vertices (local minima below the end time), sorts them by
+//! `(time, id)` and greedily takes every vertex none of whose neighbours is taken. The taken
+//! tents do not read each other's data (they are not neighbours), so solving them in parallel in
+//! any order gives the same bits; their outcomes are recorded in the round's order, and queued
+//! events then run in a fixed order. The result depends only on the inputs.
+
+use std::sync::Barrier;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+use parking_lot::{Mutex, RwLock};
+use sdg_mesh::{Front, Mesh};
+
+use crate::{Events, RunError, Stats, VertexId, Work, is_ready};
+
+/// Shared state of one round.
+struct Round<O, E> {
+    chosen: Vec<VertexId>,
+    next: AtomicUsize,
+    results: Vec<Mutex<Option<Result<O, E>>>>,
+}
+
+pub(crate) fn run<'a, W: Work<'a>>(
+    mesh: &Mesh,
+    front: &Front,
+    t_end: f64,
+    work: &'a W,
+    scratch: Vec<W::Scratch>,
+) -> Result<Stats, RunError<W::Error>> {
+    let n = mesh.vertices().len();
+    let threads = scratch.len();
+    let events = Events::default();
+    let round: RwLock<Round<W::Outcome, W::Error>> = RwLock::new(Round {
+        chosen: Vec::with_capacity(n),
+        next: AtomicUsize::new(0),
+        results: Vec::new(),
+    });
+    let barrier = Barrier::new(threads + 1);
+    let done = AtomicBool::new(false);
+    let mut stats = Stats {
+        tents_per_thread: vec![0; threads],
+        ..Stats::default()
+    };
+    let per_thread: Vec<AtomicUsize> = (0..threads).map(|_| AtomicUsize::new(0)).collect();
+    let mut ready: Vec<(f64, VertexId)> = Vec::with_capacity(n);
+    let mut taken = vec![false; n];
+    let outcome = std::thread::scope(|s| {
+        for (id, mut scratch) in scratch.into_iter().enumerate() {
+            let (round, barrier, done, events, per_thread) =
+                (&round, &barrier, &done, &events, &per_thread);
+            s.spawn(move || {
+                loop {
+                    barrier.wait();
+                    if done.load(Ordering::Acquire) {
+                        return;
+                    }
+                    {
+                        let r = round.read();
+                        let chosen = &r.chosen;
+                        loop {
+                            let i = r.next.fetch_add(1, Ordering::Relaxed);
+                            let Some(&v) = chosen.get(i) else { break };
+                            let result = work.tent(&mut scratch, v, events).map(|(_, o)| o);
+                            *r.results[i].lock() = Some(result);
+                            per_thread[id].fetch_add(1, Ordering::Relaxed);
+                        }
+                    }
+                    barrier.wait();
+                }
+            });
+        }
+        let result = (|| {
+            loop {
+                ready.clear();
+                ready.extend(
+                    (0..n as VertexId)
+                        .filter(|&v| is_ready(mesh, front, t_end, v))
+                        .map(|v| (front.time(v), v)),
+                );
+                if ready.is_empty() {
+                    let remaining = (0..n as VertexId)
+                        .filter(|&v| front.time(v) < t_end)
+                        .count();
+                    return if remaining == 0 {
+                        Ok(())
+                    } else {
+                        Err(RunError::Stalled { remaining })
+                    };
+                }
+                ready.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                {
+                    let mut r = round.write();
+                    r.chosen.clear();
+                    taken.fill(false);
+                    for &(_, v) in &ready {
+                        if !taken[v as usize] {
+                            r.chosen.push(v);
+                            taken[v as usize] = true;
+                            for &w in mesh.vertex_neighbors(v) {
+                                taken[w as usize] = true;
+                            }
+                        }
+                    }
+                    let len = r.chosen.len();
+                    r.results.resize_with(len, || Mutex::new(None));
+                    r.next.store(0, Ordering::Relaxed);
+                }
+                // The round-setup lock is released before the workers start.
+                barrier.wait();
+                barrier.wait();
+                let mut r = round.write();
+                let chosen = std::mem::take(&mut r.chosen);
+                for (i, &v) in chosen.iter().enumerate() {
+                    let result = r.results[i].lock().take().expect("every chosen tent ran");
+                    let outcome = result.map_err(RunError::Work)?;
+                    work.record(v, outcome, &events).map_err(RunError::Work)?;
+                }
+                stats.tents += chosen.len() as u64;
+                r.chosen = chosen;
+                stats.rounds += 1;
+                drop(r);
+                let mut pending = std::mem::take(&mut *events.queue.lock());
+                pending.sort_by(|a, b| a.region.cmp(&b.region));
+                for event in pending {
+                    (event.action)();
+                    events.pending.fetch_sub(1, Ordering::AcqRel);
+                    stats.events += 1;
+                }
+            }
+        })();
+        done.store(true, Ordering::Release);
+        barrier.wait();
+        result
+    });
+    for (count, total) in per_thread.iter().zip(&mut stats.tents_per_thread) {
+        *total = count.load(Ordering::Relaxed) as u64;
+    }
+    outcome.map(|()| stats)
+}
