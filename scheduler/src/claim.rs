@@ -2,10 +2,12 @@
 //!
 //! A tent at `v` needs `v` exclusively (its time changes) and its neighbours shared (their times
 //! are read, and the triangles of `v`'s star are written). Two tents conflict exactly when their
-//! vertices are neighbours or equal. Every operation is a non-blocking try: a claim either takes
-//! all its locks or none, so claims can never deadlock.
+//! vertices are neighbours or equal. A claim checks and takes all its locks at once behind a
+//! short gate, or takes none: claims never wait for each other (no deadlock), and a claim fails
+//! only because of a claim that succeeded and is still held, whose release will offer the failed
+//! vertex again (no lost wake-up). Releases need no gate.
 
-use crate::sync::{AtomicU32, Ordering};
+use crate::sync::{AtomicU32, Mutex, Ordering};
 
 /// Vertex index.
 pub type VertexId = u32;
@@ -16,6 +18,7 @@ const EXCLUSIVE: u32 = 1 << 31;
 #[derive(Debug)]
 pub struct ClaimTable {
     words: Vec<AtomicU32>,
+    gate: Mutex<()>,
 }
 
 impl ClaimTable {
@@ -23,35 +26,12 @@ impl ClaimTable {
     pub fn new(vertices: usize) -> Self {
         Self {
             words: (0..vertices).map(|_| AtomicU32::new(0)).collect(),
-        }
-    }
-
-    fn try_exclusive(&self, v: VertexId) -> bool {
-        self.words[v as usize]
-            .compare_exchange(0, EXCLUSIVE, Ordering::Acquire, Ordering::Relaxed)
-            .is_ok()
-    }
-
-    fn try_shared(&self, v: VertexId) -> bool {
-        let word = &self.words[v as usize];
-        let mut current = word.load(Ordering::Relaxed);
-        loop {
-            if current & EXCLUSIVE != 0 {
-                return false;
-            }
-            match word.compare_exchange_weak(
-                current,
-                current + 1,
-                Ordering::Acquire,
-                Ordering::Relaxed,
-            ) {
-                Ok(_) => return true,
-                Err(now) => current = now,
-            }
+            gate: Mutex::new(()),
         }
     }
 
     fn release_exclusive(&self, v: VertexId) {
+        // Nobody else holds v while it is exclusive: a plain store frees it.
         self.words[v as usize].store(0, Ordering::Release);
     }
 
@@ -60,22 +40,26 @@ impl ClaimTable {
     }
 
     /// Takes `owned` exclusively and `shared` (disjoint from `owned`) shared, all or nothing.
-    /// Returns false, holding nothing, when any of them is held in a conflicting way.
+    /// Returns false, holding nothing, when any of them is held in a conflicting way. Claims are
+    /// serialized by a gate, so no claim ever sees another's partial state; releases only lower
+    /// the words, so a check that fails saw a real holder.
     pub fn try_claim(&self, owned: &[VertexId], shared: &[VertexId]) -> bool {
-        for (i, &v) in owned.iter().enumerate() {
-            if !self.try_exclusive(v) {
-                owned[..i].iter().for_each(|&w| self.release_exclusive(w));
-                return false;
+        let _gate = self.gate.lock().expect("the claim gate is never poisoned");
+        let free = owned
+            .iter()
+            .all(|&v| self.words[v as usize].load(Ordering::Acquire) == 0)
+            && shared
+                .iter()
+                .all(|&v| self.words[v as usize].load(Ordering::Acquire) & EXCLUSIVE == 0);
+        if free {
+            for &v in owned {
+                self.words[v as usize].store(EXCLUSIVE, Ordering::Relaxed);
+            }
+            for &v in shared {
+                self.words[v as usize].fetch_add(1, Ordering::Relaxed);
             }
         }
-        for (i, &v) in shared.iter().enumerate() {
-            if !self.try_shared(v) {
-                shared[..i].iter().for_each(|&w| self.release_shared(w));
-                owned.iter().for_each(|&w| self.release_exclusive(w));
-                return false;
-            }
-        }
-        true
+        free
     }
 
     /// Releases a claim taken by [`Self::try_claim`] with the same arguments. Writes made while

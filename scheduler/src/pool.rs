@@ -91,6 +91,17 @@ pub(crate) fn run<'a, W: Work<'a>>(
     if let Some(e) = shared.error.into_inner() {
         return Err(RunError::Work(e));
     }
+    // Events queued by the last tents, which the workers may have left when the front reached
+    // the end: no tent is in flight any more, so they run here in queue order.
+    let leftover = std::mem::take(&mut *shared.reserved_events.lock());
+    for event in leftover {
+        (event.action)();
+        shared.events_run.fetch_add(1, Ordering::Relaxed);
+    }
+    for event in std::mem::take(&mut *shared.events.queue.lock()) {
+        (event.action)();
+        shared.events_run.fetch_add(1, Ordering::Relaxed);
+    }
     let remaining = shared.remaining.load(Ordering::SeqCst);
     if remaining > 0 {
         return Err(RunError::Stalled { remaining });

@@ -1,0 +1,233 @@
+//! The scheduler under load: no two tents in flight are neighbours, every tent is causal, events
+//! run exclusively against overlapping tents, and single-thread runs finish in both modes.
+
+#![cfg(not(loom))]
+
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+use parking_lot::Mutex;
+use sdg_mesh::{Diagonal, Front, Mesh, Pitcher, Point, Rectangle};
+use sdg_scheduler::{Events, Options, RunError, VertexId, Work};
+
+const C: f64 = 1.0;
+const SAFETY: f64 = 0.9;
+
+fn perturbed(n: u32) -> Mesh {
+    Rectangle {
+        width: 1.0,
+        height: 1.0,
+        nx: n,
+        ny: n,
+        diagonal: Diagonal::Alternate,
+        interface: None,
+        perturb: 0.2,
+        seed: 11,
+    }
+    .build()
+    .unwrap()
+}
+
+/// Pitches tents and checks the claim contract from inside each tent; every `event_every`-th
+/// record queues a smoothing event that moves the recorded vertex.
+struct Checked<'a> {
+    mesh: &'a Mesh,
+    front: &'a Front,
+    pitcher: Pitcher,
+    in_flight: Vec<AtomicBool>,
+    /// Vertices a running event moves.
+    in_event: Vec<AtomicBool>,
+    /// Vertex positions that events move (a mutable copy of the mesh geometry).
+    positions: Vec<Mutex<Point>>,
+    records: AtomicUsize,
+    event_every: usize,
+    events_run: AtomicU64,
+    max_slope: Mutex<f64>,
+}
+
+impl<'a> Checked<'a> {
+    fn new(mesh: &'a Mesh, front: &'a Front, t_end: f64, event_every: usize) -> Self {
+        let n = mesh.vertices().len();
+        Self {
+            mesh,
+            front,
+            pitcher: Pitcher::new(mesh, C, SAFETY, t_end).unwrap(),
+            in_flight: (0..n).map(|_| AtomicBool::new(false)).collect(),
+            in_event: (0..n).map(|_| AtomicBool::new(false)).collect(),
+            positions: mesh.vertices().iter().map(|&p| Mutex::new(p)).collect(),
+            records: AtomicUsize::new(0),
+            event_every,
+            events_run: AtomicU64::new(0),
+            max_slope: Mutex::new(0.0),
+        }
+    }
+
+    /// Moves `v` a little towards the mean of its neighbours: the test event. Its region is `v`:
+    /// no tent whose star contains `v` (at `v` or a neighbour) may be in flight.
+    fn smooth(&self, v: VertexId) {
+        for &u in self.mesh.vertex_neighbors(v).iter().chain([&v]) {
+            assert!(
+                !self.in_flight[u as usize].load(Ordering::SeqCst),
+                "event at {v} overlaps a tent at {u}"
+            );
+        }
+        self.in_event[v as usize].store(true, Ordering::SeqCst);
+        let neighbours = self.mesh.vertex_neighbors(v);
+        let mean = neighbours.iter().fold([0.0, 0.0], |acc, &u| {
+            let p = *self.positions[u as usize].lock();
+            [acc[0] + p[0], acc[1] + p[1]]
+        });
+        let mut p = self.positions[v as usize].lock();
+        let k = neighbours.len() as f64;
+        *p = [
+            0.9 * p[0] + 0.1 * mean[0] / k,
+            0.9 * p[1] + 0.1 * mean[1] / k,
+        ];
+        drop(p);
+        std::thread::sleep(Duration::from_micros(50));
+        self.in_event[v as usize].store(false, Ordering::SeqCst);
+        self.events_run.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+impl<'a> Work<'a> for Checked<'a> {
+    type Scratch = ();
+    type Outcome = ();
+    type Error = String;
+
+    fn tent(&self, _: &mut (), v: VertexId, _: &Events<'a>) -> Result<(f64, ()), String> {
+        if self.in_flight[v as usize].swap(true, Ordering::SeqCst) {
+            return Err(format!("vertex {v} claimed twice"));
+        }
+        for &u in self.mesh.vertex_neighbors(v).iter().chain([&v]) {
+            if u != v && self.in_flight[u as usize].load(Ordering::SeqCst) {
+                return Err(format!("neighbours {v} and {u} in flight together"));
+            }
+            if self.in_event[u as usize].load(Ordering::SeqCst) {
+                return Err(format!("tent at {v} overlaps an event at {u}"));
+            }
+        }
+        // The star's positions must not move while the tent is in flight.
+        let before: Vec<Point> = self
+            .mesh
+            .vertex_neighbors(v)
+            .iter()
+            .map(|&u| *self.positions[u as usize].lock())
+            .collect();
+        let tent = self
+            .pitcher
+            .pitch(self.mesh, self.front, v)
+            .ok_or(format!("{v} not pitchable"))?;
+        let mut slope: f64 = 0.0;
+        for &t in self.mesh.vertex_triangles(v) {
+            slope = slope.max(C * self.front.slope(self.mesh, t));
+        }
+        if slope >= SAFETY {
+            return Err(format!("tent at {v}: slope ratio {slope}"));
+        }
+        std::hint::black_box((0..200).fold(0u64, |a, i| a.wrapping_mul(31).wrapping_add(i)));
+        let after: Vec<Point> = self
+            .mesh
+            .vertex_neighbors(v)
+            .iter()
+            .map(|&u| *self.positions[u as usize].lock())
+            .collect();
+        if before != after {
+            return Err(format!("star of {v} moved during its tent"));
+        }
+        let mut max = self.max_slope.lock();
+        *max = max.max(slope);
+        drop(max);
+        self.in_flight[v as usize].store(false, Ordering::SeqCst);
+        Ok((tent.t_new, ()))
+    }
+
+    fn record(&'a self, v: VertexId, (): (), events: &Events<'a>) -> Result<(), String> {
+        let k = self.records.fetch_add(1, Ordering::Relaxed);
+        if self.event_every > 0 && k % self.event_every == 0 {
+            events.push(vec![v], Box::new(move || self.smooth(v)));
+        }
+        Ok(())
+    }
+}
+
+fn run(mesh: &Mesh, threads: usize, deterministic: bool, event_every: usize) -> (u64, u64) {
+    let t_end = 3.0 / 16.0;
+    let front = Front::flat(mesh.vertices().len(), 0.0);
+    let work = Checked::new(mesh, &front, t_end, event_every);
+    let options = Options {
+        threads,
+        deterministic,
+    };
+    let stats = sdg_scheduler::run(mesh, &front, t_end, &work, vec![(); threads], &options)
+        .unwrap_or_else(|e| panic!("{threads} threads, deterministic {deterministic}: {e:?}"));
+    assert!(
+        front.snapshot().iter().all(|&t| t == t_end),
+        "front ends flat at t_end"
+    );
+    assert_eq!(stats.tents, work.records.load(Ordering::Relaxed) as u64);
+    assert_eq!(stats.tents_per_thread.len(), threads);
+    assert!(*work.max_slope.lock() < SAFETY);
+    assert!(work.in_flight.iter().all(|f| !f.load(Ordering::SeqCst)));
+    (stats.tents, work.events_run.load(Ordering::Relaxed))
+}
+
+#[test]
+fn eight_threads_on_a_perturbed_mesh() {
+    let mesh = perturbed(24);
+    for deterministic in [false, true] {
+        let (tents, _) = run(&mesh, 8, deterministic, 0);
+        assert!(tents > 5000, "{tents}");
+    }
+}
+
+#[test]
+fn events_run_exclusively_and_move_the_mesh() {
+    let mesh = perturbed(16);
+    for deterministic in [false, true] {
+        let (tents, events) = run(&mesh, 4, deterministic, 37);
+        assert_eq!(events, tents.div_ceil(37), "every queued event ran");
+    }
+}
+
+#[test]
+fn single_thread_runs_finish() {
+    for mesh in [perturbed(8), perturbed(20)] {
+        for deterministic in [false, true] {
+            let start = Instant::now();
+            run(&mesh, 1, deterministic, 10);
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "took {:?}",
+                start.elapsed()
+            );
+        }
+    }
+}
+
+#[test]
+fn work_errors_stop_the_run() {
+    struct Failing;
+    impl<'a> Work<'a> for Failing {
+        type Scratch = ();
+        type Outcome = ();
+        type Error = &'static str;
+        fn tent(&self, _: &mut (), _: VertexId, _: &Events<'a>) -> Result<(f64, ()), &'static str> {
+            Err("boom")
+        }
+        fn record(&'a self, _: VertexId, (): (), _: &Events<'a>) -> Result<(), &'static str> {
+            Ok(())
+        }
+    }
+    let mesh = perturbed(6);
+    for deterministic in [false, true] {
+        let front = Front::flat(mesh.vertices().len(), 0.0);
+        let options = Options {
+            threads: 3,
+            deterministic,
+        };
+        let e =
+            sdg_scheduler::run(&mesh, &front, 1.0, &Failing, vec![(); 3], &options).unwrap_err();
+        assert!(matches!(e, RunError::Work("boom")));
+    }
+}
