@@ -185,6 +185,7 @@ pub fn mesh_job(
                 .then(|| SpacetimeMesh::new(mesh, &front)),
         }),
     };
+    let _span = tracing::info_span!("mesh", config = %problem.loaded.file.display()).entered();
     let start = Instant::now();
     let stats = sdg_scheduler::run(
         mesh,
@@ -196,6 +197,7 @@ pub fn mesh_job(
     )
     .map_err(scheduler_error)?;
     let wall_time_s = start.elapsed().as_secs_f64();
+    tracing::info!(tents = stats.tents, wall_time_s, "pitching finished");
     let record = work.record.into_inner();
     let (min_edge, max_edge) = mesh.edge_length_range();
     let summary = MeshSummary {

@@ -391,6 +391,7 @@ pub fn solve_job(
         }),
     };
     solve.history_row(&mut solve.book.lock());
+    let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
     tracing::info!(
         threads = scheduler.threads,
         deterministic = scheduler.deterministic,
