@@ -41,7 +41,30 @@ impl CellType {
     }
 }
 
-/// An unstructured grid of one cell type with named scalar fields, written as VTK XML
+/// A named field with `components` values per point or cell (1 for scalars, 3 for vectors, 6 for
+/// symmetric tensors in VTK's order XX, YY, ZZ, XY, YZ, XZ).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    /// Array name.
+    pub name: String,
+    /// Values per point or cell.
+    pub components: usize,
+    /// `components` values per point or cell, flattened.
+    pub values: Vec<f64>,
+}
+
+impl Field {
+    /// A scalar field.
+    pub fn scalar(name: &str, values: Vec<f64>) -> Self {
+        Self {
+            name: name.into(),
+            components: 1,
+            values,
+        }
+    }
+}
+
+/// An unstructured grid of one cell type with named fields, written as VTK XML
 /// (`.vtu`, ASCII, file version 1.0) that ParaView and meshio read.
 #[derive(Clone, Debug)]
 pub struct UnstructuredGrid {
@@ -51,10 +74,10 @@ pub struct UnstructuredGrid {
     pub points: Vec<[f64; 3]>,
     /// Point indices of each cell, `cell_type.nodes()` per cell, flattened.
     pub connectivity: Vec<u32>,
-    /// Named per-point scalars.
-    pub point_data: Vec<(String, Vec<f64>)>,
-    /// Named per-cell scalars.
-    pub cell_data: Vec<(String, Vec<f64>)>,
+    /// Per-point fields.
+    pub point_data: Vec<Field>,
+    /// Per-cell fields.
+    pub cell_data: Vec<Field>,
 }
 
 impl UnstructuredGrid {
@@ -76,14 +99,14 @@ impl UnstructuredGrid {
             ("CellData", &self.cell_data),
         ] {
             let _ = writeln!(s, "<{tag}>");
-            for (name, values) in data {
-                data_array(
-                    &mut s,
-                    "Float64",
-                    &format!("Name=\"{name}\""),
-                    values.iter(),
-                    6,
-                );
+            for f in data {
+                let (name, components) = (&f.name, f.components);
+                let attrs = match components {
+                    1 => format!("Name=\"{name}\""),
+                    _ => format!("Name=\"{name}\" NumberOfComponents=\"{components}\""),
+                };
+                let per_line = if components == 1 { 6 } else { components };
+                data_array(&mut s, "Float64", &attrs, f.values.iter(), per_line);
             }
             let _ = writeln!(s, "</{tag}>");
         }
@@ -142,12 +165,17 @@ mod tests {
             cell_type: CellType::Tetra,
             points: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             connectivity: vec![0, 1, 2, 3],
-            point_data: vec![("time".into(), vec![0.0, 0.0, 0.0, 0.5])],
-            cell_data: vec![("tent".into(), vec![7.0])],
+            point_data: vec![Field::scalar("time", vec![0.0, 0.0, 0.0, 0.5])],
+            cell_data: vec![Field {
+                name: "tent".into(),
+                components: 3,
+                values: vec![7.0, 8.0, 9.0],
+            }],
         };
         let text = grid.to_vtu();
         assert!(text.contains("NumberOfPoints=\"4\" NumberOfCells=\"1\""));
         assert!(text.contains("Name=\"time\""));
+        assert!(text.contains("Name=\"tent\" NumberOfComponents=\"3\" format=\"ascii\">\n7 8 9\n"));
         assert!(text.contains("0 0 0 0.5\n"));
         assert!(text.contains("Name=\"offsets\" format=\"ascii\">\n4\n"));
         assert!(text.contains("Name=\"types\" format=\"ascii\">\n10\n"));

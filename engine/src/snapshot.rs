@@ -29,7 +29,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use crate::error::EngineError;
-use crate::output::write_atomic;
+use crate::output::{CellType, Field, UnstructuredGrid, write_atomic};
 
 /// Field values at a point of a slice, physical SI units.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -226,7 +226,11 @@ impl Snapshots {
                 std::mem::take(&mut snap.triangles)
             };
             let name = format!("snapshot_{:04}.vtu", snap.index);
-            write_atomic(&self.dir, &name, triangles_vtu(&triangles).as_bytes())?;
+            write_atomic(
+                &self.dir,
+                &name,
+                triangles_grid(&triangles).to_vtu().as_bytes(),
+            )?;
             self.written.push((snap.time, name));
             self.next += 1;
             count += 1;
@@ -361,79 +365,36 @@ fn signed_area(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
 }
 
-/// The triangles as a VTK XML unstructured grid (ASCII, version 1.0, the layout of
-/// [`crate::output::UnstructuredGrid`]) with points `[x, y, 0]`, multi-component point data
-/// `velocity`, `stress`, `displacement`, `strain_energy_density` and cell data `area`.
-fn triangles_vtu(triangles: &[Triangle]) -> String {
-    let n = triangles.len();
-    let mut s = String::from(
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" \
-         byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n",
-    );
-    let _ = writeln!(
-        s,
-        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{n}\">",
-        3 * n
-    );
+/// The triangles as an unstructured grid with points `[x, y, 0]` (three per triangle: fields
+/// are discontinuous), point fields `velocity`, `stress`, `displacement`,
+/// `strain_energy_density` and cell field `area`.
+fn triangles_grid(triangles: &[Triangle]) -> UnstructuredGrid {
     let values = || triangles.iter().flat_map(|t| t.values.iter());
-    s.push_str("<PointData>\n");
-    type Get = for<'a> fn(&'a PointValues) -> &'a [f64];
-    let fields: [(&str, usize, Get); 4] = [
-        ("velocity", 3, |p| &p.velocity),
-        ("stress", 6, |p| &p.stress),
-        ("displacement", 3, |p| &p.displacement),
-        ("strain_energy_density", 1, |p| {
-            std::slice::from_ref(&p.strain_energy_density)
-        }),
-    ];
-    for (name, comps, get) in fields {
-        let attrs = match comps {
-            1 => format!("Name=\"{name}\""),
-            _ => format!("Name=\"{name}\" NumberOfComponents=\"{comps}\""),
-        };
-        let data = values().flat_map(|p| get(p).iter());
-        data_array(&mut s, "Float64", &attrs, data, comps);
+    let field = |name: &str, components: usize, get: fn(&PointValues) -> &[f64]| Field {
+        name: name.into(),
+        components,
+        values: values().flat_map(|p| get(p).iter().copied()).collect(),
+    };
+    UnstructuredGrid {
+        cell_type: CellType::Triangle,
+        points: triangles
+            .iter()
+            .flat_map(|t| t.xy.iter().map(|p| [p[0], p[1], 0.0]))
+            .collect(),
+        connectivity: (0..3 * triangles.len() as u32).collect(),
+        point_data: vec![
+            field("velocity", 3, |p| &p.velocity),
+            field("stress", 6, |p| &p.stress),
+            field("displacement", 3, |p| &p.displacement),
+            field("strain_energy_density", 1, |p| {
+                std::slice::from_ref(&p.strain_energy_density)
+            }),
+        ],
+        cell_data: vec![Field::scalar(
+            "area",
+            triangles.iter().map(Triangle::area).collect(),
+        )],
     }
-    s.push_str("</PointData>\n<CellData>\n");
-    let areas = triangles.iter().map(Triangle::area);
-    data_array(&mut s, "Float64", "Name=\"area\"", areas, 1);
-    s.push_str("</CellData>\n<Points>\n");
-    let points = triangles
-        .iter()
-        .flat_map(|t| t.xy.iter().flat_map(|p| [p[0], p[1], 0.0]));
-    data_array(&mut s, "Float64", "NumberOfComponents=\"3\"", points, 3);
-    s.push_str("</Points>\n<Cells>\n");
-    data_array(&mut s, "Int64", "Name=\"connectivity\"", 0..3 * n, 3);
-    let offsets = (1..=n).map(|c| 3 * c);
-    data_array(&mut s, "Int64", "Name=\"offsets\"", offsets, 10);
-    let types = std::iter::repeat_n(5u8, n);
-    data_array(&mut s, "UInt8", "Name=\"types\"", types, 20);
-    s.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
-    s
-}
-
-/// Appends an ASCII `DataArray` of type `ty` with extra attributes `attrs`, `per_line` values to
-/// a line, floats in Rust's shortest round-trip form.
-fn data_array<T: std::fmt::Display>(
-    out: &mut String,
-    ty: &str,
-    attrs: &str,
-    values: impl Iterator<Item = T>,
-    per_line: usize,
-) {
-    let _ = writeln!(out, "<DataArray type=\"{ty}\" {attrs} format=\"ascii\">");
-    let mut count = 0;
-    for v in values {
-        if count > 0 {
-            out.push(if count % per_line == 0 { '\n' } else { ' ' });
-        }
-        let _ = write!(out, "{v}");
-        count += 1;
-    }
-    if count > 0 {
-        out.push('\n');
-    }
-    out.push_str("</DataArray>\n");
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 
 use sdg_mesh::{Front, Mesh, Tent};
 
-use crate::output::{CellType, UnstructuredGrid};
+use crate::output::{CellType, Field, UnstructuredGrid};
 
 /// Tetrahedra in `(x, y, t)` of all tents pitched so far. Each tent adds one point (its pole
 /// top) and one tetrahedron per triangle of its vertex star.
@@ -73,9 +73,12 @@ impl SpacetimeMesh {
             cell_type: CellType::Tetra,
             points: self.points.iter().map(|p| [p[0], p[1], c * p[2]]).collect(),
             connectivity: self.tets.iter().flatten().copied().collect(),
-            point_data: vec![("time".into(), self.points.iter().map(|p| p[2]).collect())],
-            cell_data: vec![(
-                "tent".into(),
+            point_data: vec![Field::scalar(
+                "time",
+                self.points.iter().map(|p| p[2]).collect(),
+            )],
+            cell_data: vec![Field::scalar(
+                "tent",
                 self.tent_of_tet.iter().map(|&t| t as f64).collect(),
             )],
         }
