@@ -17,13 +17,9 @@ fn material() -> Material {
     Material::new(3.24e9, 0.35, 1190.0, Plane::Strain).unwrap()
 }
 
-/// A pulse of width 0.25 m centred at x = 0.5 m travelling in +x, in a 1 m x 0.25 m strip with
-/// rollers on the long sides, an absorbing left side and `right` on the right; solved at order
-/// `order` to `t_end`.
-fn strip(right: Condition, order: usize, t_end: f64) -> (common::Direct, PlaneWave) {
-    let m = material();
-    let pulse = PlaneWave::new(&m, Wave::P, 0.0, WIDTH, 1.0, Profile::Pulse, 0.5).unwrap();
-    let mesh = Rectangle {
+/// The 1 m x 0.25 m strip, 32 x 8 right-diagonal cells.
+fn strip_mesh() -> sdg_mesh::Mesh {
+    Rectangle {
         width: LENGTH,
         height: WIDTH,
         nx: 32,
@@ -34,7 +30,16 @@ fn strip(right: Condition, order: usize, t_end: f64) -> (common::Direct, PlaneWa
         seed: 0,
     }
     .build()
-    .unwrap();
+    .unwrap()
+}
+
+/// A pulse of width 0.25 m centred at x = 0.5 m travelling in +x, in a 1 m x 0.25 m strip with
+/// rollers on the long sides, an absorbing left side and `right` on the right; solved at order
+/// `order` to `t_end`.
+fn strip(right: Condition, order: usize, t_end: f64) -> (common::Direct, PlaneWave) {
+    let m = material();
+    let pulse = PlaneWave::new(&m, Wave::P, 0.0, WIDTH, 1.0, Profile::Pulse, 0.5).unwrap();
+    let mesh = strip_mesh();
     let absorbing = Condition::Transmitting {
         incoming: [0.0; 2],
         history: sdg_solver::history::History::Constant,
@@ -178,18 +183,7 @@ fn velocity_and_traction_sides_launch_the_exact_wave() {
             history: smooth.clone(),
         },
     ] {
-        let mesh = Rectangle {
-            width: LENGTH,
-            height: WIDTH,
-            nx: 32,
-            ny: 8,
-            diagonal: Diagonal::Right,
-            interface: None,
-            perturb: 0.0,
-            seed: 0,
-        }
-        .build()
-        .unwrap();
+        let mesh = strip_mesh();
         let boundary = Boundary::new(
             vec![
                 Some(left.clone()),

@@ -163,9 +163,7 @@ pub struct PatchSolver {
     phi_other: Vec<f64>,
     values: Vec<f64>,
     output: Vec<f64>,
-    inflow: Vec<f64>,
-    inflow_geometry: Vec<Geometry>,
-    inflow_solved: Vec<bool>,
+    inflow: Inflow,
     reports: Vec<ElementReport>,
     used: usize,
 }
@@ -225,9 +223,12 @@ impl PatchSolver {
             phi_other: vec![0.0; n],
             values: vec![0.0; width],
             output: vec![0.0; max_star * n * width],
-            inflow: vec![0.0; max_star * n * width],
-            inflow_geometry: vec![Geometry::default(); max_star],
-            inflow_solved: vec![false; max_star],
+            inflow: Inflow {
+                solved: vec![false; max_star],
+                geometry: vec![Geometry::default(); max_star],
+                coefficients: vec![0.0; max_star * n * width],
+                size: n * width,
+            },
             reports: vec![ElementReport::default(); max_star],
             used: 0,
             system,
@@ -307,14 +308,7 @@ impl PatchSolver {
             };
         }
 
-        let size = n * self.width();
-        for (i, slot) in self.slots[..d].iter().enumerate() {
-            self.inflow_solved[i] = solution.load(
-                slot.triangle as usize,
-                &mut self.inflow_geometry[i],
-                &mut self.inflow[i * size..(i + 1) * size],
-            );
-        }
+        self.inflow.gather(&self.slots[..d], solution);
         self.blocks.reset(d, m);
         let a_mu = [
             self.system.a_n([1.0, 0.0, 0.0]),
@@ -338,13 +332,7 @@ impl PatchSolver {
                 add_kron(self.blocks.block_mut(i, i), m, n, fields, h, &b);
             }
             // Inflow face: target is the earlier side's trace.
-            let under = below(
-                &self.inflow_solved,
-                &self.inflow_geometry,
-                &self.inflow,
-                i,
-                size,
-            );
+            let under = self.inflow.below(i);
             let (system, basis) = (&self.system, &self.basis);
             let (phi, values) = (&mut self.phi, &mut self.values);
             let mass = &mut self.mass[..n * n];
@@ -501,14 +489,7 @@ impl PatchSolver {
             }
         });
         add_momentum(face_momentum);
-        let size = n * width;
-        let under = below(
-            &self.inflow_solved,
-            &self.inflow_geometry,
-            &self.inflow,
-            i,
-            size,
-        );
+        let under = self.inflow.below(i);
         face_momentum = [0.0; 2];
         face_points(face_rule, &slot.vertices, slot.bottom(), |x, w, nrm| {
             let an = system.a_n(nrm);
@@ -592,14 +573,7 @@ impl PatchSolver {
                 rhs[d * n + k] = det * self.output[i * n * width + k * width + d] / c;
             }
         }
-        let size = n * width;
-        let under = below(
-            &self.inflow_solved,
-            &self.inflow_geometry,
-            &self.inflow,
-            i,
-            size,
-        );
+        let under = self.inflow.below(i);
         let (system, basis) = (&self.system, &self.basis);
         let (phi, phi_prev, values) = (&mut self.phi, &mut self.phi_other, &mut self.values);
         face_points(
@@ -725,16 +699,39 @@ fn face_normal(vertices: &[SpacePoint; 4], face: Face) -> [f64; 2] {
     [n[0], n[1]]
 }
 
-/// The element below element `i` of the current patch (copied from the front solution when the
-/// patch started; `size` values each), or `None` for initial data.
-fn below<'a>(
-    solved: &[bool],
-    geometry: &'a [Geometry],
-    coefficients: &'a [f64],
-    i: usize,
+/// Copies of the elements below a patch's elements, taken when the patch starts.
+#[derive(Debug)]
+struct Inflow {
+    solved: Vec<bool>,
+    geometry: Vec<Geometry>,
+    coefficients: Vec<f64>,
+    /// Values per element.
     size: usize,
-) -> Option<(&'a Geometry, &'a [f64])> {
-    solved[i].then(|| (&geometry[i], &coefficients[i * size..(i + 1) * size]))
+}
+
+impl Inflow {
+    /// Copies the elements under the slots' triangles from `solution`.
+    fn gather(&mut self, slots: &[Slot], solution: &FrontSolution) {
+        for (i, slot) in slots.iter().enumerate() {
+            let size = self.size;
+            self.solved[i] = solution.load(
+                slot.triangle as usize,
+                &mut self.geometry[i],
+                &mut self.coefficients[i * size..(i + 1) * size],
+            );
+        }
+    }
+
+    /// The element below element `i`, or `None` for initial data.
+    fn below(&self, i: usize) -> Option<(&Geometry, &[f64])> {
+        let size = self.size;
+        self.solved[i].then(|| {
+            (
+                &self.geometry[i],
+                &self.coefficients[i * size..(i + 1) * size],
+            )
+        })
+    }
 }
 
 /// The state `sum_k phi_k q_k` of coefficients stored `fields` per basis function.
