@@ -119,7 +119,8 @@ fn spacetime_mesh_opens_in_meshio() {
     let script = "import sys, meshio\n\
                   m = meshio.read(sys.argv[1])\n\
                   t = m.point_data['time']\n\
-                  print(len(m.points), m.cells_dict['tetra'].shape[0], t.min(), t.max())";
+                  print(len(m.points), m.cells_dict['tetra'].shape[0], t.min(), t.max(), \
+                  m.points[:, 2].max())";
     let out = Command::new("python3")
         .args(["-c", script])
         .arg(dir.path().join("spacetime.vtu"))
@@ -138,6 +139,6 @@ fn spacetime_mesh_opens_in_meshio() {
     let points = s["vertices"].as_f64().unwrap() + s["tents"].as_f64().unwrap();
     assert_eq!(
         fields,
-        [points, s["tetrahedra"].as_f64().unwrap(), 0.0, 5e-7]
+        [points, s["tetrahedra"].as_f64().unwrap(), 0.0, 5e-7, 5e-7]
     );
 }

@@ -65,18 +65,18 @@ impl SpacetimeMesh {
         self.tets.len()
     }
 
-    /// The mesh as a VTK grid. The third coordinate is `c * t` (metres) so that causal cones
-    /// look like cones; the point field `time` holds `t` in seconds and the cell field `tent`
-    /// the tent index.
+    /// The mesh as a VTK grid with points `(x, y, t)` (metres, metres, seconds). Point fields:
+    /// `time` (s) and `ct`, `c * t` in metres, which a ParaView "Warp By Scalar" turns into a
+    /// view where causal cones look like cones; cell field `tent`, the tent index.
     pub fn to_grid(&self, c: f64) -> UnstructuredGrid {
         UnstructuredGrid {
             cell_type: CellType::Tetra,
-            points: self.points.iter().map(|p| [p[0], p[1], c * p[2]]).collect(),
+            points: self.points.clone(),
             connectivity: self.tets.iter().flatten().copied().collect(),
-            point_data: vec![Field::scalar(
-                "time",
-                self.points.iter().map(|p| p[2]).collect(),
-            )],
+            point_data: vec![
+                Field::scalar("time", self.points.iter().map(|p| p[2]).collect()),
+                Field::scalar("ct", self.points.iter().map(|p| c * p[2]).collect()),
+            ],
             cell_data: vec![Field::scalar(
                 "tent",
                 self.tent_of_tet.iter().map(|&t| t as f64).collect(),
