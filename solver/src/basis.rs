@@ -9,7 +9,7 @@
 //! values and gradients are finite and accurate everywhere, vertices and edges included.
 
 /// Largest supported polynomial degree.
-pub const MAX_DEGREE: usize = 6;
+pub const MAX_DEGREE: usize = 4;
 
 /// Dimension `(q+1)(q+2)(q+3)/6` of the polynomials of total degree <= `q` in three variables.
 pub const fn dimension(q: usize) -> usize {
@@ -45,7 +45,7 @@ impl Basis {
     /// The basis of complete degree `degree`.
     ///
     /// # Panics
-    /// If `degree > MAX_DEGREE` (6).
+    /// If `degree > MAX_DEGREE` (4).
     pub fn new(degree: usize) -> Self {
         assert!(
             degree <= MAX_DEGREE,
