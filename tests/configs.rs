@@ -1,5 +1,7 @@
 //! Every shipped config runs, and its results match the stored values.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -105,13 +107,7 @@ fn solver_configs_match_stored_results() {
 /// `python3` with meshio: required under CI, skipped with a notice elsewhere.
 #[test]
 fn spacetime_mesh_opens_in_meshio() {
-    let has_meshio = Command::new("python3")
-        .args(["-c", "import meshio"])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has_meshio {
-        assert!(std::env::var_os("CI").is_none(), "CI must install meshio");
-        eprintln!("skipped: python3 with meshio is not available");
+    if !common::meshio_available() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

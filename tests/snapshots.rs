@@ -70,13 +70,7 @@ fn snapshots_agree_with_the_exact_solution() {
 
 #[test]
 fn snapshots_open_in_meshio() {
-    let has_meshio = Command::new("python3")
-        .args(["-c", "import meshio"])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has_meshio {
-        assert!(std::env::var_os("CI").is_none(), "CI must install meshio");
-        eprintln!("skipped: python3 with meshio is not available");
+    if !common::meshio_available() {
         return;
     }
     let text = std::fs::read_to_string(

@@ -87,3 +87,17 @@ pub fn solve_direct(
         dissipation,
     }
 }
+
+/// True when `python3` can import meshio. Tests that read our files back with meshio skip with a
+/// notice without it, except under CI (`CI` set), which must install it.
+pub fn meshio_available() -> bool {
+    let ok = std::process::Command::new("python3")
+        .args(["-c", "import meshio"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !ok {
+        assert!(std::env::var_os("CI").is_none(), "CI must install meshio");
+        eprintln!("skipped: python3 with meshio is not available");
+    }
+    ok
+}
