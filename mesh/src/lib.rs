@@ -1,5 +1,5 @@
 //! Space triangulations for tent-pitched spacetime meshes: the mesh and its adjacency, structured
-//! and Gmsh-read meshes, the advancing front and the tent pitcher.
+//! and Gmsh-read meshes, newest-vertex bisection, the advancing front and the tent pitcher.
 //!
 //! Units are SI: metres for lengths, seconds for times.
 
@@ -8,6 +8,7 @@ pub mod geometry;
 pub mod gmsh;
 pub mod mesh;
 pub mod rectangle;
+pub mod refine;
 pub mod tent;
 
 pub use front::Front;
@@ -15,4 +16,5 @@ pub use geometry::Point;
 pub use gmsh::{GmshError, read_msh};
 pub use mesh::{Edge, EdgeId, Mesh, MeshError, TagId, TriangleId, VertexId};
 pub use rectangle::{Diagonal, GridSegment, Rectangle, RectangleError};
+pub use refine::Split;
 pub use tent::{PitchError, Pitcher, Tent};

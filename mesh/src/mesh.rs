@@ -67,50 +67,32 @@ pub enum MeshError {
     TooLarge(&'static str),
 }
 
-/// Compressed lists: the items of entry `i` are `items[offsets[i]..offsets[i + 1]]`.
-#[derive(Clone, Debug, Default)]
-struct Adjacency {
-    offsets: Vec<u32>,
-    items: Vec<u32>,
-}
-
-impl Adjacency {
-    fn from_lists(lists: Vec<Vec<u32>>) -> Self {
-        let mut offsets = Vec::with_capacity(lists.len() + 1);
-        offsets.push(0);
-        let mut items = Vec::new();
-        for list in lists {
-            items.extend(list);
-            offsets.push(items.len() as u32);
-        }
-        Self { offsets, items }
-    }
-
-    fn get(&self, i: u32) -> &[u32] {
-        let i = i as usize;
-        &self.items[self.offsets[i] as usize..self.offsets[i + 1] as usize]
-    }
-}
-
 /// A conforming triangulation of a planar domain with full adjacency.
 ///
 /// Contract: every triangle is counter-clockwise with positive area, every edge belongs to one
-/// or two triangles, and every vertex belongs to at least one triangle.
+/// or two triangles, and every vertex belongs to at least one triangle. Each triangle also
+/// carries a refinement edge for newest-vertex bisection (see [`Mesh::bisect`]).
 #[derive(Clone, Debug)]
 pub struct Mesh {
-    vertices: Vec<Point>,
-    triangles: Vec<[VertexId; 3]>,
-    triangle_edges: Vec<[EdgeId; 3]>,
-    edges: Vec<Edge>,
-    vertex_triangles: Adjacency,
-    vertex_neighbors: Adjacency,
-    tag_names: Vec<String>,
+    pub(crate) vertices: Vec<Point>,
+    pub(crate) triangles: Vec<[VertexId; 3]>,
+    pub(crate) triangle_edges: Vec<[EdgeId; 3]>,
+    /// Per triangle, the corner opposite its refinement edge.
+    pub(crate) refinement_edge: Vec<u8>,
+    pub(crate) edges: Vec<Edge>,
+    /// Per vertex, its triangles in increasing id order.
+    pub(crate) vertex_triangles: Vec<Vec<TriangleId>>,
+    /// Per vertex, its neighbours in increasing id order.
+    pub(crate) vertex_neighbors: Vec<Vec<VertexId>>,
+    pub(crate) tag_names: Vec<String>,
 }
 
 impl Mesh {
     /// Builds a mesh from vertex positions (metres) and triangles (any orientation; they are
-    /// made counter-clockwise). `tagged_edges` lists edges by their end vertices with an index
-    /// into `tag_names`.
+    /// made counter-clockwise by swapping corners 1 and 2). `tagged_edges` lists edges by their
+    /// end vertices with an index into `tag_names`. Each triangle's refinement edge is its
+    /// longest edge; equal lengths are ordered by the edges' (smaller, larger) vertex ids, the
+    /// smaller pair winning, so that neighbours agree on ties.
     pub fn new(
         vertices: Vec<Point>,
         mut triangles: Vec<[VertexId; 3]>,
@@ -220,13 +202,36 @@ impl Mesh {
         for list in &mut vn {
             list.sort_unstable();
         }
+        let refinement_edge = triangle_edges
+            .iter()
+            .map(|ids| {
+                let key = |i: usize| {
+                    let edge = &edges[ids[i] as usize];
+                    let [a, b] = edge.vertices.map(|v| vertices[v as usize]);
+                    (geometry::distance(a, b), edge.vertices)
+                };
+                // Longest first; among equal lengths the smaller vertex pair.
+                (0..3)
+                    .reduce(|best, i| {
+                        let (lb, vb) = key(best);
+                        let (li, vi) = key(i);
+                        if li > lb || (li == lb && vi < vb) {
+                            i
+                        } else {
+                            best
+                        }
+                    })
+                    .expect("a triangle has three edges") as u8
+            })
+            .collect();
         Ok(Self {
             vertices,
             triangles,
             triangle_edges,
+            refinement_edge,
             edges,
-            vertex_triangles: Adjacency::from_lists(vt),
-            vertex_neighbors: Adjacency::from_lists(vn),
+            vertex_triangles: vt,
+            vertex_neighbors: vn,
             tag_names,
         })
     }
@@ -276,12 +281,18 @@ impl Mesh {
 
     /// Triangles that contain vertex `v` (its star), in increasing id order.
     pub fn vertex_triangles(&self, v: VertexId) -> &[TriangleId] {
-        self.vertex_triangles.get(v)
+        &self.vertex_triangles[v as usize]
     }
 
     /// Vertices joined to `v` by an edge, in increasing id order.
     pub fn vertex_neighbors(&self, v: VertexId) -> &[VertexId] {
-        self.vertex_neighbors.get(v)
+        &self.vertex_neighbors[v as usize]
+    }
+
+    /// The corner of triangle `t` opposite its refinement edge (0, 1 or 2): the edge that
+    /// [`Mesh::bisect`] splits at its midpoint.
+    pub fn refinement_edge(&self, t: TriangleId) -> usize {
+        self.refinement_edge[t as usize] as usize
     }
 
     /// Length of edge `e` in metres.
@@ -306,21 +317,30 @@ impl Mesh {
         geometry::angles(self.triangle_points(t))
     }
 
-    /// The same triangulation and tags with every vertex moved by `f` (metres to metres).
-    /// Fails when a triangle degenerates or folds over a neighbour.
+    /// The same triangulation, tags and refinement edges with every vertex moved by `f`
+    /// (metres to metres). Fails when a triangle degenerates or folds over a neighbour.
     pub fn map_vertices(&self, f: impl Fn(Point) -> Point) -> Result<Mesh, MeshError> {
-        let tagged: Vec<_> = self
-            .edges
-            .iter()
-            .filter_map(|e| e.tag.map(|t| (e.vertices, t)))
-            .collect();
         let vertices = self.vertices.iter().map(|&p| f(p)).collect();
-        Mesh::new(
+        let mut mesh = Mesh::new(
             vertices,
             self.triangles.clone(),
             self.tag_names.clone(),
-            &tagged,
-        )
+            &self.tagged_edges(),
+        )?;
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let z = tri[self.refinement_edge[t] as usize];
+            let corner = mesh.triangles[t].iter().position(|&v| v == z);
+            mesh.refinement_edge[t] = corner.expect("the same triangle") as u8;
+        }
+        Ok(mesh)
+    }
+
+    /// Every tagged edge as (end vertices, tag), as [`Mesh::new`] takes them.
+    pub(crate) fn tagged_edges(&self) -> Vec<([VertexId; 2], TagId)> {
+        self.edges
+            .iter()
+            .filter_map(|e| e.tag.map(|t| (e.vertices, t)))
+            .collect()
     }
 
     /// Shortest and longest edge lengths of the mesh, in metres.

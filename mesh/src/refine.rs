@@ -1,0 +1,594 @@
+//! Conforming local refinement by newest-vertex bisection (NVB).
+//!
+//! A triangle `(z, a, b)` (counter-clockwise, refinement edge `ab` opposite `z`) is bisected at
+//! the midpoint `m` of `ab` into the children `(m, z, a)` and `(m, b, z)`, each with its
+//! refinement edge opposite the newest vertex `m` at corner 0. With the longest-edge marking of
+//! [`Mesh::new`] the descendants of a triangle fall into at most four similarity classes, so
+//! angles stay bounded away from zero.
+
+use std::collections::HashMap;
+
+use crate::geometry::Point;
+use crate::mesh::{Edge, EdgeId, Mesh, TriangleId, VertexId};
+
+/// One edge bisection: edge `ends` split at its midpoint, the new vertex `vertex`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Split {
+    /// The new vertex at the midpoint of `ends`.
+    pub vertex: VertexId,
+    /// End vertices of the split edge, smaller id first.
+    pub ends: [VertexId; 2],
+    /// One `(kept, new)` entry per split triangle: one on a boundary edge, two inside. Both
+    /// children lie inside the old triangle `kept`: for its old corners `(z, a, b)` with
+    /// refinement edge `ab`, `kept` keeps its id and becomes `(vertex, z, a)`, and `new` is a
+    /// freshly appended triangle `(vertex, b, z)`.
+    pub halves: Vec<(TriangleId, TriangleId)>,
+}
+
+impl Mesh {
+    /// Bisects triangle `t` by newest-vertex bisection, first bisecting whatever neighbours the
+    /// closure needs so that the mesh stays conforming.
+    ///
+    /// Each step splits one edge in every triangle that has it as refinement edge (two inside,
+    /// one on the boundary). Before each step, `allow` is asked about every triangle the step
+    /// would split (all of them, with the mesh as it is before the step); if it returns false
+    /// for any of them, refinement stops there and `bisect` returns false. Every step done is
+    /// pushed to `splits` in order, and the mesh is conforming after each one. Returns true when
+    /// `t` itself was bisected.
+    ///
+    /// Ids are only appended, never removed or renumbered: a step adds one vertex, one triangle
+    /// per split triangle, and one edge per split triangle plus one. The split edge keeps its id
+    /// for the half at its smaller end vertex; both halves keep its tag, the new interior edges
+    /// have none.
+    pub fn bisect(
+        &mut self,
+        t: TriangleId,
+        allow: &mut dyn FnMut(&Mesh, TriangleId) -> bool,
+        splits: &mut Vec<Split>,
+    ) -> bool {
+        // Triangles waiting for the one above them to be bisected; the last is handled next.
+        let mut pending = vec![t];
+        while let Some(&s) = pending.last() {
+            let e = self.refinement_edge_id(s);
+            let triangles = self.edges[e as usize].triangles;
+            if let Some(u) = triangles.into_iter().flatten().find(|&u| u != s) {
+                if self.refinement_edge_id(u) != e {
+                    assert!(
+                        !pending.contains(&u),
+                        "refinement edges around triangle {u} form a cycle"
+                    );
+                    pending.push(u);
+                    continue;
+                }
+            }
+            let mut allowed = true;
+            for u in triangles.into_iter().flatten() {
+                allowed &= allow(self, u);
+            }
+            if !allowed {
+                return false;
+            }
+            splits.push(self.split_edge(e));
+            pending.pop();
+        }
+        true
+    }
+
+    /// The two children that bisecting `t` would create, as counter-clockwise corner points in
+    /// metres: first the one that keeps the id `t`, then the new one (see [`Split::halves`]).
+    pub fn bisection_children(&self, t: TriangleId) -> [[Point; 3]; 2] {
+        let r = self.refinement_edge(t);
+        let p = self.triangle_points(t);
+        let (z, a, b) = (p[r], p[(r + 1) % 3], p[(r + 2) % 3]);
+        let m = midpoint(a, b);
+        [[m, z, a], [m, b, z]]
+    }
+
+    /// Consistency check used by tests: rebuilds the adjacency from scratch with [`Mesh::new`]
+    /// on the current vertices, triangles and tags and compares edges (end vertices, tags and
+    /// triangles), triangle edges, vertex stars and vertex neighbours, and checks that every
+    /// triangle is counter-clockwise with positive area. Returns the first difference found.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.refinement_edge.len() != self.triangles.len() {
+            return Err("one refinement edge per triangle expected".into());
+        }
+        for t in 0..self.triangles.len() as TriangleId {
+            if self.area(t) <= 0.0 {
+                return Err(format!("triangle {t} is not counter-clockwise"));
+            }
+            if self.refinement_edge(t) > 2 {
+                return Err(format!("triangle {t} has no valid refinement edge"));
+            }
+        }
+        let fresh = Mesh::new(
+            self.vertices.clone(),
+            self.triangles.clone(),
+            self.tag_names.clone(),
+            &self.tagged_edges(),
+        )
+        .map_err(|e| e.to_string())?;
+        if fresh.triangles != self.triangles {
+            return Err("triangle orientation differs from a rebuild".into());
+        }
+        if fresh.edges.len() != self.edges.len() {
+            return Err(format!(
+                "{} edges, a rebuild has {}",
+                self.edges.len(),
+                fresh.edges.len()
+            ));
+        }
+        let mut expected: HashMap<[VertexId; 2], &Edge> =
+            fresh.edges.iter().map(|e| (e.vertices, e)).collect();
+        for (id, edge) in self.edges.iter().enumerate() {
+            match expected.remove(&edge.vertices) {
+                Some(want) if want == edge => {}
+                Some(want) => return Err(format!("edge {id} is {edge:?}, expected {want:?}")),
+                None => return Err(format!("edge {id} {edge:?} is unknown or repeated")),
+            }
+        }
+        for (t, (tri, ids)) in self.triangles.iter().zip(&self.triangle_edges).enumerate() {
+            for (i, &e) in ids.iter().enumerate() {
+                let (a, b) = (tri[(i + 1) % 3], tri[(i + 2) % 3]);
+                if self.edges[e as usize].vertices != [a.min(b), a.max(b)] {
+                    return Err(format!(
+                        "edge {i} of triangle {t} is not opposite corner {i}"
+                    ));
+                }
+            }
+        }
+        if fresh.vertex_triangles != self.vertex_triangles {
+            return Err("vertex stars differ from a rebuild".into());
+        }
+        if fresh.vertex_neighbors != self.vertex_neighbors {
+            return Err("vertex neighbours differ from a rebuild".into());
+        }
+        Ok(())
+    }
+
+    /// The refinement edge of triangle `t`.
+    fn refinement_edge_id(&self, t: TriangleId) -> EdgeId {
+        self.triangle_edges[t as usize][self.refinement_edge(t)]
+    }
+
+    /// Splits edge `e` at its midpoint in every triangle that contains it; each must have `e` as
+    /// its refinement edge.
+    fn split_edge(&mut self, e: EdgeId) -> Split {
+        let old = self.edges[e as usize];
+        let [p, q] = old.vertices;
+        let m = next_id(self.vertices.len());
+        self.vertices.push(midpoint(self.vertex(p), self.vertex(q)));
+        self.vertex_triangles.push(Vec::new());
+        self.vertex_neighbors.push(vec![p, q]);
+        let eq = next_id(self.edges.len());
+        self.edges[e as usize] = Edge {
+            vertices: [p, m],
+            triangles: [None, None],
+            tag: old.tag,
+        };
+        self.edges.push(Edge {
+            vertices: [q, m],
+            triangles: [None, None],
+            tag: old.tag,
+        });
+        let half = |v: VertexId| if v == p { e } else { eq };
+
+        let mut halves = Vec::with_capacity(2);
+        for k in old.triangles.into_iter().flatten() {
+            let r = self.refinement_edge(k);
+            debug_assert_eq!(self.triangle_edges[k as usize][r], e);
+            let tri = self.triangles[k as usize];
+            let (z, a, b) = (tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]);
+            let ids = self.triangle_edges[k as usize];
+            let (bz, za) = (ids[(r + 1) % 3], ids[(r + 2) % 3]);
+            let n = next_id(self.triangles.len());
+            let zm = next_id(self.edges.len());
+            self.edges.push(Edge {
+                vertices: [z, m],
+                triangles: [Some(k), Some(n)],
+                tag: None,
+            });
+            let (ha, hb) = (half(a), half(b));
+            self.triangles[k as usize] = [m, z, a];
+            self.triangle_edges[k as usize] = [za, ha, zm];
+            self.refinement_edge[k as usize] = 0;
+            self.triangles.push([m, b, z]);
+            self.triangle_edges.push([bz, zm, hb]);
+            self.refinement_edge.push(0);
+            add_triangle(&mut self.edges[ha as usize], k);
+            add_triangle(&mut self.edges[hb as usize], n);
+            let across = &mut self.edges[bz as usize].triangles;
+            for slot in across.iter_mut().filter(|s| **s == Some(k)) {
+                *slot = Some(n);
+            }
+            sort_pair(across);
+            self.vertex_triangles[m as usize].extend([k, n]);
+            self.vertex_triangles[z as usize].push(n);
+            replace_sorted(&mut self.vertex_triangles[b as usize], k, n);
+            self.vertex_neighbors[z as usize].push(m);
+            self.vertex_neighbors[m as usize].push(z);
+            halves.push((k, n));
+        }
+        replace_sorted(&mut self.vertex_neighbors[p as usize], q, m);
+        replace_sorted(&mut self.vertex_neighbors[q as usize], p, m);
+        self.vertex_neighbors[m as usize].sort_unstable();
+        self.vertex_triangles[m as usize].sort_unstable();
+        Split {
+            vertex: m,
+            ends: [p, q],
+            halves,
+        }
+    }
+}
+
+/// Midpoint of segment `ab`; symmetric in `a` and `b` to the last bit.
+fn midpoint(a: Point, b: Point) -> Point {
+    [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
+}
+
+/// The id of the next item of a list of length `len`.
+fn next_id(len: usize) -> u32 {
+    u32::try_from(len).expect("mesh ids exceed 32 bits")
+}
+
+/// Adds triangle `t` to an edge that has a free slot, keeping the smaller id first.
+fn add_triangle(edge: &mut Edge, t: TriangleId) {
+    let slot = edge.triangles.iter().position(Option::is_none);
+    edge.triangles[slot.expect("an edge has at most two triangles")] = Some(t);
+    sort_pair(&mut edge.triangles);
+}
+
+/// Orders an edge's triangles: the smaller id first, `None` last.
+fn sort_pair(pair: &mut [Option<TriangleId>; 2]) {
+    match *pair {
+        [None, Some(_)] => pair.swap(0, 1),
+        [Some(a), Some(b)] if b < a => pair.swap(0, 1),
+        _ => {}
+    }
+}
+
+/// Removes `old` from an increasing list and appends `new`, which exceeds every entry.
+fn replace_sorted(list: &mut Vec<u32>, old: u32, new: u32) {
+    let i = list
+        .binary_search(&old)
+        .expect("the entry to replace is listed");
+    list.remove(i);
+    list.push(new);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry;
+    use crate::rectangle::{Diagonal, GridSegment, Rectangle};
+
+    fn square(n: u32, diagonal: Diagonal, perturb: f64) -> Rectangle {
+        Rectangle {
+            width: 1.0,
+            height: 1.0,
+            nx: n,
+            ny: n,
+            diagonal,
+            interface: None,
+            perturb,
+            seed: 7,
+        }
+    }
+
+    fn allow_all(_: &Mesh, _: TriangleId) -> bool {
+        true
+    }
+
+    /// Bisects `t` with every split allowed and checks the result.
+    fn refine(m: &mut Mesh, t: TriangleId) -> Vec<Split> {
+        let mut splits = Vec::new();
+        assert!(m.bisect(t, &mut allow_all, &mut splits));
+        m.validate().unwrap();
+        splits
+    }
+
+    fn total_area(m: &Mesh) -> f64 {
+        (0..m.triangles().len() as TriangleId)
+            .map(|t| m.area(t))
+            .sum()
+    }
+
+    /// Number and total length (metres) of the edges tagged `name`.
+    fn tagged(m: &Mesh, name: &str) -> (usize, f64) {
+        let tag = m.tag_id(name);
+        (0..m.edges().len() as EdgeId)
+            .filter(|&e| m.edges()[e as usize].tag == tag)
+            .fold((0, 0.0), |(n, l), e| (n + 1, l + m.edge_length(e)))
+    }
+
+    fn counts(m: &Mesh) -> [usize; 3] {
+        [m.vertices().len(), m.triangles().len(), m.edges().len()]
+    }
+
+    fn min_angle(m: &Mesh) -> f64 {
+        (0..m.triangles().len() as TriangleId)
+            .flat_map(|t| m.angles(t))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// xorshift64: a deterministic pseudo-random sequence.
+    struct XorShift(u64);
+
+    impl XorShift {
+        fn below(&mut self, n: usize) -> u32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 % n as u64) as u32
+        }
+    }
+
+    /// `count` bisections of random triangles, validating after each.
+    fn refine_randomly(m: &mut Mesh, count: usize, seed: u64) {
+        let mut rng = XorShift(seed);
+        for _ in 0..count {
+            let t = rng.below(m.triangles().len());
+            refine(m, t);
+        }
+    }
+
+    #[test]
+    fn initial_refinement_edge_is_the_longest() {
+        let m = square(4, Diagonal::Alternate, 0.2).build().unwrap();
+        for t in 0..m.triangles().len() as TriangleId {
+            let lengths = m.triangle_edges(t).map(|e| m.edge_length(e));
+            let longest = lengths.iter().cloned().fold(0.0, f64::max);
+            assert_eq!(lengths[m.refinement_edge(t)], longest);
+        }
+        let right = square(2, Diagonal::Right, 0.0).build().unwrap();
+        // Triangle (0, 1, 4): the diagonal 0-4 is opposite corner 1.
+        assert_eq!(right.triangles()[0], [0, 1, 4]);
+        assert_eq!(right.refinement_edge(0), 1);
+    }
+
+    #[test]
+    fn bisecting_an_interior_refinement_edge_splits_both_triangles() {
+        let mut m = square(2, Diagonal::Right, 0.0).build().unwrap();
+        assert_eq!(counts(&m), [9, 8, 16]);
+        let predicted = [m.bisection_children(0), m.bisection_children(1)];
+        let splits = refine(&mut m, 0);
+        assert_eq!(
+            splits,
+            vec![Split {
+                vertex: 9,
+                ends: [0, 4],
+                halves: vec![(0, 8), (1, 9)],
+            }]
+        );
+        assert_eq!(counts(&m), [10, 10, 19]);
+        assert_eq!(m.vertex(9), [0.25, 0.25]);
+        for (k, ((kept, new), children)) in splits[0].halves.iter().zip(predicted).enumerate() {
+            assert_eq!(m.triangle_points(*kept), children[0], "half {k}");
+            assert_eq!(m.triangle_points(*new), children[1], "half {k}");
+            assert_eq!(m.area(*kept), 0.0625);
+            assert_eq!(m.area(*new), 0.0625);
+        }
+        assert!((total_area(&m) - 1.0).abs() < 1e-15);
+        assert_eq!(tagged(&m, "bottom"), (2, 1.0));
+        let diagonal: Vec<_> = m.edges().iter().filter(|e| e.vertices[1] == 9).collect();
+        assert_eq!(diagonal.len(), 4);
+        assert!(diagonal.iter().all(|e| !e.is_boundary() && e.tag.is_none()));
+    }
+
+    #[test]
+    fn bisecting_a_boundary_refinement_edge_keeps_the_side_tag() {
+        let mut m = square(2, Diagonal::Right, 0.0).build().unwrap();
+        refine(&mut m, 0);
+        let bottom = m.tag_id("bottom");
+        let t = (0..m.triangles().len() as TriangleId)
+            .find(|&t| m.edges()[m.refinement_edge_id(t) as usize].tag == bottom)
+            .unwrap();
+        let before = counts(&m);
+        let splits = refine(&mut m, t);
+        assert_eq!(splits.len(), 1);
+        assert_eq!(splits[0].ends, [0, 1]);
+        assert_eq!(splits[0].halves, vec![(t, before[1] as TriangleId)]);
+        assert_eq!(counts(&m), [before[0] + 1, before[1] + 1, before[2] + 2]);
+        assert_eq!(m.vertex(splits[0].vertex), [0.25, 0.0]);
+        let (count, length) = tagged(&m, "bottom");
+        assert_eq!(count, 3);
+        assert!((length - 1.0).abs() < 1e-15);
+        assert!(m.edges().iter().all(|e| e.tag != bottom || e.is_boundary()));
+        assert!((total_area(&m) - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn closure_bisects_the_neighbour_first() {
+        let mut m = square(2, Diagonal::Right, 0.0).build().unwrap();
+        refine(&mut m, 0);
+        // Triangle 0 is now (9, 1, 4) with refinement edge 1-4, which its neighbour (1, 5, 4)
+        // does not share as refinement edge: that neighbour's diagonal goes first.
+        assert_eq!(m.triangles()[0], [9, 1, 4]);
+        let splits = refine(&mut m, 0);
+        assert_eq!(splits.len(), 2);
+        assert_eq!(splits[0].ends, [1, 5]);
+        assert_eq!(splits[1].ends, [1, 4]);
+        assert_eq!(splits[1].halves.len(), 2);
+        assert_eq!(splits[1].halves[0].0, 0);
+        assert_eq!(counts(&m), [12, 14, 25]);
+    }
+
+    #[test]
+    fn random_refinement_of_a_right_isosceles_mesh_keeps_triangles_similar() {
+        for diagonal in [Diagonal::Right, Diagonal::Alternate] {
+            let mut m = square(3, diagonal, 0.0).build().unwrap();
+            refine_randomly(&mut m, 300, 0x9E37_79B9_7F4A_7C15);
+            assert!(m.triangles().len() > 600);
+            assert!((total_area(&m) - 1.0).abs() < 1e-12);
+            for t in 0..m.triangles().len() as TriangleId {
+                for a in m.angles(t).map(f64::to_degrees) {
+                    assert!(
+                        (a - 45.0).abs() < 1e-9 || (a - 90.0).abs() < 1e-9,
+                        "{diagonal:?} triangle {t} angle {a}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Smallest angle over the bisection tree of a triangle given by counter-clockwise corners
+    /// with the refinement edge opposite corner 0, `depth` levels deep.
+    fn tree_min_angle(p: [Point; 3], depth: u32) -> f64 {
+        let own = geometry::angles(p)
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        if depth == 0 {
+            return own;
+        }
+        let m = midpoint(p[1], p[2]);
+        let left = tree_min_angle([m, p[0], p[1]], depth - 1);
+        let right = tree_min_angle([m, p[2], p[0]], depth - 1);
+        own.min(left).min(right)
+    }
+
+    #[test]
+    fn random_refinement_of_a_perturbed_mesh_keeps_angles_bounded() {
+        let mut r = square(4, Diagonal::Alternate, 0.2);
+        r.interface = Some(GridSegment {
+            from: [0.0, 0.5],
+            to: [0.75, 0.5],
+            tag: "crack".into(),
+        });
+        let mut m = r.build().unwrap();
+        let initial = min_angle(&m);
+        // Every triangle NVB creates lies in the bisection tree of an initial triangle, whose
+        // shapes repeat after two levels (at most four similarity classes): six levels give the
+        // exact smallest angle refinement can reach.
+        let reachable = (0..m.triangles().len() as TriangleId)
+            .map(|t| {
+                let (r, p) = (m.refinement_edge(t), m.triangle_points(t));
+                tree_min_angle([p[r], p[(r + 1) % 3], p[(r + 2) % 3]], 6)
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(reachable >= initial / 4.0);
+        assert!(reachable < initial);
+        let sides = ["left", "right", "bottom", "top", "crack"].map(|s| tagged(&m, s).1);
+
+        refine_randomly(&mut m, 400, 12345);
+        assert!(m.triangles().len() > 800);
+        let smallest = min_angle(&m);
+        assert!(smallest >= reachable - 1e-12, "{smallest} < {reachable}");
+        assert!((total_area(&m) - 1.0).abs() < 1e-12);
+        for (name, length) in ["left", "right", "bottom", "top", "crack"]
+            .iter()
+            .zip(sides)
+        {
+            assert!((tagged(&m, name).1 - length).abs() < 1e-12, "{name}");
+        }
+        let crack = m.tag_id("crack");
+        assert!(m.edges().iter().all(|e| e.tag != crack || e.is_interface()));
+        assert!(tagged(&m, "crack").0 > 3);
+    }
+
+    #[test]
+    fn grading_toward_a_corner_stays_local() {
+        let mut m = square(2, Diagonal::Right, 0.0).build().unwrap();
+        let mut calls = 0;
+        loop {
+            let (shortest, longest) = m.edge_length_range();
+            if shortest / longest < 1e-4 {
+                break;
+            }
+            let &t = m
+                .vertex_triangles(0)
+                .iter()
+                .min_by(|&&a, &&b| m.area(a).total_cmp(&m.area(b)))
+                .unwrap();
+            let mut splits = Vec::new();
+            assert!(m.bisect(t, &mut allow_all, &mut splits));
+            calls += 1;
+        }
+        m.validate().unwrap();
+        assert!(calls < 40, "{calls} bisections");
+        // O(levels): a bounded number of triangles per level, far below 2000.
+        let triangles = m.triangles().len();
+        assert!(triangles < 8 + 4 * calls, "{triangles} triangles");
+        assert!((total_area(&m) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn refused_split_stops_refinement_and_lists_the_splits_done() {
+        let mut m = square(3, Diagonal::Alternate, 0.1).build().unwrap();
+        refine_randomly(&mut m, 40, 99);
+        // A triangle whose closure takes at least three splits.
+        let t = (0..m.triangles().len() as TriangleId)
+            .find(|&t| {
+                let mut trial = m.clone();
+                let mut splits = Vec::new();
+                trial.bisect(t, &mut allow_all, &mut splits);
+                splits.len() >= 3
+            })
+            .unwrap();
+        let corners = m.triangles()[t as usize];
+
+        let mut nothing = Vec::new();
+        let mut untouched = m.clone();
+        assert!(!untouched.bisect(t, &mut |_, _| false, &mut nothing));
+        assert!(nothing.is_empty());
+        assert_eq!(counts(&untouched), counts(&m));
+        assert_eq!(untouched.triangles(), m.triangles());
+
+        let before = counts(&m);
+        let mut asked = Vec::new();
+        let mut splits = Vec::new();
+        let done = m.bisect(
+            t,
+            &mut |mesh, u| {
+                asked.push((mesh.triangles().len(), u));
+                u != t
+            },
+            &mut splits,
+        );
+        assert!(!done);
+        m.validate().unwrap();
+        assert_eq!(m.triangles()[t as usize], corners);
+        assert!(splits.len() >= 2);
+
+        // Each split was asked about its triangles with the mesh as it was before the split.
+        let mut triangles = before[1];
+        let mut edges = before[2];
+        let mut asked = asked.into_iter();
+        for (i, split) in splits.iter().enumerate() {
+            assert_eq!(split.vertex as usize, before[0] + i);
+            let size = triangles;
+            for &(kept, new) in &split.halves {
+                assert_eq!(asked.next(), Some((size, kept)));
+                assert!((kept as usize) < size);
+                assert_eq!(new as usize, triangles);
+                assert!(m.triangles()[new as usize].contains(&split.vertex));
+                triangles += 1;
+                edges += 1;
+            }
+            edges += 1;
+            let half = m
+                .edges()
+                .iter()
+                .find(|e| e.vertices == [split.ends[0], split.vertex])
+                .unwrap();
+            assert_eq!(half.is_boundary(), split.halves.len() == 1);
+        }
+        assert_eq!(counts(&m), [before[0] + splits.len(), triangles, edges]);
+        // The refused step asked about `t` and then changed nothing.
+        assert!(asked.any(|(size, u)| size == triangles && u == t));
+    }
+
+    #[test]
+    fn map_vertices_keeps_refinement_edges() {
+        let mut m = square(2, Diagonal::Left, 0.0).build().unwrap();
+        refine(&mut m, 3);
+        refine(&mut m, 5);
+        // A reflection reverses orientation, so corners get reordered by `Mesh::new`.
+        let mirrored = m.map_vertices(|p| [2.0 - 3.0 * p[0], p[1]]).unwrap();
+        for t in 0..m.triangles().len() as TriangleId {
+            let z = m.triangles()[t as usize][m.refinement_edge(t)];
+            let mz = mirrored.triangles()[t as usize][mirrored.refinement_edge(t)];
+            assert_eq!(z, mz, "triangle {t}");
+        }
+        let mut mirrored = mirrored;
+        refine(&mut mirrored, 0);
+    }
+}
