@@ -68,6 +68,7 @@ fn patches(c: &mut Criterion) {
                             Initial::Wave(&wave),
                             solution,
                         );
+                        solver.commit(solution);
                     }
                 },
                 BatchSize::LargeInput,

@@ -6,26 +6,37 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
-use sdg_mesh::{Diagonal, Front, Mesh, Pitcher, Rectangle};
-use sdg_scheduler::{Events, Options, VertexId, Work};
+use sdg_mesh::{Diagonal, Front, Pitcher, Rectangle};
+use sdg_scheduler::{Events, Fixed, Options, VertexId, Work};
 
 struct PitchOnly<'a> {
-    mesh: &'a Mesh,
     pitcher: &'a Pitcher,
-    front: &'a Front,
 }
 
 impl<'a> Work<'a> for PitchOnly<'a> {
+    type State = Fixed<'a>;
     type Scratch = ();
     type Outcome = ();
     type Error = ();
 
-    fn tent(&self, _: &mut (), v: VertexId, _: &Events<'a>) -> Result<(f64, ()), ()> {
-        let tent = self.pitcher.pitch(self.mesh, self.front, v).ok_or(())?;
+    fn tent(
+        &self,
+        state: &Fixed<'a>,
+        _: &mut (),
+        v: VertexId,
+        _: &Events<'a, Fixed<'a>>,
+    ) -> Result<(f64, ()), ()> {
+        let tent = self.pitcher.pitch(state.mesh, state.front, v).ok_or(())?;
         Ok((tent.t_new, ()))
     }
 
-    fn record(&'a self, _: VertexId, (): (), _: &Events<'a>) -> Result<(), ()> {
+    fn record(
+        &'a self,
+        _: &Fixed<'a>,
+        _: VertexId,
+        (): (),
+        _: &Events<'a, Fixed<'a>>,
+    ) -> Result<(), ()> {
         Ok(())
     }
 }
@@ -49,16 +60,16 @@ fn schedule(c: &mut Criterion) {
     for deterministic in [false, true] {
         let run = || {
             let front = Front::flat(mesh.vertices().len(), 0.0);
-            let work = PitchOnly {
-                mesh: &mesh,
-                pitcher: &pitcher,
-                front: &front,
-            };
+            let work = PitchOnly { pitcher: &pitcher };
             let options = Options {
                 threads: 1,
                 deterministic,
             };
-            sdg_scheduler::run(&mesh, &front, pitcher.t_end(), &work, vec![()], &options)
+            let mut state = Fixed {
+                mesh: &mesh,
+                front: &front,
+            };
+            sdg_scheduler::run(&mut state, pitcher.t_end(), &work, vec![()], &options)
                 .expect("reaches the end")
                 .tents
         };

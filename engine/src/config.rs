@@ -43,6 +43,9 @@ pub struct Config {
     /// Parallel execution.
     #[serde(default)]
     pub scheduler: SchedulerConfig,
+    /// Adaptive refinement of the front.
+    #[serde(default)]
+    pub adapt: AdaptConfig,
     /// Boundary conditions, one entry per group of sides (`[[boundary]]`). Sides without an
     /// entry are traction-free.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -60,6 +63,41 @@ pub struct SchedulerConfig {
     /// tents instead of asynchronous claiming). Default false.
     #[serde(default)]
     pub deterministic: bool,
+}
+
+/// `[adapt]`: error-driven refinement of the front (see `docs/method.md`, "Adaptivity").
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptConfig {
+    /// Refine where patches are too dissipative. Default false.
+    #[serde(default)]
+    pub enabled: bool,
+    /// Upper tolerance of the dissipation indicator: a patch above it is rejected and the front
+    /// around its vertex refined. Dimensionless, see `docs/method.md`. Default 1e-3.
+    #[serde(default = "default_tol")]
+    pub tol: f64,
+    /// No edge is split into halves shorter than this, m. Default: no limit below 1/1000 of the
+    /// initial shortest edge.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_edge: Option<f64>,
+    /// Edges longer than this, m, are split before the first tent. Default: no limit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_edge: Option<f64>,
+}
+
+fn default_tol() -> f64 {
+    1e-3
+}
+
+impl Default for AdaptConfig {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            tol: default_tol(),
+            min_edge: None,
+            max_edge: None,
+        }
+    }
 }
 
 /// `[solver]`: discretization.
@@ -470,6 +508,7 @@ impl Config {
             );
         }
         self.validate_physics()?;
+        self.validate_adapt()?;
         let m = &self.mesh;
         let rectangle_keys = [
             ("mesh.width", m.width.is_some()),
@@ -503,6 +542,31 @@ impl Config {
                 if let Some((key, _)) = rectangle_keys.iter().find(|(_, set)| *set) {
                     return fail(key, "is only used with mesh.kind = \"rectangle\"".into());
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks `[adapt]`.
+    fn validate_adapt(&self) -> Result<(), (String, String)> {
+        let a = &self.adapt;
+        let fail = |key: &str, reason: String| Err((format!("adapt.{key}"), reason));
+        if !(a.tol.is_finite() && a.tol > 0.0) {
+            return fail("tol", format!("must be a positive number, got {}", a.tol));
+        }
+        for (key, value) in [("min_edge", a.min_edge), ("max_edge", a.max_edge)] {
+            if let Some(v) = value {
+                if !(v.is_finite() && v > 0.0) {
+                    return fail(key, format!("must be a positive length in m, got {v}"));
+                }
+            }
+        }
+        if let (Some(lo), Some(hi)) = (a.min_edge, a.max_edge) {
+            if 2.0 * lo > hi {
+                return fail(
+                    "max_edge",
+                    format!("must be at least twice adapt.min_edge ({lo} m), got {hi} m"),
+                );
             }
         }
         Ok(())

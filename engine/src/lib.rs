@@ -1,8 +1,10 @@
 //! The engine: configuration, problem setup, the run loop wiring mesh, solver and scheduler, and
 //! the outputs of a run.
 
+mod adapt;
 pub mod config;
 pub mod error;
+mod frontier;
 pub mod output;
 pub mod problem;
 pub mod progress;

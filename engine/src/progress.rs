@@ -55,6 +55,11 @@ impl Progress {
         }
     }
 
+    /// Adds `extra` vertex-seconds to the total (vertices added by refinement).
+    pub fn grow(&mut self, extra: f64) {
+        self.total += extra;
+    }
+
     /// Clears the bar.
     pub fn finish(&mut self) {
         if let Some(bar) = self.bar.take() {

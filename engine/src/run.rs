@@ -8,7 +8,7 @@ use parking_lot::Mutex;
 use serde::Serialize;
 
 use sdg_mesh::{Front, Mesh, Pitcher, Tent};
-use sdg_scheduler::{Events, Options, VertexId, Work};
+use sdg_scheduler::{Events, Fixed, Options, VertexId, Work};
 
 use crate::error::EngineError;
 use crate::output::write_atomic;
@@ -80,9 +80,7 @@ pub fn pitch_to_end(
 
 /// Pitching without solving, for `sdg mesh`.
 struct MeshWork<'a> {
-    mesh: &'a Mesh,
     pitcher: &'a Pitcher,
-    front: &'a Front,
     record: Mutex<MeshRecord>,
 }
 
@@ -94,31 +92,45 @@ struct MeshRecord {
 }
 
 impl<'a> Work<'a> for MeshWork<'a> {
+    type State = Fixed<'a>;
     type Scratch = ();
     type Outcome = Tent;
     type Error = EngineError;
 
-    fn tent(&self, _: &mut (), v: VertexId, _: &Events<'a>) -> Result<(f64, Tent), EngineError> {
+    fn tent(
+        &self,
+        state: &Fixed<'a>,
+        _: &mut (),
+        v: VertexId,
+        _: &Events<'a, Fixed<'a>>,
+    ) -> Result<(f64, Tent), EngineError> {
         let tent = self
             .pitcher
-            .pitch(self.mesh, self.front, v)
+            .pitch(state.mesh, state.front, v)
             .ok_or_else(|| {
                 EngineError::Runtime(format!("vertex {v} was claimed but cannot be pitched"))
             })?;
         Ok((tent.t_new, tent))
     }
 
-    fn record(&'a self, v: VertexId, tent: Tent, _: &Events<'a>) -> Result<(), EngineError> {
-        let star = self.mesh.vertex_triangles(v);
+    fn record(
+        &'a self,
+        state: &Fixed<'a>,
+        v: VertexId,
+        tent: Tent,
+        _: &Events<'a, Fixed<'a>>,
+    ) -> Result<(), EngineError> {
+        let Fixed { mesh, front } = *state;
+        let star = mesh.vertex_triangles(v);
         let slope = star
             .iter()
-            .map(|&t| self.pitcher.c_max() * self.front.slope(self.mesh, t))
+            .map(|&t| self.pitcher.c_max() * front.slope(mesh, t))
             .fold(0.0, f64::max);
         let mut r = self.record.lock();
         r.tetrahedra += star.len() as u64;
         r.max_slope_ratio = r.max_slope_ratio.max(slope);
         if let Some(s) = r.spacetime.as_mut() {
-            s.add_tent(self.mesh, &tent);
+            s.add_tent(mesh, &tent);
         }
         Ok(())
     }
@@ -173,9 +185,7 @@ pub fn mesh_job(
 
     let front = Front::flat(mesh.vertices().len(), 0.0);
     let work = MeshWork {
-        mesh,
         pitcher: &pitcher,
-        front: &front,
         record: Mutex::new(MeshRecord {
             tetrahedra: 0,
             max_slope_ratio: 0.0,
@@ -188,8 +198,10 @@ pub fn mesh_job(
     let _span = tracing::info_span!("mesh", config = %problem.loaded.file.display()).entered();
     let start = Instant::now();
     let stats = sdg_scheduler::run(
-        mesh,
-        &front,
+        &mut Fixed {
+            mesh,
+            front: &front,
+        },
         config.time.end,
         &work,
         vec![(); scheduler.threads],

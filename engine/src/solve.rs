@@ -13,7 +13,9 @@ use std::time::Instant;
 use parking_lot::Mutex;
 use serde::Serialize;
 
-use sdg_mesh::{Front, Pitcher};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use sdg_mesh::{Front, Pitcher, Tent, TriangleId};
 use sdg_scheduler::{Events, VertexId, Work};
 use sdg_solver::element::{FrontSolution, Geometry, evaluate};
 use sdg_solver::norms::{FrontEnergy, front_energy, slice_errors};
@@ -21,7 +23,9 @@ use sdg_solver::patch::{Initial, PatchReport, PatchSolver};
 use sdg_solver::system::{MAX_FIELDS, State};
 use sdg_solver::{Material, Plane};
 
+use crate::adapt::Adapt;
 use crate::error::EngineError;
+use crate::frontier::{Frontier, Refined, refinement_edge_length};
 use crate::output::write_atomic;
 use crate::problem::Problem;
 use crate::progress::Progress;
@@ -98,6 +102,14 @@ pub struct RunSummary {
     pub error: Option<ErrorSummary>,
     /// Snapshot files written: `[time s, file]`.
     pub snapshots: Vec<(f64, String)>,
+    /// Edge bisections (new vertices) made by adaptive refinement.
+    pub refinements: u64,
+    /// Patches solved and rejected by the error indicator (included in `patches`).
+    pub rejected_patches: u64,
+    /// Shortest edge of the final space mesh, m.
+    pub min_edge: f64,
+    /// Longest edge of the final space mesh, m.
+    pub max_edge: f64,
 }
 
 /// History rows are written when the whole front has passed each of this many equal fractions
@@ -138,6 +150,15 @@ impl Milestones {
         }
     }
 
+    /// Counts a vertex added at time `t` (s) by refinement.
+    fn add_vertex(&mut self, t: f64) {
+        for (i, &(time, _)) in self.times.iter().enumerate().skip(self.next) {
+            if time > t {
+                self.below[i] += 1;
+            }
+        }
+    }
+
     /// Records a vertex moving from `t_old` to `t_new`; returns the milestones the whole front
     /// has now passed, in order.
     fn advance(&mut self, t_old: f64, t_new: f64, passed: &mut Vec<(f64, Milestone)>) {
@@ -160,6 +181,10 @@ impl Milestones {
 struct Book {
     totals: PatchReport,
     patches: u64,
+    rejected: u64,
+    refinements: u64,
+    /// Largest `energy0 + boundary work` so far (scaled units), the indicator's reference.
+    energy_max: f64,
     elements: u64,
     dofs: u64,
     max_slope_ratio: f64,
@@ -175,12 +200,14 @@ struct Book {
     coefficients: Vec<f64>,
 }
 
-/// The shared state of a solve.
+/// The read-only context and the bookkeeping of a solve.
 struct Solve<'a> {
     problem: &'a Problem,
-    pitcher: &'a Pitcher,
-    front: &'a Front,
-    solution: &'a FrontSolution,
+    adapt: Option<Adapt>,
+    /// Triangles a vertex star may have: the patch solvers' capacity.
+    max_star: usize,
+    /// `Book::energy_max` as bits, read by tents without the book's lock.
+    energy_reference: AtomicU64,
     initial: Initial<'a>,
     energy0: FrontEnergy,
     /// Basis of every element (each worker's solver has the same).
@@ -197,14 +224,81 @@ fn initial_state(problem: &Problem, initial: Initial, x: [f64; 2]) -> State {
 }
 
 impl Solve<'_> {
+    /// True when the patch just solved for `tent` dissipates more than the tolerance allows.
+    fn too_dissipative(
+        &self,
+        adapt: &Adapt,
+        state: &Frontier,
+        tent: &Tent,
+        report: &PatchReport,
+    ) -> bool {
+        let mesh = &state.mesh;
+        let area: f64 = mesh
+            .vertex_triangles(tent.vertex)
+            .iter()
+            .map(|&t| mesh.area(t))
+            .sum();
+        let volume = area * (tent.t_new - tent.t_old) / 3.0;
+        let energy = f64::from_bits(self.energy_reference.load(Ordering::Relaxed));
+        adapt.indicator(report.dissipation, volume, energy) > adapt.tol
+    }
+
+    /// True when star triangle `t` may be bisected now: its halves would not be too short, the
+    /// front stays causal, and the star of the corner that gains a triangle stays within the
+    /// patch solvers' capacity.
+    fn may_refine(&self, adapt: &Adapt, state: &Frontier, t: TriangleId) -> bool {
+        let mesh = &state.mesh;
+        let apex = mesh.triangles()[t as usize][mesh.refinement_edge(t)];
+        refinement_edge_length(mesh, t) >= 2.0 * adapt.min_edge
+            && mesh.vertex_triangles(apex).len() < self.max_star
+            && state.pitcher.may_bisect(mesh, |w| state.front.time(w), t)
+    }
+
+    /// The refinement event of a rejected patch at `v`: bisects the triangles of `star` that
+    /// are unchanged since. When none could be, the next tent at `v` is accepted whatever its
+    /// indicator, so that the front keeps moving. Returns the vertices whose readiness changed.
+    fn refine(
+        &self,
+        state: &mut Frontier,
+        v: VertexId,
+        star: &[(TriangleId, [VertexId; 3])],
+    ) -> Vec<VertexId> {
+        let adapt = self.adapt.expect("refinement only runs with adaptivity on");
+        let mut refined = Refined::default();
+        for &(t, corners) in star {
+            if state.mesh.triangles()[t as usize] == corners {
+                state.refine(t, adapt.min_edge, self.max_star, &mut refined);
+            }
+        }
+        if !star
+            .iter()
+            .any(|&(t, corners)| state.mesh.triangles()[t as usize] != corners)
+        {
+            state.insist(v);
+        }
+        let t_end = self.problem.loaded.config.time.end;
+        let mut book = self.book.lock();
+        book.refinements += refined.vertices.len() as u64;
+        for &(_, t) in &refined.vertices {
+            book.milestones.add_vertex(t);
+            book.progress.grow(t_end - t);
+        }
+        let mut touched = refined.touched;
+        touched.push(v);
+        touched.extend(state.mesh.vertex_neighbors(v));
+        touched.sort_unstable();
+        touched.dedup();
+        touched
+    }
+
     /// Appends a `history.csv` row for the current front: it must not move meanwhile.
-    fn history_row(&self, book: &mut Book) {
+    fn history_row(&self, state: &Frontier, book: &mut Book) {
         let system = &self.problem.system;
         let rho = self.problem.material.density();
         let e = front_energy(
-            &self.problem.mesh,
-            self.front,
-            self.solution,
+            &state.mesh,
+            &state.front,
+            &state.solution,
             &self.basis,
             system,
             |x| initial_state(self.problem, self.initial, x),
@@ -214,7 +308,7 @@ impl Solve<'_> {
         let _ = writeln!(
             book.history,
             "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e}",
-            self.front.min_time(),
+            state.front.min_time(),
             book.patches,
             rho * e.total,
             rho * e.kinetic,
@@ -228,63 +322,127 @@ impl Solve<'_> {
 
 /// What one tent hands to the bookkeeping.
 #[derive(Debug)]
-struct Outcome {
-    t_old: f64,
-    t_new: f64,
-    report: PatchReport,
+enum Outcome {
+    /// The patch is stored and the vertex advanced.
+    Accepted {
+        t_old: f64,
+        t_new: f64,
+        report: PatchReport,
+    },
+    /// The indicator rejected the patch: nothing advanced; these star triangles (with their
+    /// corners, to notice a change) are to be bisected.
+    Rejected {
+        star: Vec<(TriangleId, [VertexId; 3])>,
+    },
 }
 
 impl<'a> Work<'a> for Solve<'a> {
+    type State = Frontier;
     type Scratch = PatchSolver;
     type Outcome = Outcome;
     type Error = EngineError;
 
     fn tent(
         &self,
+        state: &Frontier,
         solver: &mut PatchSolver,
         v: VertexId,
-        _: &Events<'a>,
+        _: &Events<'a, Frontier>,
     ) -> Result<(f64, Outcome), EngineError> {
-        let mesh = &self.problem.mesh;
-        let tent = self.pitcher.pitch(mesh, self.front, v).ok_or_else(|| {
+        let (mesh, front) = (&state.mesh, &state.front);
+        let star = mesh.vertex_triangles(v);
+        if star.len() > self.max_star {
+            return Err(EngineError::Runtime(format!(
+                "vertex {v} has {} triangles, more than the {} the patch solvers hold",
+                star.len(),
+                self.max_star
+            )));
+        }
+        let t_new = state.pitcher.pole_height(mesh, front, v).ok_or_else(|| {
             EngineError::Runtime(format!("vertex {v} was claimed but cannot be pitched"))
         })?;
+        let tent = Tent {
+            vertex: v,
+            t_old: front.time(v),
+            t_new,
+        };
         let report = solver.solve(
             mesh,
-            self.front,
+            front,
             &tent,
             &self.problem.boundary,
             self.initial,
-            self.solution,
+            &state.solution,
         );
-        let outcome = Outcome {
+        if let Some(adapt) = &self.adapt {
+            if !state.insists(v) && self.too_dissipative(adapt, state, &tent, &report) {
+                let star = star
+                    .iter()
+                    .filter(|&&t| self.may_refine(adapt, state, t))
+                    .map(|&t| (t, mesh.triangles()[t as usize]))
+                    .collect::<Vec<_>>();
+                if !star.is_empty() {
+                    return Ok((tent.t_old, Outcome::Rejected { star }));
+                }
+            }
+        }
+        solver.commit(&state.solution);
+        front.set_time(v, t_new);
+        let outcome = Outcome::Accepted {
             t_old: tent.t_old,
-            t_new: tent.t_new,
+            t_new,
             report,
         };
-        Ok((tent.t_new, outcome))
+        Ok((t_new, outcome))
     }
 
-    fn record(&'a self, v: VertexId, o: Outcome, events: &Events<'a>) -> Result<(), EngineError> {
-        let mesh = &self.problem.mesh;
-        let c_max = self.pitcher.c_max();
+    fn record(
+        &'a self,
+        state: &Frontier,
+        v: VertexId,
+        o: Outcome,
+        events: &Events<'a, Frontier>,
+    ) -> Result<(), EngineError> {
+        let (t_old, t_new, report) = match o {
+            Outcome::Accepted {
+                t_old,
+                t_new,
+                report,
+            } => (t_old, t_new, report),
+            Outcome::Rejected { star } => {
+                let mut book = self.book.lock();
+                book.patches += 1;
+                book.rejected += 1;
+                events.push(Box::new(move |state: &mut Frontier| {
+                    self.refine(state, v, &star)
+                }));
+                return Ok(());
+            }
+        };
+        let mesh = &state.mesh;
+        let c_max = state.pitcher.c_max();
         let slope = mesh
             .vertex_triangles(v)
             .iter()
-            .map(|&t| c_max * self.front.slope(mesh, t))
+            .map(|&t| c_max * state.front.slope(mesh, t))
             .fold(0.0, f64::max);
         let mut guard = self.book.lock();
         let book = &mut *guard;
         book.patches += 1;
-        book.elements += o.report.elements as u64;
-        book.dofs += o.report.dofs as u64;
-        book.totals.energy_in += o.report.energy_in;
-        book.totals.energy_out += o.report.energy_out;
-        book.totals.boundary_work += o.report.boundary_work;
-        book.totals.dissipation += o.report.dissipation;
+        book.elements += report.elements as u64;
+        book.dofs += report.dofs as u64;
+        book.totals.energy_in += report.energy_in;
+        book.totals.energy_out += report.energy_out;
+        book.totals.boundary_work += report.boundary_work;
+        book.totals.dissipation += report.dissipation;
+        book.energy_max = book
+            .energy_max
+            .max(self.energy0.total + book.totals.boundary_work);
+        self.energy_reference
+            .store(book.energy_max.to_bits(), Ordering::Relaxed);
         book.max_slope_ratio = book.max_slope_ratio.max(slope);
         for &t in mesh.vertex_triangles(v) {
-            if self
+            if state
                 .solution
                 .load(t as usize, &mut book.geometry, &mut book.coefficients)
             {
@@ -307,19 +465,18 @@ impl<'a> Work<'a> for Solve<'a> {
                 });
             }
         }
-        book.progress.advance(o.t_new - o.t_old, book.patches);
+        book.progress.advance(t_new - t_old, book.patches);
         let mut passed = std::mem::take(&mut book.passed);
-        book.milestones.advance(o.t_old, o.t_new, &mut passed);
+        book.milestones.advance(t_old, t_new, &mut passed);
         for &(t, _) in passed.iter().filter(|p| p.1 == Milestone::Snapshot) {
             book.snapshots.flush(t)?;
         }
         // One row for however many history milestones passed at once.
         if passed.iter().any(|p| p.1 == Milestone::History) {
-            let all: Vec<VertexId> = (0..mesh.vertices().len() as VertexId).collect();
-            events.push(
-                all,
-                Box::new(move || self.history_row(&mut self.book.lock())),
-            );
+            events.push(Box::new(move |state: &mut Frontier| {
+                self.history_row(state, &mut self.book.lock());
+                Vec::new()
+            }));
         }
         passed.clear();
         book.passed = passed;
@@ -344,37 +501,65 @@ pub fn solve_job(
     let dir = options.output_dir(problem)?;
     let scheduler = options.scheduler(problem);
 
-    let max_star = (0..mesh.vertices().len() as u32)
+    let adapt = Adapt::new(&config.adapt, mesh, c_max);
+    let pitcher = if adapt.is_some() {
+        pitcher.for_refinement(mesh)
+    } else {
+        pitcher
+    };
+    let initial_star = (0..mesh.vertices().len() as u32)
         .map(|v| mesh.vertex_triangles(v).len())
         .max()
         .unwrap_or(0);
+    // Bisection adds triangles to stars; the solvers are sized once, and refinement never
+    // grows a star beyond them.
+    let max_star = if adapt.is_some() {
+        (2 * initial_star).max(12)
+    } else {
+        initial_star
+    };
     let solvers: Vec<PatchSolver> = (0..scheduler.threads)
         .map(|_| PatchSolver::new(system.clone(), config.solver.order, max_star))
         .collect();
     let (basis, width) = (solvers[0].basis().clone(), solvers[0].width());
-    let solution = FrontSolution::new(mesh.triangles().len(), basis.len(), width);
     let initial = problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave);
-    let front = Front::flat(mesh.vertices().len(), 0.0);
-    let energy0 = front_energy(mesh, &front, &solution, &basis, system, |x| {
-        initial_state(problem, initial, x)
-    });
+    let mut state = Frontier::new(
+        mesh.clone(),
+        Front::flat(mesh.vertices().len(), 0.0),
+        FrontSolution::new(mesh.triangles().len(), basis.len(), width),
+        pitcher,
+    );
+    if let Some(adapt) = &adapt {
+        refine_to_max_edge(&mut state, adapt, max_star)?;
+    }
+    let energy0 = front_energy(
+        &state.mesh,
+        &state.front,
+        &state.solution,
+        &basis,
+        system,
+        |x| initial_state(problem, initial, x),
+    );
     let solve = Solve {
         problem,
-        pitcher: &pitcher,
-        front: &front,
-        solution: &solution,
+        adapt,
+        max_star,
+        energy_reference: AtomicU64::new(energy0.total.to_bits()),
         initial,
         energy0,
         basis: basis.clone(),
         book: Mutex::new(Book {
             totals: PatchReport::default(),
             patches: 0,
+            rejected: 0,
+            refinements: 0,
+            energy_max: energy0.total,
             elements: 0,
             dofs: 0,
             max_slope_ratio: 0.0,
             snapshots: Snapshots::new(&config.output.snapshot_times, c_max, dir.clone()),
             milestones: Milestones::new(
-                mesh.vertices().len(),
+                state.mesh.vertices().len(),
                 t_end,
                 &config.output.snapshot_times,
             ),
@@ -383,33 +568,39 @@ pub fn solve_job(
                 "time_s,patches,front_energy_j,kinetic_j,strain_j,boundary_work_j,dissipation_j,\
                  balance_residual_j\n",
             ),
-            progress: Progress::new(options.progress, mesh.vertices().len() as f64 * t_end),
+            progress: Progress::new(options.progress, state.mesh.vertices().len() as f64 * t_end),
             phi: vec![0.0; basis.len()],
             values: vec![0.0; width],
             geometry: Geometry::default(),
             coefficients: vec![0.0; basis.len() * width],
         }),
     };
-    solve.history_row(&mut solve.book.lock());
+    solve.history_row(&state, &mut solve.book.lock());
     let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
     tracing::info!(
         threads = scheduler.threads,
         deterministic = scheduler.deterministic,
         order = config.solver.order,
-        vertices = mesh.vertices().len(),
+        vertices = state.mesh.vertices().len(),
         "solve started"
     );
     let start = Instant::now();
-    let stats = sdg_scheduler::run(mesh, &front, t_end, &solve, solvers, &scheduler)
+    let stats = sdg_scheduler::run(&mut state, t_end, &solve, solvers, &scheduler)
         .map_err(scheduler_error)?;
     let wall_time_s = start.elapsed().as_secs_f64();
     let mut book = solve.book.lock();
     book.progress.finish();
-    solve.history_row(&mut book);
+    solve.history_row(&state, &mut book);
     book.snapshots.flush(t_end)?;
     tracing::info!(patches = stats.tents, wall_time_s, "solve finished");
 
-    let e = front_energy(mesh, &front, &solution, &basis, system, |x| {
+    let Frontier {
+        mesh,
+        front,
+        solution,
+        ..
+    } = &state;
+    let e = front_energy(mesh, front, solution, &basis, system, |x| {
         initial_state(problem, initial, x)
     });
     let initial_j = rho * solve.energy0.total;
@@ -427,12 +618,13 @@ pub fn solve_job(
             / (initial_j + work.abs()).max(f64::MIN_POSITIVE),
     };
     let error = problem.exact.as_ref().map(|w| {
-        let e = slice_errors(mesh, &solution, &basis, system, t_end, w);
+        let e = slice_errors(mesh, solution, &basis, system, t_end, w);
         ErrorSummary {
             velocity_l2_rel: e.velocity,
             stress_l2_rel: e.stress,
         }
     });
+    let (min_edge, max_edge) = mesh.edge_length_range();
     let summary = RunSummary {
         command: "run",
         config_file: problem.loaded.file.clone(),
@@ -449,18 +641,49 @@ pub fn solve_job(
         } else {
             "asynchronous"
         },
-        state_hash: state_hash(&front, &solution, basis.len() * width),
+        state_hash: state_hash(front, solution, basis.len() * width),
         wall_time_s,
         patches_per_second: book.patches as f64 / wall_time_s.max(f64::MIN_POSITIVE),
         threads: scheduler.threads,
         energy,
         error,
         snapshots: book.snapshots.written().to_vec(),
+        refinements: book.refinements,
+        rejected_patches: book.rejected,
+        min_edge,
+        max_edge,
     };
     write_atomic(&dir, "history.csv", book.history.as_bytes())?;
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;
     Ok((summary, dir))
+}
+
+/// Bisects every triangle whose refinement edge is longer than `adapt.max_edge`, on the flat
+/// initial front.
+fn refine_to_max_edge(
+    state: &mut Frontier,
+    adapt: &Adapt,
+    max_star: usize,
+) -> Result<(), EngineError> {
+    let mut refined = Refined::default();
+    let mut t: TriangleId = 0;
+    while (t as usize) < state.mesh.triangles().len() {
+        if refinement_edge_length(&state.mesh, t) <= adapt.max_edge {
+            t += 1;
+            continue;
+        }
+        let before = state.mesh.triangles().len();
+        state.refine(t, adapt.min_edge, max_star, &mut refined);
+        if state.mesh.triangles().len() == before {
+            return Err(EngineError::Runtime(format!(
+                "adapt.max_edge = {} m cannot be reached: a vertex star would exceed {max_star} \
+                 triangles",
+                adapt.max_edge
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// FNV-1a over the bits of the front times and of every element under the front.

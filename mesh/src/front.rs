@@ -59,6 +59,13 @@ impl Front {
         self.times[v as usize].store(t.to_bits(), Ordering::Release);
     }
 
+    /// Appends a vertex at time `t` (seconds), for a vertex just added to the mesh; returns its
+    /// id.
+    pub fn push(&mut self, t: f64) -> VertexId {
+        self.times.push(AtomicU64::new(t.to_bits()));
+        (self.times.len() - 1) as VertexId
+    }
+
     /// A copy of all times, seconds.
     pub fn snapshot(&self) -> Vec<f64> {
         (0..self.times.len() as VertexId)

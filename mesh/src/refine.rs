@@ -31,7 +31,8 @@ impl Mesh {
     ///
     /// Each step splits one edge in every triangle that has it as refinement edge (two inside,
     /// one on the boundary). Before each step, `allow` is asked about every triangle the step
-    /// would split (all of them, with the mesh as it is before the step); if it returns false
+    /// would split (all of them, with the mesh as it is before the step and the steps this call
+    /// has done so far, in order); if it returns false
     /// for any of them, refinement stops there and `bisect` returns false. Every step done is
     /// pushed to `splits` in order, and the mesh is conforming after each one. Returns true when
     /// `t` itself was bisected.
@@ -43,11 +44,12 @@ impl Mesh {
     pub fn bisect(
         &mut self,
         t: TriangleId,
-        allow: &mut dyn FnMut(&Mesh, TriangleId) -> bool,
+        allow: &mut dyn FnMut(&Mesh, &[Split], TriangleId) -> bool,
         splits: &mut Vec<Split>,
     ) -> bool {
         // Triangles waiting for the one above them to be bisected; the last is handled next.
         let mut pending = vec![t];
+        let first = splits.len();
         while let Some(&s) = pending.last() {
             let e = self.refinement_edge_id(s);
             let triangles = self.edges[e as usize].triangles;
@@ -63,7 +65,7 @@ impl Mesh {
             }
             let mut allowed = true;
             for u in triangles.into_iter().flatten() {
-                allowed &= allow(self, u);
+                allowed &= allow(self, &splits[first..], u);
             }
             if !allowed {
                 return false;
@@ -274,7 +276,7 @@ mod tests {
         }
     }
 
-    fn allow_all(_: &Mesh, _: TriangleId) -> bool {
+    fn allow_all(_: &Mesh, _: &[Split], _: TriangleId) -> bool {
         true
     }
 
@@ -527,7 +529,7 @@ mod tests {
 
         let mut nothing = Vec::new();
         let mut untouched = m.clone();
-        assert!(!untouched.bisect(t, &mut |_, _| false, &mut nothing));
+        assert!(!untouched.bisect(t, &mut |_, _, _| false, &mut nothing));
         assert!(nothing.is_empty());
         assert_eq!(counts(&untouched), counts(&m));
         assert_eq!(untouched.triangles(), m.triangles());
@@ -537,7 +539,11 @@ mod tests {
         let mut splits = Vec::new();
         let done = m.bisect(
             t,
-            &mut |mesh, u| {
+            &mut |mesh, done, u| {
+                assert!(
+                    done.iter()
+                        .all(|s| (s.vertex as usize) < mesh.vertices().len())
+                );
                 asked.push((mesh.triangles().len(), u));
                 u != t
             },

@@ -34,6 +34,7 @@
 //! far.
 
 use crate::front::Front;
+use crate::geometry;
 use crate::mesh::{Mesh, TriangleId, VertexId};
 
 /// Relative margin under the safety factor that absorbs rounding in times and gradients.
@@ -70,6 +71,8 @@ pub struct Pitcher {
     c_max: f64,
     safety: f64,
     t_end: f64,
+    /// `kappa` in `B_T = kappa s (1 - GUARD) h_T / c`: 1, or 1/2 on meshes that get refined.
+    margin: f64,
 }
 
 impl Pitcher {
@@ -85,16 +88,59 @@ impl Pitcher {
         if !t_end.is_finite() {
             return Err(PitchError::EndTime(t_end));
         }
-        let scale = safety * (1.0 - GUARD) / c_max;
-        let budgets = (0..mesh.triangles().len() as TriangleId)
-            .map(|t| scale * mesh.altitudes(t).into_iter().fold(f64::INFINITY, f64::min))
-            .collect();
-        Ok(Self {
-            budgets,
+        let mut pitcher = Self {
+            budgets: Vec::new(),
             c_max,
             safety,
             t_end,
-        })
+            margin: 1.0,
+        };
+        pitcher.update(mesh, 0..mesh.triangles().len() as TriangleId);
+        Ok(pitcher)
+    }
+
+    /// The same pitcher with budgets halved (`kappa = 1/2`), so that bisecting any front
+    /// triangle whose time spread is within its budget keeps the front causal for later
+    /// tents; see [`Self::may_bisect`] and `docs/pitching.md`.
+    pub fn for_refinement(mut self, mesh: &Mesh) -> Self {
+        self.margin = 0.5;
+        self.update(mesh, 0..mesh.triangles().len() as TriangleId);
+        self
+    }
+
+    /// Recomputes the budgets of `triangles` (new or changed by a mesh operation), sizing the
+    /// table to the mesh.
+    pub fn update(&mut self, mesh: &Mesh, triangles: impl IntoIterator<Item = TriangleId>) {
+        self.budgets.resize(mesh.triangles().len(), 0.0);
+        let scale = self.margin * self.causal_width_factor();
+        for t in triangles {
+            self.budgets[t as usize] =
+                scale * mesh.altitudes(t).into_iter().fold(f64::INFINITY, f64::min);
+        }
+    }
+
+    /// True when bisecting front triangle `t` keeps the front causal for every later tent: its
+    /// time spread (vertex times from `time`, s) is at most `s (1 - GUARD) / c` times the
+    /// smallest altitude of either child. Pitching never widens a spread beyond
+    /// `max(B_T, current spread)` with `B_T <= s (1 - GUARD) h_T / c`, so children that pass keep
+    /// every later facet causal; with `kappa = 1/2` every triangle within its budget passes
+    /// (a child's smallest altitude is at least half its parent's).
+    pub fn may_bisect(&self, mesh: &Mesh, time: impl Fn(VertexId) -> f64, t: TriangleId) -> bool {
+        let times = mesh.triangles()[t as usize].map(time);
+        let spread = times.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+            - times.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        let width = mesh
+            .bisection_children(t)
+            .into_iter()
+            .flat_map(geometry::altitudes)
+            .fold(f64::INFINITY, f64::min);
+        spread <= self.causal_width_factor() * width
+    }
+
+    /// `s (1 - GUARD) / c`: a triangle of minimum width `h` whose time spread is at most `h`
+    /// times this has a causal facet.
+    fn causal_width_factor(&self) -> f64 {
+        self.safety * (1.0 - GUARD) / self.c_max
     }
 
     /// The end time, seconds.

@@ -30,6 +30,13 @@ impl ClaimTable {
         }
     }
 
+    /// Adds free lock words up to `vertices` (for vertices appended by an event).
+    pub fn grow(&mut self, vertices: usize) {
+        while self.words.len() < vertices {
+            self.words.push(AtomicU32::new(0));
+        }
+    }
+
     fn release_exclusive(&self, v: VertexId) {
         // Nobody else holds v while it is exclusive: a plain store frees it.
         self.words[v as usize].store(0, Ordering::Release);

@@ -3,8 +3,8 @@
 //! Worker threads advance one shared [`Front`] together. A worker claims a vertex that is a local
 //! minimum of the front (exclusive on the vertex, shared on its neighbours, see [`claim`]),
 //! pitches its tent and solves its patch through [`Work::tent`], records it, releases the claim
-//! and offers the vertex and its neighbours as new candidates. Topology changes are [`Event`]s
-//! that claim a whole region the same way. The design, its invariants and why it cannot deadlock
+//! and offers the vertex and its neighbours as new candidates. Topology changes are events ([`Action`]s)
+//! that run with exclusive access to the state, between tents. The design, its invariants and why it cannot deadlock
 //! or race are in `scheduler/README.md`.
 //!
 //! Two modes:
@@ -37,8 +37,39 @@ pub struct Options {
     pub deterministic: bool,
 }
 
+/// The data tents share: a space mesh and its front, plus whatever the engine keeps with them
+/// (the solution under the front). Tents see it shared; events get it exclusively and may change
+/// the mesh, appending vertices (ids are never reused or removed) with their front times.
+pub trait State: Send + Sync {
+    /// The space mesh.
+    fn mesh(&self) -> &Mesh;
+    /// The front over [`State::mesh`], one time per vertex.
+    fn front(&self) -> &Front;
+}
+
+/// A mesh and front that no event changes.
+#[derive(Clone, Copy, Debug)]
+pub struct Fixed<'m> {
+    /// The space mesh.
+    pub mesh: &'m Mesh,
+    /// Its front.
+    pub front: &'m Front,
+}
+
+impl State for Fixed<'_> {
+    fn mesh(&self) -> &Mesh {
+        self.mesh
+    }
+
+    fn front(&self) -> &Front {
+        self.front
+    }
+}
+
 /// What the engine does for each tent; `'a` is the lifetime of the data its events borrow.
 pub trait Work<'a>: Sync {
+    /// The shared mesh, front and solution.
+    type State: State;
     /// Per-worker scratch memory (the patch solver's buffers).
     type Scratch: Send;
     /// What a tent produces for [`Work::record`].
@@ -46,57 +77,68 @@ pub trait Work<'a>: Sync {
     /// A failure that stops the run.
     type Error: Send;
 
-    /// Pitches the tent at `v` and solves its patch; returns the vertex's new time (s) and the
-    /// outcome. Called with `v` claimed exclusively and its neighbours shared, and `v` a local
-    /// minimum of the front below the end time. May queue topology events.
+    /// Pitches the tent at `v` and solves its patch; returns the vertex's new time (s; equal to
+    /// the old one when the tent is rejected) and the outcome. Called with `v` claimed
+    /// exclusively and its neighbours shared, and `v` a local minimum of the front below the end
+    /// time. May queue events.
     fn tent(
         &self,
+        state: &Self::State,
         scratch: &mut Self::Scratch,
         v: VertexId,
-        events: &Events<'a>,
+        events: &Events<'a, Self::State>,
     ) -> Result<(f64, Self::Outcome), Self::Error>;
 
     /// Records a finished tent (outputs, energy sums). Asynchronous mode: called by the worker
     /// while it still holds the claim. Deterministic mode: called on one thread after each round,
-    /// in the round's order. May queue topology events.
+    /// in the round's order. May queue events.
     fn record(
         &'a self,
+        state: &Self::State,
         v: VertexId,
         outcome: Self::Outcome,
-        events: &Events<'a>,
+        events: &Events<'a, Self::State>,
     ) -> Result<(), Self::Error>;
 }
 
-/// A topology change: runs once no tent overlaps `region` (the vertices it modifies; their
-/// neighbours are claimed shared), with no tent starting in the region meanwhile.
-pub struct Event<'a> {
-    /// Vertices whose star the event may change.
-    pub region: Vec<VertexId>,
-    /// The change.
-    pub action: Box<dyn FnOnce() + Send + 'a>,
-}
+/// An event: runs with exclusive access to the state (no tent in flight) and returns the
+/// vertices whose readiness it may have changed; vertices it appends are offered as well.
+pub type Action<'a, S> = Box<dyn FnOnce(&mut S) -> Vec<VertexId> + Send + 'a>;
 
-impl std::fmt::Debug for Event<'_> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Event")
-            .field("region", &self.region)
-            .finish_non_exhaustive()
-    }
-}
-
-/// The queue of pending topology events.
-#[derive(Debug, Default)]
-pub struct Events<'a> {
-    queue: Mutex<Vec<Event<'a>>>,
+/// The queue of pending events.
+pub struct Events<'a, S> {
+    queue: Mutex<Vec<Action<'a, S>>>,
     /// Events pushed and not yet run.
     pending: AtomicUsize,
 }
 
-impl<'a> Events<'a> {
-    /// Queues `action` to run exclusively on `region`.
-    pub fn push(&self, region: Vec<VertexId>, action: Box<dyn FnOnce() + Send + 'a>) {
-        self.queue.lock().push(Event { region, action });
+impl<S> Default for Events<'_, S> {
+    fn default() -> Self {
+        Self {
+            queue: Mutex::new(Vec::new()),
+            pending: AtomicUsize::new(0),
+        }
+    }
+}
+
+impl<S> std::fmt::Debug for Events<'_, S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Events")
+            .field("pending", &self.pending.load(Ordering::Relaxed))
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a, S> Events<'a, S> {
+    /// Queues `action`. Deterministic mode runs queued events in the order they were pushed.
+    pub fn push(&self, action: Action<'a, S>) {
+        self.queue.lock().push(action);
         self.pending.fetch_add(1, Ordering::AcqRel);
+    }
+
+    /// Takes every queued event, in push order.
+    fn take(&self) -> Vec<Action<'a, S>> {
+        std::mem::take(&mut *self.queue.lock())
     }
 }
 
@@ -128,29 +170,23 @@ pub enum RunError<E> {
 }
 
 /// True when `v` is below `t_end` and no neighbour is earlier.
-fn is_ready(mesh: &Mesh, front: &Front, t_end: f64, v: VertexId) -> bool {
-    front.time(v) < t_end && front.is_local_minimum(mesh, v)
+fn is_ready<S: State>(state: &S, t_end: f64, v: VertexId) -> bool {
+    let front = state.front();
+    (v as usize) < front.len() && front.time(v) < t_end && front.is_local_minimum(state.mesh(), v)
 }
 
-/// The vertices of `region` and, separately, their neighbours outside it, sorted.
-fn region_and_halo(mesh: &Mesh, region: &[VertexId]) -> (Vec<VertexId>, Vec<VertexId>) {
-    let mut owned = region.to_vec();
-    owned.sort_unstable();
-    owned.dedup();
-    let mut halo: Vec<VertexId> = owned
-        .iter()
-        .flat_map(|&v| mesh.vertex_neighbors(v).iter().copied())
-        .filter(|w| owned.binary_search(w).is_err())
-        .collect();
-    halo.sort_unstable();
-    halo.dedup();
-    (owned, halo)
+/// Vertices of `state` below `t_end` among `vertices`.
+fn below_end<S: State>(state: &S, t_end: f64, vertices: std::ops::Range<usize>) -> usize {
+    vertices
+        .filter(|&v| state.front().time(v as VertexId) < t_end)
+        .count()
 }
 
-/// Advances every vertex of `front` to `t_end` with one worker per element of `scratch`.
+/// Advances every vertex of the state's front to `t_end` with one worker per element of
+/// `scratch`. Events may refine the mesh meanwhile; the run ends when every vertex, old or new,
+/// has reached `t_end`.
 pub fn run<'a, W: Work<'a>>(
-    mesh: &Mesh,
-    front: &Front,
+    state: &mut W::State,
     t_end: f64,
     work: &'a W,
     scratch: Vec<W::Scratch>,
@@ -158,8 +194,8 @@ pub fn run<'a, W: Work<'a>>(
 ) -> Result<Stats, RunError<W::Error>> {
     assert!(!scratch.is_empty(), "at least one worker");
     if options.deterministic {
-        rounds::run(mesh, front, t_end, work, scratch)
+        rounds::run(state, t_end, work, scratch)
     } else {
-        pool::run(mesh, front, t_end, work, scratch)
+        pool::run(state, t_end, work, scratch)
     }
 }

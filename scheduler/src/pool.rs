@@ -5,26 +5,28 @@
 //! claimed), runs the tent, records it, releases the claim and pushes the vertex and its
 //! neighbours back as candidates. A candidate that is not ready or cannot be claimed is dropped:
 //! whatever blocks it (an earlier neighbour, or a claim around it) pushes it again when it
-//! changes. Workers with nothing to do sleep on a condition variable. See `scheduler/README.md`.
+//! changes. Workers with nothing to do sleep on a condition variable. Tents hold the state
+//! shared (a read lock); events take it exclusively between tents. See `scheduler/README.md`.
 
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 
 use crossbeam_deque::{Injector, Steal, Stealer, Worker};
-use parking_lot::{Condvar, Mutex};
-use sdg_mesh::{Front, Mesh};
+use parking_lot::{Condvar, Mutex, RwLock};
 
 use crate::claim::ClaimTable;
-use crate::{Events, RunError, Stats, VertexId, Work, is_ready, region_and_halo};
+use crate::{Events, RunError, State, Stats, VertexId, Work, below_end, is_ready};
+
+/// The state and the claims on its vertices: shared by tents, exclusive for events.
+struct Locked<'s, S> {
+    state: &'s mut S,
+    claims: ClaimTable,
+}
 
 /// State shared by the workers of one run.
 struct Shared<'s, 'a, W: Work<'a>> {
-    mesh: &'s Mesh,
-    front: &'s Front,
+    locked: RwLock<Locked<'s, W::State>>,
     t_end: f64,
     work: &'a W,
-    claims: ClaimTable,
-    /// Per vertex: pending events whose region or halo contains it. No tent starts there.
-    reserved: Vec<AtomicU32>,
     injector: Injector<VertexId>,
     stealers: Vec<Stealer<VertexId>>,
     /// Candidates pushed and not yet taken (an upper bound of what the deques hold).
@@ -35,52 +37,45 @@ struct Shared<'s, 'a, W: Work<'a>> {
     error: Mutex<Option<W::Error>>,
     sleep: Mutex<usize>,
     wake: Condvar,
-    events: Events<'a>,
-    /// Events whose regions are reserved, waiting for their claims.
-    reserved_events: Mutex<Vec<Reserved<'a>>>,
+    events: Events<'a, W::State>,
     events_run: AtomicU64,
     tents: Vec<AtomicU64>,
 }
 
 pub(crate) fn run<'a, W: Work<'a>>(
-    mesh: &Mesh,
-    front: &Front,
+    state: &mut W::State,
     t_end: f64,
     work: &'a W,
     scratch: Vec<W::Scratch>,
 ) -> Result<Stats, RunError<W::Error>> {
-    let n = mesh.vertices().len();
+    let n = state.mesh().vertices().len();
     let threads = scratch.len();
     let workers: Vec<Worker<VertexId>> = (0..threads).map(|_| Worker::new_fifo()).collect();
+    let ready: Vec<VertexId> = (0..n as VertexId)
+        .filter(|&v| is_ready(&*state, t_end, v))
+        .collect();
     let shared = Shared {
-        mesh,
-        front,
+        remaining: AtomicUsize::new(below_end(&*state, t_end, 0..n)),
+        locked: RwLock::new(Locked {
+            state,
+            claims: ClaimTable::new(n),
+        }),
         t_end,
         work,
-        claims: ClaimTable::new(n),
-        reserved: (0..n).map(|_| AtomicU32::new(0)).collect(),
         injector: Injector::new(),
         stealers: workers.iter().map(Worker::stealer).collect(),
         queued: AtomicUsize::new(0),
-        remaining: AtomicUsize::new(
-            (0..n as VertexId)
-                .filter(|&v| front.time(v) < t_end)
-                .count(),
-        ),
         stop: AtomicBool::new(false),
         error: Mutex::new(None),
         sleep: Mutex::new(0),
         wake: Condvar::new(),
         events: Events::default(),
-        reserved_events: Mutex::new(Vec::new()),
         events_run: AtomicU64::new(0),
         tents: (0..threads).map(|_| AtomicU64::new(0)).collect(),
     };
-    for v in 0..n as VertexId {
-        if is_ready(mesh, front, t_end, v) {
-            shared.queued.fetch_add(1, Ordering::SeqCst);
-            shared.injector.push(v);
-        }
+    for v in ready {
+        shared.queued.fetch_add(1, Ordering::SeqCst);
+        shared.injector.push(v);
     }
     std::thread::scope(|s| {
         for (id, (local, scratch)) in workers.into_iter().zip(scratch).enumerate() {
@@ -93,13 +88,15 @@ pub(crate) fn run<'a, W: Work<'a>>(
     }
     // Events queued by the last tents, which the workers may have left when the front reached
     // the end: no tent is in flight any more, so they run here in queue order.
-    let leftover = std::mem::take(&mut *shared.reserved_events.lock());
-    for event in leftover {
-        (event.action)();
-        shared.events_run.fetch_add(1, Ordering::Relaxed);
-    }
-    for event in std::mem::take(&mut *shared.events.queue.lock()) {
-        (event.action)();
+    let locked = shared.locked.into_inner();
+    for action in shared.events.take() {
+        let before = locked.state.mesh().vertices().len();
+        action(locked.state);
+        let after = locked.state.mesh().vertices().len();
+        shared.remaining.fetch_add(
+            below_end(&*locked.state, t_end, before..after),
+            Ordering::SeqCst,
+        );
         shared.events_run.fetch_add(1, Ordering::Relaxed);
     }
     let remaining = shared.remaining.load(Ordering::SeqCst);
@@ -177,6 +174,7 @@ fn offer<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<VertexId>, 
 fn sleep<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>) {
     let mut sleeping = shared.sleep.lock();
     if shared.queued.load(Ordering::SeqCst) > 0
+        || shared.events.pending.load(Ordering::SeqCst) > 0
         || shared.stop.load(Ordering::SeqCst)
         || shared.remaining.load(Ordering::SeqCst) == 0
     {
@@ -202,30 +200,32 @@ fn tent<'a, W: Work<'a>>(
     scratch: &mut W::Scratch,
     v: VertexId,
 ) {
-    let (mesh, front) = (shared.mesh, shared.front);
-    if shared.reserved[v as usize].load(Ordering::Acquire) > 0
-        || !is_ready(mesh, front, shared.t_end, v)
-    {
+    let locked = shared.locked.read();
+    let state = &*locked.state;
+    if !is_ready(state, shared.t_end, v) {
         return;
     }
-    let neighbours = mesh.vertex_neighbors(v);
-    if !shared.claims.try_claim(&[v], neighbours) {
+    let neighbours = state.mesh().vertex_neighbors(v);
+    if !locked.claims.try_claim(&[v], neighbours) {
         return;
     }
     // Claimed: the times of v and its neighbours cannot change until the release.
-    let result = if is_ready(mesh, front, shared.t_end, v) {
+    let result = if is_ready(state, shared.t_end, v) {
         Some(
             shared
                 .work
-                .tent(scratch, v, &shared.events)
+                .tent(state, scratch, v, &shared.events)
                 .and_then(|(t, outcome)| {
-                    shared.work.record(v, outcome, &shared.events).map(|()| t)
+                    shared
+                        .work
+                        .record(state, v, outcome, &shared.events)
+                        .map(|()| t)
                 }),
         )
     } else {
         None
     };
-    shared.claims.release(&[v], neighbours);
+    locked.claims.release(&[v], neighbours);
     match result {
         Some(Ok(t)) => {
             shared.tents[id].fetch_add(1, Ordering::Relaxed);
@@ -245,55 +245,39 @@ fn tent<'a, W: Work<'a>>(
     for &w in neighbours {
         offer(shared, local, w);
     }
+    drop(locked);
     if shared.events.pending.load(Ordering::Acquire) > 0 {
         wake_all(shared);
     }
 }
 
-/// An event whose region and halo are reserved: no tent starts there until it has run.
-struct Reserved<'a> {
-    owned: Vec<VertexId>,
-    halo: Vec<VertexId>,
-    action: Box<dyn FnOnce() + Send + 'a>,
-}
-
-/// Reserves the regions of newly queued events, then runs every reserved event whose region and
-/// halo can be claimed, and offers their vertices as candidates afterwards.
+/// Runs every queued event with the state held exclusively (waiting for the tents in flight),
+/// then offers the vertices the events touched or appended.
 fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<VertexId>) {
     if shared.events.pending.load(Ordering::Acquire) == 0 {
         return;
     }
-    let mut reserved = shared.reserved_events.lock();
-    for event in std::mem::take(&mut *shared.events.queue.lock()) {
-        let (owned, halo) = region_and_halo(shared.mesh, &event.region);
-        for &v in owned.iter().chain(&halo) {
-            shared.reserved[v as usize].fetch_add(1, Ordering::AcqRel);
-        }
-        reserved.push(Reserved {
-            owned,
-            halo,
-            action: event.action,
-        });
+    let mut locked = shared.locked.write();
+    let actions = shared.events.take();
+    if actions.is_empty() {
+        return;
     }
-    let mut i = 0;
-    while i < reserved.len() {
-        if !shared
-            .claims
-            .try_claim(&reserved[i].owned, &reserved[i].halo)
-        {
-            i += 1;
-            continue;
-        }
-        let event = reserved.swap_remove(i);
-        drop(reserved);
-        (event.action)();
-        shared.claims.release(&event.owned, &event.halo);
-        for &v in event.owned.iter().chain(&event.halo) {
-            shared.reserved[v as usize].fetch_sub(1, Ordering::AcqRel);
-            offer(shared, local, v);
-        }
+    let mut touched = Vec::new();
+    for action in actions {
+        let before = locked.state.mesh().vertices().len();
+        touched.extend(action(locked.state));
+        let after = locked.state.mesh().vertices().len();
+        locked.claims.grow(after);
+        shared.remaining.fetch_add(
+            below_end(&*locked.state, shared.t_end, before..after),
+            Ordering::SeqCst,
+        );
+        touched.extend(before as VertexId..after as VertexId);
         shared.events_run.fetch_add(1, Ordering::Relaxed);
         shared.events.pending.fetch_sub(1, Ordering::AcqRel);
-        reserved = shared.reserved_events.lock();
+    }
+    drop(locked);
+    for v in touched {
+        offer(shared, local, v);
     }
 }

@@ -4,15 +4,15 @@
 //! `(time, id)` and greedily takes every vertex none of whose neighbours is taken. The taken
 //! tents do not read each other's data (they are not neighbours), so solving them in parallel in
 //! any order gives the same bits; their outcomes are recorded in the round's order, and queued
-//! events then run in a fixed order. The result depends only on the inputs.
+//! events then run in the order they were queued, with the state held exclusively. The result
+//! depends only on the inputs.
 
 use std::sync::Barrier;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use parking_lot::{Mutex, RwLock};
-use sdg_mesh::{Front, Mesh};
 
-use crate::{Events, RunError, Stats, VertexId, Work, is_ready};
+use crate::{Events, RunError, State, Stats, VertexId, Work, below_end, is_ready};
 
 /// Shared state of one round.
 struct Round<O, E> {
@@ -22,15 +22,15 @@ struct Round<O, E> {
 }
 
 pub(crate) fn run<'a, W: Work<'a>>(
-    mesh: &Mesh,
-    front: &Front,
+    state: &mut W::State,
     t_end: f64,
     work: &'a W,
     scratch: Vec<W::Scratch>,
 ) -> Result<Stats, RunError<W::Error>> {
-    let n = mesh.vertices().len();
+    let mut n = state.mesh().vertices().len();
+    let state = RwLock::new(state);
     let threads = scratch.len();
-    let events = Events::default();
+    let events: Events<'a, W::State> = Events::default();
     let round: RwLock<Round<W::Outcome, W::Error>> = RwLock::new(Round {
         chosen: Vec::with_capacity(n),
         next: AtomicUsize::new(0),
@@ -47,8 +47,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
     let mut taken = vec![false; n];
     let outcome = std::thread::scope(|s| {
         for (id, mut scratch) in scratch.into_iter().enumerate() {
-            let (round, barrier, done, events, per_thread) =
-                (&round, &barrier, &done, &events, &per_thread);
+            let (round, barrier, done, events, per_thread, state) =
+                (&round, &barrier, &done, &events, &per_thread, &state);
             s.spawn(move || {
                 loop {
                     barrier.wait();
@@ -57,11 +57,13 @@ pub(crate) fn run<'a, W: Work<'a>>(
                     }
                     {
                         let r = round.read();
+                        let state = state.read();
                         let chosen = &r.chosen;
                         loop {
                             let i = r.next.fetch_add(1, Ordering::Relaxed);
                             let Some(&v) = chosen.get(i) else { break };
-                            let result = work.tent(&mut scratch, v, events).map(|(_, o)| o);
+                            let result =
+                                work.tent(&**state, &mut scratch, v, events).map(|(_, o)| o);
                             *r.results[i].lock() = Some(result);
                             per_thread[id].fetch_add(1, Ordering::Relaxed);
                         }
@@ -72,16 +74,16 @@ pub(crate) fn run<'a, W: Work<'a>>(
         }
         let result = (|| {
             loop {
+                let guard = state.read();
+                let s: &W::State = &guard;
                 ready.clear();
                 ready.extend(
                     (0..n as VertexId)
-                        .filter(|&v| is_ready(mesh, front, t_end, v))
-                        .map(|v| (front.time(v), v)),
+                        .filter(|&v| is_ready(s, t_end, v))
+                        .map(|v| (s.front().time(v), v)),
                 );
                 if ready.is_empty() {
-                    let remaining = (0..n as VertexId)
-                        .filter(|&v| front.time(v) < t_end)
-                        .count();
+                    let remaining = below_end(s, t_end, 0..n);
                     return if remaining == 0 {
                         Ok(())
                     } else {
@@ -97,7 +99,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                         if !taken[v as usize] {
                             r.chosen.push(v);
                             taken[v as usize] = true;
-                            for &w in mesh.vertex_neighbors(v) {
+                            for &w in s.mesh().vertex_neighbors(v) {
                                 taken[w as usize] = true;
                             }
                         }
@@ -107,26 +109,32 @@ pub(crate) fn run<'a, W: Work<'a>>(
                     r.next.store(0, Ordering::Relaxed);
                 }
                 // The round-setup lock is released before the workers start.
+                drop(guard);
                 barrier.wait();
                 barrier.wait();
                 let mut r = round.write();
                 let chosen = std::mem::take(&mut r.chosen);
-                for (i, &v) in chosen.iter().enumerate() {
-                    let result = r.results[i].lock().take().expect("every chosen tent ran");
-                    let outcome = result.map_err(RunError::Work)?;
-                    work.record(v, outcome, &events).map_err(RunError::Work)?;
+                {
+                    let guard = state.read();
+                    for (i, &v) in chosen.iter().enumerate() {
+                        let result = r.results[i].lock().take().expect("every chosen tent ran");
+                        let outcome = result.map_err(RunError::Work)?;
+                        work.record(&**guard, v, outcome, &events)
+                            .map_err(RunError::Work)?;
+                    }
                 }
                 stats.tents += chosen.len() as u64;
                 r.chosen = chosen;
                 stats.rounds += 1;
                 drop(r);
-                let mut pending = std::mem::take(&mut *events.queue.lock());
-                pending.sort_by(|a, b| a.region.cmp(&b.region));
-                for event in pending {
-                    (event.action)();
+                let mut guard = state.write();
+                for action in events.take() {
+                    action(&mut **guard);
                     events.pending.fetch_sub(1, Ordering::AcqRel);
                     stats.events += 1;
                 }
+                n = guard.mesh().vertices().len();
+                taken.resize(n, false);
             }
         })();
         done.store(true, Ordering::Release);

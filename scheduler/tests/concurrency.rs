@@ -1,14 +1,15 @@
 //! The scheduler under load: no two tents in flight are neighbours, every tent is causal, events
-//! run exclusively against overlapping tents, and single-thread runs finish in both modes.
+//! run with no tent in flight, and single-thread runs finish in both modes.
 
 #![cfg(not(loom))]
 
+use std::marker::PhantomData;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use parking_lot::Mutex;
 use sdg_mesh::{Diagonal, Front, Mesh, Pitcher, Point, Rectangle};
-use sdg_scheduler::{Events, Options, RunError, VertexId, Work};
+use sdg_scheduler::{Events, Fixed, Options, RunError, VertexId, Work};
 
 const C: f64 = 1.0;
 const SAFETY: f64 = 0.9;
@@ -30,9 +31,8 @@ fn perturbed(n: u32) -> Mesh {
 
 /// Pitches tents and checks the claim contract from inside each tent; every `event_every`-th
 /// record queues a smoothing event that moves the recorded vertex.
-struct Checked<'a> {
-    mesh: &'a Mesh,
-    front: &'a Front,
+struct Checked<'m> {
+    mesh: PhantomData<&'m Mesh>,
     pitcher: Pitcher,
     in_flight: Vec<AtomicBool>,
     /// Vertices a running event moves.
@@ -45,12 +45,11 @@ struct Checked<'a> {
     max_slope: Mutex<f64>,
 }
 
-impl<'a> Checked<'a> {
-    fn new(mesh: &'a Mesh, front: &'a Front, t_end: f64, event_every: usize) -> Self {
+impl Checked<'_> {
+    fn new(mesh: &Mesh, t_end: f64, event_every: usize) -> Self {
         let n = mesh.vertices().len();
         Self {
-            mesh,
-            front,
+            mesh: PhantomData,
             pitcher: Pitcher::new(mesh, C, SAFETY, t_end).unwrap(),
             in_flight: (0..n).map(|_| AtomicBool::new(false)).collect(),
             in_event: (0..n).map(|_| AtomicBool::new(false)).collect(),
@@ -62,17 +61,17 @@ impl<'a> Checked<'a> {
         }
     }
 
-    /// Moves `v` a little towards the mean of its neighbours: the test event. Its region is `v`:
-    /// no tent whose star contains `v` (at `v` or a neighbour) may be in flight.
-    fn smooth(&self, v: VertexId) {
-        for &u in self.mesh.vertex_neighbors(v).iter().chain([&v]) {
+    /// Moves `v` a little towards the mean of its neighbours: the test event. No tent may be in
+    /// flight.
+    fn smooth(&self, mesh: &Mesh, v: VertexId) {
+        for (u, flag) in self.in_flight.iter().enumerate() {
             assert!(
-                !self.in_flight[u as usize].load(Ordering::SeqCst),
+                !flag.load(Ordering::SeqCst),
                 "event at {v} overlaps a tent at {u}"
             );
         }
         self.in_event[v as usize].store(true, Ordering::SeqCst);
-        let neighbours = self.mesh.vertex_neighbors(v);
+        let neighbours = mesh.vertex_neighbors(v);
         let mean = neighbours.iter().fold([0.0, 0.0], |acc, &u| {
             let p = *self.positions[u as usize].lock();
             [acc[0] + p[0], acc[1] + p[1]]
@@ -90,16 +89,27 @@ impl<'a> Checked<'a> {
     }
 }
 
-impl<'a> Work<'a> for Checked<'a> {
+impl<'a, 'm> Work<'a> for Checked<'m>
+where
+    'm: 'a,
+{
+    type State = Fixed<'m>;
     type Scratch = ();
     type Outcome = ();
     type Error = String;
 
-    fn tent(&self, _: &mut (), v: VertexId, _: &Events<'a>) -> Result<(f64, ()), String> {
+    fn tent(
+        &self,
+        state: &Fixed<'m>,
+        _: &mut (),
+        v: VertexId,
+        _: &Events<'a, Fixed<'m>>,
+    ) -> Result<(f64, ()), String> {
+        let Fixed { mesh, front } = *state;
         if self.in_flight[v as usize].swap(true, Ordering::SeqCst) {
             return Err(format!("vertex {v} claimed twice"));
         }
-        for &u in self.mesh.vertex_neighbors(v).iter().chain([&v]) {
+        for &u in mesh.vertex_neighbors(v).iter().chain([&v]) {
             if u != v && self.in_flight[u as usize].load(Ordering::SeqCst) {
                 return Err(format!("neighbours {v} and {u} in flight together"));
             }
@@ -108,26 +118,24 @@ impl<'a> Work<'a> for Checked<'a> {
             }
         }
         // The star's positions must not move while the tent is in flight.
-        let before: Vec<Point> = self
-            .mesh
+        let before: Vec<Point> = mesh
             .vertex_neighbors(v)
             .iter()
             .map(|&u| *self.positions[u as usize].lock())
             .collect();
         let tent = self
             .pitcher
-            .pitch(self.mesh, self.front, v)
+            .pitch(mesh, front, v)
             .ok_or(format!("{v} not pitchable"))?;
         let mut slope: f64 = 0.0;
-        for &t in self.mesh.vertex_triangles(v) {
-            slope = slope.max(C * self.front.slope(self.mesh, t));
+        for &t in mesh.vertex_triangles(v) {
+            slope = slope.max(C * front.slope(mesh, t));
         }
         if slope >= SAFETY {
             return Err(format!("tent at {v}: slope ratio {slope}"));
         }
         std::hint::black_box((0..200).fold(0u64, |a, i| a.wrapping_mul(31).wrapping_add(i)));
-        let after: Vec<Point> = self
-            .mesh
+        let after: Vec<Point> = mesh
             .vertex_neighbors(v)
             .iter()
             .map(|&u| *self.positions[u as usize].lock())
@@ -142,10 +150,19 @@ impl<'a> Work<'a> for Checked<'a> {
         Ok((tent.t_new, ()))
     }
 
-    fn record(&'a self, v: VertexId, (): (), events: &Events<'a>) -> Result<(), String> {
+    fn record(
+        &'a self,
+        _: &Fixed<'m>,
+        v: VertexId,
+        (): (),
+        events: &Events<'a, Fixed<'m>>,
+    ) -> Result<(), String> {
         let k = self.records.fetch_add(1, Ordering::Relaxed);
         if self.event_every > 0 && k % self.event_every == 0 {
-            events.push(vec![v], Box::new(move || self.smooth(v)));
+            events.push(Box::new(move |state: &mut Fixed<'m>| {
+                self.smooth(state.mesh, v);
+                vec![v]
+            }));
         }
         Ok(())
     }
@@ -154,12 +171,16 @@ impl<'a> Work<'a> for Checked<'a> {
 fn run(mesh: &Mesh, threads: usize, deterministic: bool, event_every: usize) -> (u64, u64) {
     let t_end = 3.0 / 16.0;
     let front = Front::flat(mesh.vertices().len(), 0.0);
-    let work = Checked::new(mesh, &front, t_end, event_every);
+    let work = Checked::new(mesh, t_end, event_every);
     let options = Options {
         threads,
         deterministic,
     };
-    let stats = sdg_scheduler::run(mesh, &front, t_end, &work, vec![(); threads], &options)
+    let mut state = Fixed {
+        mesh,
+        front: &front,
+    };
+    let stats = sdg_scheduler::run(&mut state, t_end, &work, vec![(); threads], &options)
         .unwrap_or_else(|e| panic!("{threads} threads, deterministic {deterministic}: {e:?}"));
     assert!(
         front.snapshot().iter().all(|&t| t == t_end),
@@ -207,15 +228,28 @@ fn single_thread_runs_finish() {
 
 #[test]
 fn work_errors_stop_the_run() {
-    struct Failing;
-    impl<'a> Work<'a> for Failing {
+    struct Failing<'m>(PhantomData<&'m ()>);
+    impl<'a, 'm: 'a> Work<'a> for Failing<'m> {
+        type State = Fixed<'m>;
         type Scratch = ();
         type Outcome = ();
         type Error = &'static str;
-        fn tent(&self, _: &mut (), _: VertexId, _: &Events<'a>) -> Result<(f64, ()), &'static str> {
+        fn tent(
+            &self,
+            _: &Fixed<'m>,
+            _: &mut (),
+            _: VertexId,
+            _: &Events<'a, Fixed<'m>>,
+        ) -> Result<(f64, ()), &'static str> {
             Err("boom")
         }
-        fn record(&'a self, _: VertexId, (): (), _: &Events<'a>) -> Result<(), &'static str> {
+        fn record(
+            &'a self,
+            _: &Fixed<'m>,
+            _: VertexId,
+            (): (),
+            _: &Events<'a, Fixed<'m>>,
+        ) -> Result<(), &'static str> {
             Ok(())
         }
     }
@@ -226,8 +260,18 @@ fn work_errors_stop_the_run() {
             threads: 3,
             deterministic,
         };
-        let e =
-            sdg_scheduler::run(&mesh, &front, 1.0, &Failing, vec![(); 3], &options).unwrap_err();
+        let mut state = Fixed {
+            mesh: &mesh,
+            front: &front,
+        };
+        let e = sdg_scheduler::run(
+            &mut state,
+            1.0,
+            &Failing(PhantomData),
+            vec![(); 3],
+            &options,
+        )
+        .unwrap_err();
         assert!(matches!(e, RunError::Work("boom")));
     }
 }

@@ -147,6 +147,14 @@ impl FrontSolution {
         self.cells.is_empty()
     }
 
+    /// Appends a front triangle that lies on the top face of the element under triangle `from`
+    /// (a child of a bisection): it gets the same element, no projection. Returns its index.
+    pub fn push_copy(&mut self, from: usize) -> usize {
+        let cell = self.cells[from].get_mut().clone();
+        self.cells.push(Mutex::new(cell));
+        self.cells.len() - 1
+    }
+
     /// Copies the element under triangle `t` into `geometry` and `coefficients` (basis length
     /// times width values); returns false, copying nothing, while `t` carries initial data.
     pub fn load(&self, t: usize, geometry: &mut Geometry, coefficients: &mut [f64]) -> bool {

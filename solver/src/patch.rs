@@ -256,10 +256,10 @@ impl PatchSolver {
         &self.reports[..self.used]
     }
 
-    /// Solves the patch of `tent`, already pitched on `front` (only the times of the tent
-    /// vertex's neighbours are read; the tent gives its own), and replaces the elements under the
-    /// star's front triangles in `solution`. The caller owns the star: no other thread touches
-    /// these triangles or the neighbours' times meanwhile.
+    /// Solves the patch of `tent` on `front` (only the times of the tent vertex's neighbours are
+    /// read; the tent gives its own) with inflow from the elements in `solution`, which it does
+    /// not change: [`Self::commit`] stores the result. The caller owns the star: no other thread
+    /// touches these triangles or the neighbours' times meanwhile.
     pub fn solve(
         &mut self,
         mesh: &Mesh,
@@ -415,7 +415,6 @@ impl PatchSolver {
         ring_order(mesh, star, &self.slots[..d], &mut self.order);
         self.blocks.solve(&self.order[..d]);
 
-        let width = self.width();
         let mut report = PatchReport {
             elements: d,
             dofs,
@@ -430,15 +429,20 @@ impl PatchSolver {
             self.reports[i] = r;
             self.displacement(i, initial);
         }
-        for (i, slot) in self.slots[..d].iter().enumerate() {
-            let size = n * width;
+        report
+    }
+
+    /// Replaces the elements under the star's front triangles in `solution` by the last patch
+    /// solved: its tent is accepted. The caller still owns the star.
+    pub fn commit(&self, solution: &FrontSolution) {
+        let size = self.basis.len() * self.width();
+        for (i, slot) in self.slots[..self.used].iter().enumerate() {
             solution.store(
                 slot.triangle as usize,
                 &slot.geometry,
                 &self.output[i * size..(i + 1) * size],
             );
         }
-        report
     }
 
     /// Energy terms and diagnostics of element `i` after the solve; also copies its field

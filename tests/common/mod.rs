@@ -74,6 +74,7 @@ pub fn solve_direct(
     let mut dissipation = 0.0;
     sdg_engine::pitch_to_end(&mesh, &pitcher, &front, |tent, front| {
         let r = solver.solve(&mesh, front, tent, boundary, init, &solution);
+        solver.commit(&solution);
         dissipation += r.dissipation;
         solver.element_reports().iter().for_each(&mut check);
     })

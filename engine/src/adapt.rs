@@ -1,0 +1,119 @@
+//! Error-driven refinement: the bulk dissipation indicator of a patch and its tolerance.
+//!
+//! A patch's numerical dissipation `D` (J/m, non-negative per element) is compared with the
+//! dissipation a patch would be allowed if the whole domain lost a fraction `tol` of the
+//! reference energy while a wave crosses it:
+//!
+//! `eta = D / (E_ref * (V / (A L / c)))`,
+//!
+//! where `V` is the patch's spacetime volume (m^2 s), `A` the domain area (m^2), `L` its diameter
+//! (m), `c` the fastest wave speed (m/s) and `E_ref` the initial energy plus all work done
+//! through the boundary so far (J/m). `eta` is dimensionless and independent of the load scale
+//! (`D` and `E_ref` are both quadratic in it) and of the mesh size (`V / (A L / c)` is the
+//! patch's share of one crossing of the domain): with every patch at `eta = tol`, a crossing
+//! dissipates a fraction `tol` of the energy. A patch with `eta > tol` is rejected and the front
+//! around its vertex refined.
+
+use sdg_mesh::Mesh;
+
+use crate::config::AdaptConfig;
+
+/// Refinement settings of a run.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Adapt {
+    /// Upper tolerance of `eta`.
+    pub(crate) tol: f64,
+    /// No edge is halved into pieces shorter than this, m.
+    pub(crate) min_edge: f64,
+    /// Longest edge allowed before the first tent, m.
+    pub(crate) max_edge: f64,
+    /// `A L / c`, m^2 s: the spacetime volume of one crossing of the domain.
+    crossing: f64,
+}
+
+impl Adapt {
+    /// Settings for `mesh` and fastest wave speed `c_max` (m/s), or `None` when disabled.
+    pub(crate) fn new(config: &AdaptConfig, mesh: &Mesh, c_max: f64) -> Option<Self> {
+        if !config.enabled {
+            return None;
+        }
+        let area: f64 = (0..mesh.triangles().len() as u32)
+            .map(|t| mesh.area(t))
+            .sum();
+        let (lo, hi) = mesh.vertices().iter().fold(
+            ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+            |(lo, hi), p| {
+                (
+                    [lo[0].min(p[0]), lo[1].min(p[1])],
+                    [hi[0].max(p[0]), hi[1].max(p[1])],
+                )
+            },
+        );
+        let diameter = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+        Some(Self {
+            tol: config.tol,
+            min_edge: config.min_edge.unwrap_or(1e-3 * mesh.edge_length_range().0),
+            max_edge: config.max_edge.unwrap_or(f64::INFINITY),
+            crossing: area * diameter / c_max,
+        })
+    }
+
+    /// `eta` of a patch that dissipated `dissipation` (J/m) over spacetime volume `volume`
+    /// (m^2 s), with reference energy `energy` (J/m); zero while the body holds no energy.
+    pub(crate) fn indicator(&self, dissipation: f64, volume: f64, energy: f64) -> f64 {
+        if energy > 0.0 {
+            dissipation * self.crossing / (energy * volume)
+        } else {
+            0.0
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sdg_mesh::{Diagonal, Rectangle};
+
+    fn unit(n: u32) -> Mesh {
+        Rectangle {
+            width: 2.0,
+            height: 1.0,
+            nx: n,
+            ny: n,
+            diagonal: Diagonal::Right,
+            interface: None,
+            perturb: 0.0,
+            seed: 0,
+        }
+        .build()
+        .unwrap()
+    }
+
+    #[test]
+    fn indicator_is_the_dissipated_share_of_one_crossing() {
+        let config = AdaptConfig {
+            enabled: true,
+            ..AdaptConfig::default()
+        };
+        let a = Adapt::new(&config, &unit(4), 2.0).unwrap();
+        // A = 2, L = sqrt(5), c = 2: one crossing is sqrt(5) m^2 s.
+        let crossing = 5f64.sqrt();
+        let eta = a.indicator(1e-3, 0.1 * crossing, 2.0);
+        assert!((eta - 1e-3 / (2.0 * 0.1)).abs() < 1e-15);
+        assert_eq!(a.indicator(1.0, 1.0, 0.0), 0.0);
+        // The same loss at four times the energy and the same share is four times smaller.
+        assert!((a.indicator(1e-3, 0.1 * crossing, 8.0) - eta / 4.0).abs() < 1e-15);
+        assert!(Adapt::new(&AdaptConfig::default(), &unit(4), 2.0).is_none());
+    }
+
+    #[test]
+    fn default_smallest_edge_follows_the_mesh() {
+        let config = AdaptConfig {
+            enabled: true,
+            ..AdaptConfig::default()
+        };
+        let a = Adapt::new(&config, &unit(4), 1.0).unwrap();
+        assert!((a.min_edge - 1e-3 * 0.25).abs() < 1e-18);
+        assert_eq!(a.max_edge, f64::INFINITY);
+    }
+}
