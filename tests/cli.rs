@@ -144,6 +144,29 @@ fn poisson_ratio_at_or_above_one_half() {
 }
 
 #[test]
+fn invalid_adaptivity_settings() {
+    let (_dir, config) = config_file(CONFIG);
+    for (set, words) in [
+        ("adapt.tol=-1e-3", ["adapt.tol", "positive"]),
+        ("adapt.min_edge=0.0", ["adapt.min_edge", "positive length"]),
+        (
+            "adapt.max_edge=1e-4",
+            ["adapt.max_edge", "twice adapt.min_edge"],
+        ),
+    ] {
+        let args = [
+            "validate",
+            &config,
+            "--set",
+            "adapt.min_edge=1e-4",
+            "--set",
+            set,
+        ];
+        expect_input_error(&args, &["case.toml", words[0], words[1]]);
+    }
+}
+
+#[test]
 fn non_causal_safety_factor() {
     let (_dir, config) = config_file(CONFIG);
     expect_input_error(

@@ -15,7 +15,7 @@ const EXPECTED: [(&str, u64, u64); 2] = [
 /// Stored results of `sdg run --deterministic` per solver config, run to a shorter end time
 /// (s): (file, end time, patches, velocity error, stress error). Errors are compared to 1e-6
 /// relative.
-const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 2] = [
+const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 3] = [
     (
         "plane_wave.toml",
         5e-7,
@@ -29,6 +29,13 @@ const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 2] = [
         3011,
         5.622745121166161e-4,
         5.780000038761202e-4,
+    ),
+    (
+        "adaptive_pulse.toml",
+        1e-6,
+        11253,
+        8.790986097670661e-4,
+        9.031393347889088e-4,
     ),
 ];
 

@@ -3,62 +3,11 @@
 
 mod common;
 
-use std::path::Path;
-
-use sdg_engine::{Config, LoadedConfig, Problem, RunOptions, solve_job};
+use common::{outputs, solve};
+use sdg_engine::Problem;
 
 fn plane_wave(overrides: &[&str]) -> Problem {
-    let text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/plane_wave.toml"),
-    )
-    .unwrap();
-    let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    let config = Config::parse(&text, "plane_wave.toml", &overrides).unwrap();
-    Problem::setup(LoadedConfig {
-        config,
-        file: "plane_wave.toml".into(),
-    })
-    .unwrap()
-}
-
-/// Runs `problem` on `threads` threads into a fresh folder; returns the summary and the folder.
-fn solve(
-    problem: &Problem,
-    threads: usize,
-    deterministic: bool,
-) -> (sdg_engine::RunSummary, tempfile::TempDir) {
-    let dir = tempfile::tempdir().unwrap();
-    let options = RunOptions {
-        output_dir: Some(dir.path().to_path_buf()),
-        threads: Some(threads),
-        deterministic,
-        progress: false,
-    };
-    let (summary, _) = solve_job(problem, &options).unwrap();
-    (summary, dir)
-}
-
-/// Every output file, with the wall-clock fields (`wall_time_s`, `patches_per_second`,
-/// `threads`) removed from `summary.json`.
-fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| {
-            let path = e.unwrap().path();
-            let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            let mut bytes = std::fs::read(&path).unwrap();
-            if name == "summary.json" {
-                let mut json: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
-                for key in ["wall_time_s", "patches_per_second", "threads"] {
-                    json.as_object_mut().unwrap().remove(key);
-                }
-                bytes = serde_json::to_vec_pretty(&json).unwrap();
-            }
-            (name, bytes)
-        })
-        .collect();
-    files.sort();
-    files
+    common::shipped("plane_wave.toml", overrides)
 }
 
 #[test]
@@ -106,7 +55,9 @@ fn asynchronous_mode_is_as_accurate_as_a_serial_run() {
         (s.velocity_l2_rel, p.velocity_l2_rel),
         (s.stress_l2_rel, p.stress_l2_rel),
     ] {
-        assert!((b - a).abs() <= 0.05 * a, "{b} vs serial {a}");
+        // Tent orders differ from run to run; the spacetime mesh with them. Measured: 1% to 5%
+        // below the serial error. Being more accurate is fine; less accurate by 5% is not.
+        assert!(b <= 1.05 * a, "{b} vs serial {a}");
     }
     assert!(parallel.energy.balance_residual_rel.abs() < 1e-10);
 }

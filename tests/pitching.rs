@@ -192,3 +192,94 @@ fn tent_count_is_linear_in_vertices_times_end_time_over_edge_length() {
         / ratios.iter().cloned().fold(f64::INFINITY, f64::min);
     assert!(spread < 1.1, "ratios {ratios:?}");
 }
+
+/// Largest `c |grad tau|` over every front facet.
+fn max_slope_ratio(mesh: &Mesh, front: &Front) -> f64 {
+    (0..mesh.triangles().len() as u32)
+        .map(|t| C * front.slope(mesh, t))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn refinement_toward_a_corner_to_edge_ratio_1e_4_keeps_causality_and_progress() {
+    let mut mesh = rectangle(4, Diagonal::Right, 0.0);
+    // About ten coarse tents; the finest triangles need tens of thousands each.
+    let t_end = 1.0 / C;
+    let mut pitcher = Pitcher::new(&mesh, C, SAFETY, t_end)
+        .unwrap()
+        .for_refinement(&mesh);
+    let mut front = Front::flat(mesh.vertices().len(), 0.0);
+    let corner = (0..mesh.vertices().len() as u32)
+        .find(|&v| mesh.vertex(v) == [0.0, 0.0])
+        .unwrap();
+    let ratio = |mesh: &Mesh| {
+        let (lo, hi) = mesh.edge_length_range();
+        lo / hi
+    };
+    let (mut tents, mut refused, mut reached) = (0u64, 0u64, None);
+    loop {
+        // Once the front has left t = 0 everywhere (it is no longer flat), bisect the smallest
+        // triangle at the corner every third tent until the ratio is reached, whenever the
+        // pitcher allows it.
+        if front.min_time() > 0.3 * t_end && tents % 3 == 0 && ratio(&mesh) > 1e-4 {
+            let t = *mesh
+                .vertex_triangles(corner)
+                .iter()
+                .min_by(|&&a, &&b| mesh.area(a).total_cmp(&mesh.area(b)))
+                .unwrap();
+            let mut splits = Vec::new();
+            let mut allow = |m: &Mesh, done: &[sdg_mesh::Split], u: u32| {
+                pitcher.may_bisect(m, |w| front.time_after(done, w), u)
+            };
+            if !mesh.bisect(t, &mut allow, &mut splits) {
+                refused += 1;
+            }
+            for split in &splits {
+                let [a, b] = split.ends;
+                front.push(0.5 * (front.time(a) + front.time(b)));
+            }
+            pitcher.update(
+                &mesh,
+                splits
+                    .iter()
+                    .flat_map(|s| s.halves.iter().flat_map(|&(k, n)| [k, n])),
+            );
+            let slope = max_slope_ratio(&mesh, &front);
+            assert!(
+                slope < SAFETY,
+                "refinement made a facet non-causal: {slope}"
+            );
+            if ratio(&mesh) <= 1e-4 && reached.is_none() {
+                reached = Some(tents);
+            }
+        }
+        let Some(v) = (0..mesh.vertices().len() as u32)
+            .filter(|&v| front.time(v) < t_end)
+            .min_by(|&a, &b| front.time(a).total_cmp(&front.time(b)).then(a.cmp(&b)))
+        else {
+            break;
+        };
+        let tent = pitcher
+            .pitch(&mesh, &front, v)
+            .expect("the earliest vertex is pitchable");
+        assert!(tent.t_new > tent.t_old);
+        for &t in mesh.vertex_triangles(v) {
+            let slope = C * front.slope(&mesh, t);
+            assert!(slope < SAFETY, "tent {tents} at {v}: slope ratio {slope}");
+        }
+        tents += 1;
+        assert!(tents < 20_000_000, "no progress");
+    }
+    mesh.validate().unwrap();
+    let reached = reached.expect("edge-length ratio 1e-4 reached");
+    eprintln!(
+        "ratio {:e} after {reached} tents, {} vertices, {tents} tents in all, {refused} refused",
+        ratio(&mesh),
+        mesh.vertices().len()
+    );
+    assert!(ratio(&mesh) <= 1e-4);
+    assert!(
+        front.snapshot().iter().all(|&t| t == t_end),
+        "front ends at t_end"
+    );
+}

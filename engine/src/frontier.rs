@@ -10,7 +10,7 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use sdg_mesh::{Front, Mesh, Pitcher, Split, TriangleId, VertexId};
+use sdg_mesh::{Front, Mesh, Pitcher, Point, Split, TriangleId, VertexId};
 use sdg_solver::element::FrontSolution;
 
 /// The space mesh, its front, the elements under the front and the pitcher.
@@ -42,6 +42,9 @@ pub(crate) struct Refined {
     pub(crate) vertices: Vec<(VertexId, f64)>,
     /// Every vertex of a split triangle (old or new), unsorted, with repeats.
     pub(crate) touched: Vec<VertexId>,
+    /// Change of the initial data's discrete energy (scaled units) on split triangles that
+    /// still carry it: the children's face rules sample it at other points than the parent's.
+    pub(crate) initial_energy: f64,
 }
 
 impl Frontier {
@@ -72,12 +75,14 @@ impl Frontier {
     /// Bisects triangle `t` (and whatever the closure needs) as long as every split keeps the
     /// front causal, halves no edge shorter than `2 min_edge` (m) and leaves every vertex star
     /// at most `max_star` triangles. Adds what changed to `refined`; `t` itself may be left
-    /// whole when a split was refused.
+    /// whole when a split was refused. `initial_energy(corners)` is the discrete energy of the
+    /// initial data on a triangle (scaled units).
     pub(crate) fn refine(
         &mut self,
         t: TriangleId,
         min_edge: f64,
         max_star: usize,
+        initial_energy: &dyn Fn([Point; 3]) -> f64,
         refined: &mut Refined,
     ) {
         let Self {
@@ -87,16 +92,32 @@ impl Frontier {
             pitcher,
             insist,
         } = self;
-        let first_vertex = mesh.vertices().len();
         let mut splits: Vec<Split> = Vec::new();
+        // Triangles asked about that still carry initial data: (step, corners, apex corner).
+        let mut initial_parents: Vec<(usize, [VertexId; 3], usize)> = Vec::new();
         let mut allow = |mesh: &Mesh, done: &[Split], t: TriangleId| {
-            let time = |v: VertexId| time_of(front, first_vertex, done, v);
-            let apex = mesh.triangles()[t as usize][mesh.refinement_edge(t)];
+            let time = |v: VertexId| front.time_after(done, v);
+            let corners = mesh.triangles()[t as usize];
+            let r = mesh.refinement_edge(t);
+            if !solved(solution, done, t) {
+                initial_parents.push((done.len(), corners, r));
+            }
             refinement_edge_length(mesh, t) >= 2.0 * min_edge
-                && mesh.vertex_triangles(apex).len() < max_star
+                && mesh.vertex_triangles(corners[r]).len() < max_star
                 && pitcher.may_bisect(mesh, time, t)
         };
         mesh.bisect(t, &mut allow, &mut splits);
+        // A step was done when its index is below the number of splits.
+        for (step, corners, r) in initial_parents {
+            if let Some(split) = splits.get(step) {
+                let [z, a, b] = [0, 1, 2].map(|i| corners[(r + i) % 3]);
+                let m = split.vertex;
+                let points = |c: [VertexId; 3]| c.map(|v| mesh.vertex(v));
+                refined.initial_energy += initial_energy(points([m, z, a]))
+                    + initial_energy(points([m, b, z]))
+                    - initial_energy(points(corners));
+            }
+        }
         for split in &splits {
             let t_mid = 0.5 * (front.time(split.ends[0]) + front.time(split.ends[1]));
             let v = front.push(t_mid);
@@ -130,14 +151,16 @@ pub(crate) fn refinement_edge_length(mesh: &Mesh, t: TriangleId) -> f64 {
     mesh.edge_length(e)
 }
 
-/// Front time (s) of `v`, which may be a vertex created by one of `done` (split `k` created
-/// vertex `first_vertex + k`) and not yet on `front`.
-fn time_of(front: &Front, first_vertex: usize, done: &[Split], v: VertexId) -> f64 {
-    match (v as usize).checked_sub(first_vertex) {
-        None => front.time(v),
-        Some(k) => {
-            let [a, b] = done[k].ends;
-            0.5 * (time_of(front, first_vertex, done, a) + time_of(front, first_vertex, done, b))
-        }
+/// True when an element lies under triangle `t`, which may be a triangle created by one of
+/// `done` and not yet in `solution` (it then lies on its parent's element).
+fn solved(solution: &FrontSolution, done: &[Split], t: TriangleId) -> bool {
+    if (t as usize) < solution.len() {
+        return solution.is_solved(t as usize);
     }
+    let parent = done
+        .iter()
+        .flat_map(|s| &s.halves)
+        .find_map(|&(kept, new)| (new == t).then_some(kept))
+        .expect("a triangle beyond the solution was created by a split of this call");
+    solved(solution, done, parent)
 }

@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use sdg_mesh::{Front, Pitcher, Tent, TriangleId};
 use sdg_scheduler::{Events, VertexId, Work};
 use sdg_solver::element::{FrontSolution, Geometry, evaluate};
-use sdg_solver::norms::{FrontEnergy, front_energy, slice_errors};
+use sdg_solver::norms::{front_energy, initial_energy, slice_errors};
 use sdg_solver::patch::{Initial, PatchReport, PatchSolver};
 use sdg_solver::system::{MAX_FIELDS, State};
 use sdg_solver::{Material, Plane};
@@ -84,6 +84,9 @@ pub struct RunSummary {
     pub final_time: f64,
     /// Maximum `c_max |grad tau|` over all front facets.
     pub max_slope_ratio: f64,
+    /// Largest relative momentum residual of an element (zero to round-off: every element
+    /// balances linear momentum).
+    pub max_momentum_residual: f64,
     /// `"deterministic"` or `"asynchronous"`.
     pub mode: &'static str,
     /// FNV-1a hash of the final front: vertex times, then every element's geometry and
@@ -183,7 +186,11 @@ struct Book {
     patches: u64,
     rejected: u64,
     refinements: u64,
-    /// Largest `energy0 + boundary work` so far (scaled units), the indicator's reference.
+    /// Energy of the initial data as the solver takes it in (scaled units): on the initial front,
+    /// corrected whenever refinement splits a triangle that still carries initial data.
+    initial_energy: f64,
+    /// Largest `initial_energy + boundary work` so far (scaled units), the indicator's
+    /// reference.
     energy_max: f64,
     elements: u64,
     dofs: u64,
@@ -209,7 +216,6 @@ struct Solve<'a> {
     /// `Book::energy_max` as bits, read by tents without the book's lock.
     energy_reference: AtomicU64,
     initial: Initial<'a>,
-    energy0: FrontEnergy,
     /// Basis of every element (each worker's solver has the same).
     basis: sdg_solver::basis::Basis,
     book: Mutex<Book>,
@@ -224,6 +230,16 @@ fn initial_state(problem: &Problem, initial: Initial, x: [f64; 2]) -> State {
 }
 
 impl Solve<'_> {
+    /// Discrete energy of the initial data on the triangle with `corners` (scaled units).
+    fn initial_energy(&self, corners: [[f64; 2]; 3]) -> f64 {
+        initial_energy(
+            &self.problem.system,
+            self.problem.loaded.config.solver.order,
+            corners,
+            |x| initial_state(self.problem, self.initial, x),
+        )
+    }
+
     /// True when the patch just solved for `tent` dissipates more than the tolerance allows.
     fn too_dissipative(
         &self,
@@ -267,7 +283,13 @@ impl Solve<'_> {
         let mut refined = Refined::default();
         for &(t, corners) in star {
             if state.mesh.triangles()[t as usize] == corners {
-                state.refine(t, adapt.min_edge, self.max_star, &mut refined);
+                state.refine(
+                    t,
+                    adapt.min_edge,
+                    self.max_star,
+                    &|corners| self.initial_energy(corners),
+                    &mut refined,
+                );
             }
         }
         if !star
@@ -279,6 +301,7 @@ impl Solve<'_> {
         let t_end = self.problem.loaded.config.time.end;
         let mut book = self.book.lock();
         book.refinements += refined.vertices.len() as u64;
+        book.initial_energy += refined.initial_energy;
         for &(_, t) in &refined.vertices {
             book.milestones.add_vertex(t);
             book.progress.grow(t_end - t);
@@ -304,7 +327,7 @@ impl Solve<'_> {
             |x| initial_state(self.problem, self.initial, x),
         );
         let totals = &book.totals;
-        let balance = self.energy0.total + totals.boundary_work - e.total - totals.dissipation;
+        let balance = book.initial_energy + totals.boundary_work - e.total - totals.dissipation;
         let _ = writeln!(
             book.history,
             "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e}",
@@ -435,9 +458,10 @@ impl<'a> Work<'a> for Solve<'a> {
         book.totals.energy_out += report.energy_out;
         book.totals.boundary_work += report.boundary_work;
         book.totals.dissipation += report.dissipation;
+        book.totals.momentum_residual = book.totals.momentum_residual.max(report.momentum_residual);
         book.energy_max = book
             .energy_max
-            .max(self.energy0.total + book.totals.boundary_work);
+            .max(book.initial_energy + book.totals.boundary_work);
         self.energy_reference
             .store(book.energy_max.to_bits(), Ordering::Relaxed);
         book.max_slope_ratio = book.max_slope_ratio.max(slope);
@@ -530,6 +554,7 @@ pub fn solve_job(
         pitcher,
     );
     if let Some(adapt) = &adapt {
+        // Energies of the initial data are taken on the refined front below.
         refine_to_max_edge(&mut state, adapt, max_star)?;
     }
     let energy0 = front_energy(
@@ -546,13 +571,13 @@ pub fn solve_job(
         max_star,
         energy_reference: AtomicU64::new(energy0.total.to_bits()),
         initial,
-        energy0,
         basis: basis.clone(),
         book: Mutex::new(Book {
             totals: PatchReport::default(),
             patches: 0,
             rejected: 0,
             refinements: 0,
+            initial_energy: energy0.total,
             energy_max: energy0.total,
             elements: 0,
             dofs: 0,
@@ -603,7 +628,7 @@ pub fn solve_job(
     let e = front_energy(mesh, front, solution, &basis, system, |x| {
         initial_state(problem, initial, x)
     });
-    let initial_j = rho * solve.energy0.total;
+    let initial_j = rho * book.initial_energy;
     let work = rho * book.totals.boundary_work;
     let dissipation = rho * book.totals.dissipation;
     let final_j = rho * e.total;
@@ -636,6 +661,7 @@ pub fn solve_job(
         dofs_per_patch: book.dofs as f64 / book.patches.max(1) as f64,
         final_time: front.min_time(),
         max_slope_ratio: book.max_slope_ratio,
+        max_momentum_residual: book.totals.momentum_residual,
         mode: if scheduler.deterministic {
             "deterministic"
         } else {
@@ -674,7 +700,7 @@ fn refine_to_max_edge(
             continue;
         }
         let before = state.mesh.triangles().len();
-        state.refine(t, adapt.min_edge, max_star, &mut refined);
+        state.refine(t, adapt.min_edge, max_star, &|_| 0.0, &mut refined);
         if state.mesh.triangles().len() == before {
             return Err(EngineError::Runtime(format!(
                 "adapt.max_edge = {} m cannot be reached: a vertex star would exceed {max_star} \

@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::geometry;
 use crate::mesh::{Mesh, TriangleId, VertexId};
+use crate::refine::Split;
 
 /// The front `t = tau(x)`: one time (seconds) per mesh vertex, interpolated linearly on each
 /// triangle. Every front triangle is a facet of the spacetime mesh built so far.
@@ -64,6 +65,19 @@ impl Front {
     pub fn push(&mut self, t: f64) -> VertexId {
         self.times.push(AtomicU64::new(t.to_bits()));
         (self.times.len() - 1) as VertexId
+    }
+
+    /// Time (s) of `v`, which may be a vertex that the splits `done` created and that is not on
+    /// the front yet: split `k` created vertex `len() + k`, at the mean of its ends' times (the
+    /// front's own value there, so bisection does not move the front).
+    pub fn time_after(&self, done: &[Split], v: VertexId) -> f64 {
+        match (v as usize).checked_sub(self.times.len()) {
+            None => self.time(v),
+            Some(k) => {
+                let [a, b] = done[k].ends;
+                0.5 * (self.time_after(done, a) + self.time_after(done, b))
+            }
+        }
     }
 
     /// A copy of all times, seconds.

@@ -8,8 +8,11 @@
 
 use std::collections::HashMap;
 
-use crate::geometry::Point;
+use crate::geometry::{self, Point};
 use crate::mesh::{Edge, EdgeId, Mesh, TriangleId, VertexId};
+
+/// Levels of bisection explored by [`Mesh::bisection_width_ratio`].
+pub const WIDTH_RATIO_DEPTH: u32 = 6;
 
 /// One edge bisection: edge `ends` split at its midpoint, the new vertex `vertex`.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -84,6 +87,38 @@ impl Mesh {
         let (z, a, b) = (p[r], p[(r + 1) % 3], p[(r + 2) % 3]);
         let m = midpoint(a, b);
         [[m, z, a], [m, b, z]]
+    }
+
+    /// The smallest ratio of a child's minimum width (smallest altitude) to its parent's over
+    /// every bisection newest-vertex bisection can make on this mesh: at least 1/2 for any
+    /// triangle, 1/sqrt(2) for right isosceles ones. Each initial triangle is bisected on its own
+    /// to depth [`WIDTH_RATIO_DEPTH`], which visits all of its descendants' shapes (there are at
+    /// most four up to similarity, reached within three levels).
+    pub fn bisection_width_ratio(&self) -> f64 {
+        let width = |p: [Point; 3]| {
+            geometry::altitudes(p)
+                .into_iter()
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut ratio: f64 = 1.0;
+        let mut stack = Vec::new();
+        for t in 0..self.triangles.len() as TriangleId {
+            let r = self.refinement_edge(t);
+            let p = self.triangle_points(t);
+            // Corners apex first: the refinement edge is opposite corner 0.
+            stack.push(([p[r], p[(r + 1) % 3], p[(r + 2) % 3]], 0));
+            while let Some(([z, a, b], depth)) = stack.pop() {
+                let m = midpoint(a, b);
+                let parent = width([z, a, b]);
+                for child in [[m, z, a], [m, b, z]] {
+                    ratio = ratio.min(width(child) / parent);
+                    if depth + 1 < WIDTH_RATIO_DEPTH {
+                        stack.push((child, depth + 1));
+                    }
+                }
+            }
+        }
+        ratio
     }
 
     /// Consistency check used by tests: rebuilds the adjacency from scratch with [`Mesh::new`]
@@ -484,6 +519,37 @@ mod tests {
         let crack = m.tag_id("crack");
         assert!(m.edges().iter().all(|e| e.tag != crack || e.is_interface()));
         assert!(tagged(&m, "crack").0 > 3);
+    }
+
+    #[test]
+    fn width_ratio_bounds_every_bisection_refinement_makes() {
+        let right = square(3, Diagonal::Right, 0.0).build().unwrap();
+        assert!((right.bisection_width_ratio() - 0.5f64.sqrt()).abs() < 1e-12);
+        let mut m = square(4, Diagonal::Alternate, 0.2).build().unwrap();
+        let kappa = m.bisection_width_ratio();
+        assert!((0.5..0.5f64.sqrt()).contains(&kappa), "{kappa}");
+        let width =
+            |m: &Mesh, t: TriangleId| m.altitudes(t).into_iter().fold(f64::INFINITY, f64::min);
+        let mut rng = XorShift(99);
+        let mut checked = 0;
+        for _ in 0..300 {
+            let t = rng.below(m.triangles().len());
+            let before: Vec<f64> = (0..m.triangles().len() as TriangleId)
+                .map(|u| width(&m, u))
+                .collect();
+            let splits = refine(&mut m, t);
+            // A single split has the triangles of `before` as parents.
+            if let [split] = &splits[..] {
+                for &(kept, new) in &split.halves {
+                    for child in [kept, new] {
+                        let r = width(&m, child) / before[kept as usize];
+                        assert!(r >= kappa * (1.0 - 1e-12), "{r} < {kappa}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 200, "{checked}");
     }
 
     #[test]

@@ -71,7 +71,8 @@ pub struct Pitcher {
     c_max: f64,
     safety: f64,
     t_end: f64,
-    /// `kappa` in `B_T = kappa s (1 - GUARD) h_T / c`: 1, or 1/2 on meshes that get refined.
+    /// `kappa` in `B_T = kappa s (1 - GUARD) h_T / c`: 1, or on meshes that get refined the
+    /// smallest child-to-parent width ratio of bisection (at least 1/2).
     margin: f64,
 }
 
@@ -99,11 +100,11 @@ impl Pitcher {
         Ok(pitcher)
     }
 
-    /// The same pitcher with budgets halved (`kappa = 1/2`), so that bisecting any front
-    /// triangle whose time spread is within its budget keeps the front causal for later
-    /// tents; see [`Self::may_bisect`] and `docs/pitching.md`.
+    /// The same pitcher with budgets scaled by `kappa` = [`Mesh::bisection_width_ratio`]
+    /// (1/sqrt(2) on right isosceles meshes, at least 1/2 on any), so that every front triangle
+    /// within its budget may be bisected ([`Self::may_bisect`]); see `docs/pitching.md`.
     pub fn for_refinement(mut self, mesh: &Mesh) -> Self {
-        self.margin = 0.5;
+        self.margin = mesh.bisection_width_ratio();
         self.update(mesh, 0..mesh.triangles().len() as TriangleId);
         self
     }
@@ -123,8 +124,8 @@ impl Pitcher {
     /// time spread (vertex times from `time`, s) is at most `s (1 - GUARD) / c` times the
     /// smallest altitude of either child. Pitching never widens a spread beyond
     /// `max(B_T, current spread)` with `B_T <= s (1 - GUARD) h_T / c`, so children that pass keep
-    /// every later facet causal; with `kappa = 1/2` every triangle within its budget passes
-    /// (a child's smallest altitude is at least half its parent's).
+    /// every later facet causal; with [`Self::for_refinement`] every triangle within its budget
+    /// passes.
     pub fn may_bisect(&self, mesh: &Mesh, time: impl Fn(VertexId) -> f64, t: TriangleId) -> bool {
         let times = mesh.triangles()[t as usize].map(time);
         let spread = times.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))

@@ -80,7 +80,9 @@ pub trait Work<'a>: Sync {
     /// Pitches the tent at `v` and solves its patch; returns the vertex's new time (s; equal to
     /// the old one when the tent is rejected) and the outcome. Called with `v` claimed
     /// exclusively and its neighbours shared, and `v` a local minimum of the front below the end
-    /// time. May queue events.
+    /// time. A tent that leaves `v` in place must make sure an event changes something first
+    /// (otherwise it would be retried forever). May queue events, but only events queued by
+    /// [`Work::record`] run in a fixed order in deterministic mode.
     fn tent(
         &self,
         state: &Self::State,

@@ -155,6 +155,11 @@ impl FrontSolution {
         self.cells.len() - 1
     }
 
+    /// True once an element lies under triangle `t` (false while it carries initial data).
+    pub fn is_solved(&self, t: usize) -> bool {
+        self.cells[t].lock().solved
+    }
+
     /// Copies the element under triangle `t` into `geometry` and `coefficients` (basis length
     /// times width values); returns false, copying nothing, while `t` carries initial data.
     pub fn load(&self, t: usize, geometry: &mut Geometry, coefficients: &mut [f64]) -> bool {

@@ -153,3 +153,27 @@ pub fn front_energy(
     e.total = e.kinetic + e.strain + e.flux;
     e
 }
+
+/// Energy (scaled units) of the initial state `initial(x)` on the flat facet of the triangle
+/// with `corners` (m), with the patch solver's face rule for order `degree`: what the solver
+/// takes in as inflow there.
+pub fn initial_energy(
+    system: &System,
+    degree: usize,
+    corners: [[f64; 2]; 3],
+    initial: impl Fn([f64; 2]) -> crate::system::State,
+) -> f64 {
+    let rule = quadrature::triangle(2 * degree + 2);
+    let p = corners;
+    let area2 =
+        (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+    rule.points
+        .iter()
+        .zip(&rule.weights)
+        .map(|(xi, &w)| {
+            let x =
+                [0, 1].map(|i| p[0][i] + xi[0] * (p[1][i] - p[0][i]) + xi[1] * (p[2][i] - p[0][i]));
+            w * area2.abs() * system.energy_density(&initial(x))
+        })
+        .sum()
+}

@@ -63,6 +63,8 @@ pub struct PatchReport {
     pub boundary_work: f64,
     /// See [`ElementReport::dissipation`].
     pub dissipation: f64,
+    /// Largest [`ElementReport::momentum_residual`] of its elements.
+    pub momentum_residual: f64,
 }
 
 /// Initial data: the state at `t = 0`, a plane wave or rest.
@@ -426,6 +428,7 @@ impl PatchSolver {
             report.energy_out += r.energy_out;
             report.boundary_work += r.boundary_work;
             report.dissipation += r.dissipation;
+            report.momentum_residual = report.momentum_residual.max(r.momentum_residual);
             self.reports[i] = r;
             self.displacement(i, initial);
         }

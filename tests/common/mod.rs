@@ -3,6 +3,8 @@
 
 //! Helpers shared by the integration tests: run a config text through the engine.
 
+use std::path::Path;
+
 use sdg_engine::{Config, LoadedConfig, Problem, RunOptions, RunSummary};
 
 /// Parses `text` with `overrides`, solves it in deterministic mode on two threads with outputs in
@@ -24,6 +26,61 @@ pub fn run(text: &str, overrides: &[String]) -> (RunSummary, tempfile::TempDir) 
     };
     let (summary, _) = sdg_engine::solve_job(&problem, &options).expect("run succeeds");
     (summary, dir)
+}
+
+/// Runs `problem` on `threads` threads into a fresh folder; returns the summary and the folder.
+pub fn solve(
+    problem: &Problem,
+    threads: usize,
+    deterministic: bool,
+) -> (RunSummary, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let options = RunOptions {
+        output_dir: Some(dir.path().to_path_buf()),
+        threads: Some(threads),
+        deterministic,
+        progress: false,
+    };
+    let (summary, _) = sdg_engine::solve_job(problem, &options).unwrap();
+    (summary, dir)
+}
+
+/// Every output file, with the wall-clock fields (`wall_time_s`, `patches_per_second`,
+/// `threads`) removed from `summary.json`.
+pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let path = e.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            let mut bytes = std::fs::read(&path).unwrap();
+            if name == "summary.json" {
+                let mut json: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+                for key in ["wall_time_s", "patches_per_second", "threads"] {
+                    json.as_object_mut().unwrap().remove(key);
+                }
+                bytes = serde_json::to_vec_pretty(&json).unwrap();
+            }
+            (name, bytes)
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+/// The shipped config `configs/NAME` with `overrides`, set up.
+pub fn shipped(name: &str, overrides: &[&str]) -> Problem {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(name);
+    let text = std::fs::read_to_string(path).expect("shipped config");
+    let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    let config = Config::parse(&text, name, &overrides).expect("valid config");
+    Problem::setup(LoadedConfig {
+        config,
+        file: name.into(),
+    })
+    .expect("valid problem")
 }
 
 /// `key=value` overrides from pairs.

@@ -1,0 +1,85 @@
+//! Adaptive refinement on `configs/adaptive_pulse.toml`: rejected patches and bisections keep
+//! every element's momentum balance and the global energy balance, make the run more accurate
+//! than the unrefined mesh, and give bitwise identical results for any thread count in
+//! deterministic mode.
+
+mod common;
+
+use common::{outputs, shipped, solve};
+
+/// The shipped adaptive pulse, stopped once the pulse has moved about 3 mm.
+const SHORT: [&str; 2] = ["time.end=1.5e-6", "output.snapshot_times=[1.5e-6]"];
+
+#[test]
+fn refinement_conserves_momentum_and_energy_and_beats_the_unrefined_mesh() {
+    let adaptive = shipped("adaptive_pulse.toml", &SHORT);
+    let (s, _dir) = solve(&adaptive, 2, true);
+    eprintln!(
+        "adaptive: {} patches, {} rejected, {} refinements, edges {:e} to {:e}, error {:?}, \
+         balance {:e}, momentum {:e}",
+        s.patches,
+        s.rejected_patches,
+        s.refinements,
+        s.min_edge,
+        s.max_edge,
+        s.error,
+        s.energy.balance_residual_rel,
+        s.max_momentum_residual
+    );
+    assert!(s.refinements > 100 && s.rejected_patches > 10, "{s:?}");
+    assert!(s.energy.balance_residual_rel.abs() < 1e-8, "{:?}", s.energy);
+    assert!(s.max_momentum_residual < 1e-10);
+    assert!(s.max_slope_ratio < 0.9);
+    let min_edge = adaptive.loaded.config.adapt.min_edge.unwrap();
+    assert!(s.min_edge >= min_edge * (1.0 - 1e-12) && s.min_edge < 2.0 * min_edge);
+    assert_eq!(s.final_time, 1.5e-6);
+
+    let mut off = SHORT.to_vec();
+    off.push("adapt.enabled=false");
+    let (coarse, _dir) = solve(&shipped("adaptive_pulse.toml", &off), 2, true);
+    let (a, c) = (s.error.unwrap(), coarse.error.unwrap());
+    eprintln!("unrefined: {} patches, error {c:?}", coarse.patches);
+    assert!(
+        a.velocity_l2_rel < 0.25 * c.velocity_l2_rel,
+        "{a:?} vs {c:?}"
+    );
+    assert!(a.stress_l2_rel < 0.25 * c.stress_l2_rel, "{a:?} vs {c:?}");
+}
+
+#[test]
+fn adaptive_deterministic_runs_are_bitwise_identical_for_1_2_and_4_threads() {
+    let problem = shipped(
+        "adaptive_pulse.toml",
+        &["time.end=8e-7", "output.snapshot_times=[4e-7, 8e-7]"],
+    );
+    let (reference, dir) = solve(&problem, 1, true);
+    assert!(reference.refinements > 0);
+    let expected = outputs(dir.path());
+    for threads in [2, 4] {
+        let (summary, dir) = solve(&problem, threads, true);
+        assert_eq!(
+            summary.state_hash, reference.state_hash,
+            "{threads} threads"
+        );
+        assert_eq!(summary.refinements, reference.refinements);
+        for ((name, a), (other, b)) in expected.iter().zip(&outputs(dir.path())) {
+            assert_eq!(name, other);
+            assert!(a == b, "{name} differs with {threads} threads");
+        }
+    }
+}
+
+#[test]
+fn asynchronous_adaptive_run_conserves_energy() {
+    let (s, _dir) = solve(
+        &shipped(
+            "adaptive_pulse.toml",
+            &["time.end=8e-7", "output.snapshot_times=[]"],
+        ),
+        2,
+        false,
+    );
+    assert!(s.refinements > 0);
+    assert!(s.energy.balance_residual_rel.abs() < 1e-8, "{:?}", s.energy);
+    assert!(s.max_momentum_residual < 1e-10);
+}
