@@ -1,8 +1,10 @@
 //! Space triangulations for tent-pitched spacetime meshes: the mesh and its adjacency, structured
-//! and Gmsh-read meshes, newest-vertex bisection, the advancing front and the tent pitcher.
+//! and Gmsh-read meshes, newest-vertex bisection and coarsening, the advancing front and the tent
+//! pitcher.
 //!
 //! Units are SI: metres for lengths, seconds for times.
 
+pub mod coarsen;
 pub mod front;
 pub mod geometry;
 pub mod gmsh;
@@ -11,6 +13,7 @@ pub mod rectangle;
 pub mod refine;
 pub mod tent;
 
+pub use coarsen::Merge;
 pub use front::Front;
 pub use geometry::Point;
 pub use gmsh::{GmshError, read_msh};

@@ -84,6 +84,10 @@ pub struct Mesh {
     pub(crate) vertex_triangles: Vec<Vec<TriangleId>>,
     /// Per vertex, its neighbours in increasing id order.
     pub(crate) vertex_neighbors: Vec<Vec<VertexId>>,
+    /// Per vertex, its bisection generation: 0 for the vertices of [`Mesh::new`], and one more
+    /// than the largest generation among the corners of the triangles whose bisection created
+    /// it. A triangle made by bisection thus has its newest vertex as its youngest corner.
+    pub(crate) generation: Vec<u32>,
     pub(crate) tag_names: Vec<String>,
 }
 
@@ -225,6 +229,7 @@ impl Mesh {
             })
             .collect();
         Ok(Self {
+            generation: vec![0; vertices.len()],
             vertices,
             triangles,
             triangle_edges,
@@ -317,8 +322,9 @@ impl Mesh {
         geometry::angles(self.triangle_points(t))
     }
 
-    /// The same triangulation, tags and refinement edges with every vertex moved by `f`
-    /// (metres to metres). Fails when a triangle degenerates or folds over a neighbour.
+    /// The same triangulation, tags, refinement edges and vertex generations with every vertex
+    /// moved by `f` (metres to metres). Fails when a triangle degenerates or folds over a
+    /// neighbour.
     pub fn map_vertices(&self, f: impl Fn(Point) -> Point) -> Result<Mesh, MeshError> {
         let vertices = self.vertices.iter().map(|&p| f(p)).collect();
         let mut mesh = Mesh::new(
@@ -332,6 +338,7 @@ impl Mesh {
             let corner = mesh.triangles[t].iter().position(|&v| v == z);
             mesh.refinement_edge[t] = corner.expect("the same triangle") as u8;
         }
+        mesh.generation.clone_from(&self.generation);
         Ok(mesh)
     }
 

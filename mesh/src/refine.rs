@@ -124,10 +124,14 @@ impl Mesh {
     /// Consistency check used by tests: rebuilds the adjacency from scratch with [`Mesh::new`]
     /// on the current vertices, triangles and tags and compares edges (end vertices, tags and
     /// triangles), triangle edges, vertex stars and vertex neighbours, and checks that every
-    /// triangle is counter-clockwise with positive area. Returns the first difference found.
+    /// triangle is counter-clockwise with positive area and every vertex has a generation.
+    /// Returns the first difference found.
     pub fn validate(&self) -> Result<(), String> {
         if self.refinement_edge.len() != self.triangles.len() {
             return Err("one refinement edge per triangle expected".into());
+        }
+        if self.generation.len() != self.vertices.len() {
+            return Err("one generation per vertex expected".into());
         }
         for t in 0..self.triangles.len() as TriangleId {
             if self.area(t) <= 0.0 {
@@ -193,6 +197,12 @@ impl Mesh {
         let old = self.edges[e as usize];
         let [p, q] = old.vertices;
         let m = next_id(self.vertices.len());
+        let generation = (old.triangles.into_iter().flatten())
+            .flat_map(|k| self.triangles[k as usize])
+            .map(|v| self.generation[v as usize])
+            .max()
+            .expect("an edge has a triangle");
+        self.generation.push(generation + 1);
         self.vertices.push(midpoint(self.vertex(p), self.vertex(q)));
         self.vertex_triangles.push(Vec::new());
         self.vertex_neighbors.push(vec![p, q]);
@@ -258,7 +268,7 @@ impl Mesh {
 }
 
 /// Midpoint of segment `ab`; symmetric in `a` and `b` to the last bit.
-fn midpoint(a: Point, b: Point) -> Point {
+pub(crate) fn midpoint(a: Point, b: Point) -> Point {
     [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
 }
 
@@ -275,7 +285,7 @@ fn add_triangle(edge: &mut Edge, t: TriangleId) {
 }
 
 /// Orders an edge's triangles: the smaller id first, `None` last.
-fn sort_pair(pair: &mut [Option<TriangleId>; 2]) {
+pub(crate) fn sort_pair(pair: &mut [Option<TriangleId>; 2]) {
     match *pair {
         [None, Some(_)] => pair.swap(0, 1),
         [Some(a), Some(b)] if b < a => pair.swap(0, 1),
