@@ -15,7 +15,7 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::{MatMut, MatRef, Par};
 
-use sdg_mesh::{Front, Mesh, TagId, Tent, TriangleId};
+use sdg_mesh::{Front, Mesh, TagId, Tent, TriangleId, VertexId};
 
 use crate::basis::Basis;
 use crate::boundary::{Boundary, Condition};
@@ -79,11 +79,18 @@ pub enum Initial<'a> {
 /// Per element of the patch being solved.
 #[derive(Clone, Copy, Debug, Default)]
 struct Slot {
+    /// The front triangle the element's top face (`TOP`) becomes.
     triangle: TriangleId,
-    /// Position of the tent vertex in the triangle.
-    corner: usize,
     vertices: [SpacePoint; 4],
     geometry: Geometry,
+    /// Inflow faces, each with the index of the element below it in [`Inflow`]: one for a tent
+    /// element.
+    inflow: [(Face, usize); 2],
+    inflow_count: usize,
+    /// Vertical faces: the face, the index in the patch of the element across it (none on the
+    /// domain boundary), and the tag of its space edge.
+    sides: [(Face, Option<usize>, Option<TagId>); 2],
+    side_count: usize,
 }
 
 /// A face of a tetrahedron: its corners (indices into the element's vertices) and the opposite one.
@@ -94,14 +101,22 @@ const SIDE_A: Face = ([0, 1, 3], 2);
 const SIDE_B: Face = ([0, 2, 3], 1);
 
 impl Slot {
-    /// The inflow face, its corners in the front triangle's own vertex order: quadrature points
-    /// on a front triangle are then the same whichever vertex pitches it, so integrals of initial
-    /// data match [`crate::norms::front_energy`] exactly.
-    fn bottom(&self) -> Face {
-        // Tetrahedron vertex k (k < 3) is triangle corner (corner + k) mod 3.
-        let c = self.corner;
-        ([0, 1, 2].map(|k| (k + 3 - c) % 3), 3)
+    fn inflows(&self) -> &[(Face, usize)] {
+        &self.inflow[..self.inflow_count]
     }
+
+    fn sides(&self) -> &[(Face, Option<usize>, Option<TagId>)] {
+        &self.sides[..self.side_count]
+    }
+}
+
+/// The inflow face of a tent element whose tent vertex is corner `corner` of its triangle, its
+/// corners in the triangle's own vertex order: quadrature points on a front triangle are then the
+/// same whichever vertex pitches it, so integrals of initial data match
+/// [`crate::norms::front_energy`] exactly.
+fn tent_bottom(corner: usize) -> Face {
+    // Tetrahedron vertex k (k < 3) is triangle corner (corner + k) mod 3.
+    ([0, 1, 2].map(|k| (k + 3 - corner) % 3), 3)
 }
 
 /// A face's first corner, its two edge vectors from there, its outward unit normal and twice
@@ -275,17 +290,13 @@ impl PatchSolver {
         let v = tent.vertex;
         let star = mesh.vertex_triangles(v);
         let d = star.len();
-        let n = self.basis.len();
-        let fields = self.system.fields();
-        let m = n * fields;
-        let dofs = d * m;
         assert!(
             d <= self.slots.len(),
             "vertex star larger than the solver was sized for"
         );
         self.used = d;
         let pv = mesh.vertex(v);
-        for (slot, &t) in self.slots.iter_mut().zip(star) {
+        for (i, (slot, &t)) in self.slots.iter_mut().zip(star).enumerate() {
             let tri = mesh.triangles()[t as usize];
             let corner = tri
                 .iter()
@@ -304,13 +315,103 @@ impl PatchSolver {
             ];
             *slot = Slot {
                 triangle: t,
-                corner,
                 vertices,
                 geometry: Geometry::new(&vertices),
+                inflow: [(tent_bottom(corner), i), (TOP, usize::MAX)],
+                inflow_count: 1,
+                sides: vertical_faces(mesh, star, t, corner),
+                side_count: 2,
             };
         }
 
-        self.inflow.gather(&self.slots[..d], solution);
+        self.inflow.gather(star, solution);
+        self.solve_slots(boundary, initial)
+    }
+
+    /// Solves the coarsening patch that removes vertex `m`, the midpoint of edge `ends` (as
+    /// [`Mesh::coarsenable`] reports it): one tetrahedron `(m, z, a, b)` per parent triangle
+    /// `(z, a, b)` of `m`'s bisection, between the two children `(m, z, a)` and `(m, b, z)` on
+    /// `front` (inflow, each from its own element in `solution`) and the parent's facet through
+    /// `a`, `b`, `z` (outflow); the vertical face over `ab` couples the two parents, or carries
+    /// the boundary condition. This is the tent at `m` raised onto edge `ab`, with one polynomial
+    /// per parent (seed Fig. 4.6), so that every parent again lies on one element. The caller
+    /// checks that `m` is below edge `ab` on the front and that the parents' facets are causal.
+    /// [`Self::commit_to`] stores the result. Returns `None` when `m` is not coarsenable.
+    pub fn solve_coarsening(
+        &mut self,
+        mesh: &Mesh,
+        front: &Front,
+        m: VertexId,
+        boundary: &Boundary,
+        initial: Initial,
+        solution: &FrontSolution,
+    ) -> Option<PatchReport> {
+        let ends = mesh.coarsenable(m)?;
+        let c = self.system.c_ref();
+        let at = |w: VertexId| {
+            let p = mesh.vertex(w);
+            [p[0], p[1], c * front.time(w)]
+        };
+        // Children (m, z, a): the ones whose corner after m is an apex and before m an end.
+        let mut sources = [0; 4];
+        let mut parents = 0;
+        for &t in mesh.vertex_triangles(m) {
+            let tri = mesh.triangles()[t as usize];
+            let k = tri
+                .iter()
+                .position(|&w| w == m)
+                .expect("star triangle contains m");
+            let (z, a) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
+            if !ends.contains(&a) {
+                continue;
+            }
+            let b = if a == ends[0] { ends[1] } else { ends[0] };
+            let other = *mesh
+                .vertex_triangles(m)
+                .iter()
+                .find(|&&u| {
+                    let o = mesh.triangles()[u as usize];
+                    o.contains(&b) && o.contains(&z)
+                })
+                .expect("the sibling child (m, b, z) is in the star");
+            let e = mesh.triangle_edges(t)[(k + 1) % 3];
+            sources[2 * parents] = t;
+            sources[2 * parents + 1] = other;
+            let vertices = [at(m), at(z), at(a), at(b)];
+            self.slots[parents] = Slot {
+                triangle: t,
+                vertices,
+                geometry: Geometry::new(&vertices),
+                inflow: [
+                    (([0, 1, 2], 3), 2 * parents),
+                    (([0, 3, 1], 2), 2 * parents + 1),
+                ],
+                inflow_count: 2,
+                sides: [
+                    (([0, 2, 3], 1), None, mesh.edges()[e as usize].tag),
+                    (TOP, None, None),
+                ],
+                side_count: 1,
+            };
+            parents += 1;
+        }
+        if parents == 2 {
+            self.slots[0].sides[0].1 = Some(1);
+            self.slots[1].sides[0].1 = Some(0);
+        }
+        self.used = parents;
+        self.inflow.gather(&sources[..2 * parents], solution);
+        Some(self.solve_slots(boundary, initial))
+    }
+
+    /// Assembles and solves the patch of the first `self.used` slots, whose inflow sources are
+    /// gathered, and computes the element reports.
+    fn solve_slots(&mut self, boundary: &Boundary, initial: Initial) -> PatchReport {
+        let c = self.system.c_ref();
+        let d = self.used;
+        let n = self.basis.len();
+        let fields = self.system.fields();
+        let m = n * fields;
         self.blocks.reset(d, m);
         let a_mu = [
             self.system.a_n([1.0, 0.0, 0.0]),
@@ -333,19 +434,16 @@ impl PatchSolver {
                 }
                 add_kron(self.blocks.block_mut(i, i), m, n, fields, h, &b);
             }
-            // Inflow face: target is the earlier side's trace.
-            let under = self.inflow.below(i);
-            let (system, basis) = (&self.system, &self.basis);
-            let (phi, values) = (&mut self.phi, &mut self.values);
-            let mass = &mut self.mass[..n * n];
-            mass.fill(0.0);
-            let mut an = [[0.0; MAX_FIELDS]; MAX_FIELDS];
-            let rhs = self.blocks.rhs_mut(i);
-            face_points(
-                &self.face_rule,
-                &slot.vertices,
-                slot.bottom(),
-                |x, w, nrm| {
+            // Inflow faces: the target is the earlier side's trace.
+            for &(face, source) in slot.inflows() {
+                let under = self.inflow.below(source);
+                let (system, basis) = (&self.system, &self.basis);
+                let (phi, values) = (&mut self.phi, &mut self.values);
+                let mass = &mut self.mass[..n * n];
+                mass.fill(0.0);
+                let mut an = [[0.0; MAX_FIELDS]; MAX_FIELDS];
+                let rhs = self.blocks.rhs_mut(i);
+                face_points(&self.face_rule, &slot.vertices, face, |x, w, nrm| {
                     an = system.a_n(nrm);
                     let q_prev = inflow_state(system, basis, under, initial, x, phi, values);
                     basis.eval(slot.geometry.to_reference(x), phi);
@@ -356,11 +454,14 @@ impl PatchSolver {
                             *r -= w * p * a;
                         }
                     }
-                },
-            );
-            add_kron(self.blocks.block_mut(i, i), m, n, fields, mass, &an);
+                });
+                add_kron(self.blocks.block_mut(i, i), m, n, fields, mass, &an);
+            }
+            let (system, basis) = (&self.system, &self.basis);
+            let phi = &mut self.phi;
+            let mass = &mut self.mass[..n * n];
             // Vertical faces: Riemann fluxes with the ring neighbour or the boundary data.
-            for (face, neighbour, tag) in vertical_faces(mesh, star, &slot) {
+            for &(face, neighbour, tag) in slot.sides() {
                 let condition = boundary.condition(tag);
                 let normal = face_normal(&slot.vertices, face);
                 let (m_a, m_b) =
@@ -414,16 +515,16 @@ impl PatchSolver {
             }
         }
 
-        ring_order(mesh, star, &self.slots[..d], &mut self.order);
+        ring_order(&self.slots[..d], &mut self.order);
         self.blocks.solve(&self.order[..d]);
 
         let mut report = PatchReport {
             elements: d,
-            dofs,
+            dofs: d * m,
             ..Default::default()
         };
         for i in 0..d {
-            let r = self.element_post(mesh, star, i, boundary, initial);
+            let r = self.element_post(i, boundary, initial);
             report.energy_in += r.energy_in;
             report.energy_out += r.energy_out;
             report.boundary_work += r.boundary_work;
@@ -438,10 +539,17 @@ impl PatchSolver {
     /// Replaces the elements under the star's front triangles in `solution` by the last patch
     /// solved: its tent is accepted. The caller still owns the star.
     pub fn commit(&self, solution: &FrontSolution) {
+        self.commit_to(solution, |t| t);
+    }
+
+    /// Stores the elements of the last patch in `solution` under the triangles `id(t)`, where `t`
+    /// is the triangle each element's top face was built for: the tent's star triangles, or for
+    /// a coarsening patch the child `(m, z, a)` whose id the parent takes, moved by renumbering.
+    pub fn commit_to(&self, solution: &FrontSolution, id: impl Fn(TriangleId) -> TriangleId) {
         let size = self.basis.len() * self.width();
         for (i, slot) in self.slots[..self.used].iter().enumerate() {
             solution.store(
-                slot.triangle as usize,
+                id(slot.triangle) as usize,
                 &slot.geometry,
                 &self.output[i * size..(i + 1) * size],
             );
@@ -450,14 +558,7 @@ impl PatchSolver {
 
     /// Energy terms and diagnostics of element `i` after the solve; also copies its field
     /// coefficients into the output buffer.
-    fn element_post(
-        &mut self,
-        mesh: &Mesh,
-        star: &[TriangleId],
-        i: usize,
-        boundary: &Boundary,
-        initial: Initial,
-    ) -> ElementReport {
+    fn element_post(&mut self, i: usize, boundary: &Boundary, initial: Initial) -> ElementReport {
         let n = self.basis.len();
         let fields = self.system.fields();
         let nv = self.system.displacement_components();
@@ -496,22 +597,24 @@ impl PatchSolver {
             }
         });
         add_momentum(face_momentum);
-        let under = self.inflow.below(i);
-        face_momentum = [0.0; 2];
-        face_points(face_rule, &slot.vertices, slot.bottom(), |x, w, nrm| {
-            let an = system.a_n(nrm);
-            let q_prev = inflow_state(system, basis, under, initial, x, phi_j, values);
-            let q = own(x, phi);
-            let aq_prev = system.apply(&an, &q_prev);
-            r.energy_in -= 0.5 * w * system.dot(&q_prev, &aq_prev);
-            let jump = std::array::from_fn(|k| q[k] - q_prev[k]);
-            r.dissipation -= 0.5 * w * system.dot(&jump, &system.apply(&an, &jump));
-            for (f, a) in face_momentum.iter_mut().zip(&aq_prev[..nv]) {
-                *f += w * a;
-            }
-        });
-        add_momentum(face_momentum);
-        for (face, neighbour, tag) in vertical_faces(mesh, star, &slot) {
+        for &(face, source) in slot.inflows() {
+            let under = self.inflow.below(source);
+            face_momentum = [0.0; 2];
+            face_points(face_rule, &slot.vertices, face, |x, w, nrm| {
+                let an = system.a_n(nrm);
+                let q_prev = inflow_state(system, basis, under, initial, x, phi_j, values);
+                let q = own(x, phi);
+                let aq_prev = system.apply(&an, &q_prev);
+                r.energy_in -= 0.5 * w * system.dot(&q_prev, &aq_prev);
+                let jump = std::array::from_fn(|k| q[k] - q_prev[k]);
+                r.dissipation -= 0.5 * w * system.dot(&jump, &system.apply(&an, &jump));
+                for (f, a) in face_momentum.iter_mut().zip(&aq_prev[..nv]) {
+                    *f += w * a;
+                }
+            });
+            add_momentum(face_momentum);
+        }
+        for &(face, neighbour, tag) in slot.sides() {
             let condition = boundary.condition(tag);
             face_momentum = [0.0; 2];
             face_points(face_rule, &slot.vertices, face, |x, w, nrm| {
@@ -580,14 +683,11 @@ impl PatchSolver {
                 rhs[d * n + k] = det * self.output[i * n * width + k * width + d] / c;
             }
         }
-        let under = self.inflow.below(i);
         let (system, basis) = (&self.system, &self.basis);
         let (phi, phi_prev, values) = (&mut self.phi, &mut self.phi_other, &mut self.values);
-        face_points(
-            &self.face_rule,
-            &slot.vertices,
-            slot.bottom(),
-            |x, w, nrm| {
+        for &(face, source) in slot.inflows() {
+            let under = self.inflow.below(source);
+            face_points(&self.face_rule, &slot.vertices, face, |x, w, nrm| {
                 let u_prev =
                     inflow_displacement(system, basis, under, initial, x, phi_prev, values);
                 basis.eval(slot.geometry.to_reference(x), phi);
@@ -599,8 +699,8 @@ impl PatchSolver {
                         rhs[d * n + k] -= w * nrm[2] * phi[k] * u_prev[d];
                     }
                 }
-            },
-        );
+            });
+        }
         let stack = MemStack::new(&mut self.stack);
         let lu = MatMut::from_column_major_slice_mut(small, n, n);
         let (_, perm) = factor::lu_in_place(
@@ -642,14 +742,14 @@ fn add_kron(target: &mut [f64], m: usize, n: usize, fields: usize, scalar: &[f64
 }
 
 /// Orders the star's elements along the ring around the pole: each chain from its element
-/// without a neighbour across `SIDE_A` (boundary tents), then closed rings, walking across
-/// `SIDE_B` (counter-clockwise). Elimination in this order fills only blocks that couple to a
-/// ring's last element.
-fn ring_order(mesh: &Mesh, star: &[TriangleId], slots: &[Slot], order: &mut Vec<usize>) {
+/// without a neighbour across its first side (`SIDE_A`, boundary tents), then closed rings,
+/// walking across the second (`SIDE_B`, counter-clockwise). Elimination in this order fills only
+/// blocks that couple to a ring's last element.
+fn ring_order(slots: &[Slot], order: &mut Vec<usize>) {
     order.clear();
     let d = slots.len();
-    let next = |i: usize| vertical_faces(mesh, star, &slots[i])[1].1;
-    let starts_chain = |i: usize| vertical_faces(mesh, star, &slots[i])[0].1.is_none();
+    let next = |i: usize| slots[i].sides[1].1;
+    let starts_chain = |i: usize| slots[i].sides[0].1.is_none();
     for pass in [true, false] {
         for first in 0..d {
             if order.contains(&first) || (pass && !starts_chain(first)) {
@@ -676,24 +776,26 @@ fn add_outer(out: &mut [f64], w: f64, a: &[f64], b: &[f64]) {
     }
 }
 
-/// The two vertical faces of an element: the face, the index in the star of the element across
-/// it (none on the domain boundary), and the tag of its space edge.
+/// The two vertical faces of the tent element over triangle `t`, whose tent vertex is its corner
+/// `corner`: the face, the index in the star of the element across it (none on the domain
+/// boundary), and the tag of its space edge.
 fn vertical_faces(
     mesh: &Mesh,
     star: &[TriangleId],
-    slot: &Slot,
+    t: TriangleId,
+    corner: usize,
 ) -> [(Face, Option<usize>, Option<TagId>); 2] {
     [(SIDE_A, 2), (SIDE_B, 1)].map(|(face, opposite_corner)| {
-        let e = mesh.triangle_edges(slot.triangle)[(slot.corner + opposite_corner) % 3];
+        let e = mesh.triangle_edges(t)[(corner + opposite_corner) % 3];
         let edge = mesh.edges()[e as usize];
         let neighbour = edge
             .triangles
             .iter()
             .flatten()
-            .find(|&&t| t != slot.triangle)
-            .map(|&t| {
+            .find(|&&u| u != t)
+            .map(|&u| {
                 star.iter()
-                    .position(|&s| s == t)
+                    .position(|&s| s == u)
                     .expect("edge neighbour is in the star")
             });
         (face, neighbour, edge.tag)
@@ -717,19 +819,19 @@ struct Inflow {
 }
 
 impl Inflow {
-    /// Copies the elements under the slots' triangles from `solution`.
-    fn gather(&mut self, slots: &[Slot], solution: &FrontSolution) {
-        for (i, slot) in slots.iter().enumerate() {
+    /// Copies the elements under `triangles` from `solution`: source `i` is `triangles[i]`.
+    fn gather(&mut self, triangles: &[TriangleId], solution: &FrontSolution) {
+        for (i, &t) in triangles.iter().enumerate() {
             let size = self.size;
             self.solved[i] = solution.load(
-                slot.triangle as usize,
+                t as usize,
                 &mut self.geometry[i],
                 &mut self.coefficients[i * size..(i + 1) * size],
             );
         }
     }
 
-    /// The element below element `i`, or `None` for initial data.
+    /// The element of source `i`, or `None` for initial data.
     fn below(&self, i: usize) -> Option<(&Geometry, &[f64])> {
         let size = self.size;
         self.solved[i].then(|| {
