@@ -1,7 +1,7 @@
-//! Adaptive refinement on `configs/adaptive_pulse.toml`: rejected patches and bisections keep
-//! every element's momentum balance and the global energy balance, make the run more accurate
-//! than the unrefined mesh, and give bitwise identical results for any thread count in
-//! deterministic mode.
+//! Adaptivity on `configs/adaptive_pulse.toml`: rejected patches, bisections and coarsening
+//! patches keep every element's momentum balance and the global energy balance, make the run
+//! more accurate than the unrefined mesh, and give bitwise identical results for any thread
+//! count in deterministic mode.
 
 mod common;
 
@@ -11,15 +11,16 @@ use common::{outputs, shipped, solve};
 const SHORT: [&str; 2] = ["time.end=1.5e-6", "output.snapshot_times=[1.5e-6]"];
 
 #[test]
-fn refinement_conserves_momentum_and_energy_and_beats_the_unrefined_mesh() {
+fn refinement_and_coarsening_conserve_momentum_and_energy_and_beat_the_unrefined_mesh() {
     let adaptive = shipped("adaptive_pulse.toml", &SHORT);
     let (s, _dir) = solve(&adaptive, 2, true);
     eprintln!(
-        "adaptive: {} patches, {} rejected, {} refinements, edges {:e} to {:e}, error {:?}, \
-         balance {:e}, momentum {:e}",
+        "adaptive: {} patches, {} rejected, {} refinements, {} coarsenings, edges {:e} to {:e}, \
+         error {:?}, balance {:e}, momentum {:e}",
         s.patches,
         s.rejected_patches,
         s.refinements,
+        s.coarsenings,
         s.min_edge,
         s.max_edge,
         s.error,
@@ -27,6 +28,7 @@ fn refinement_conserves_momentum_and_energy_and_beats_the_unrefined_mesh() {
         s.max_momentum_residual
     );
     assert!(s.refinements > 100 && s.rejected_patches > 10, "{s:?}");
+    assert!(s.coarsenings > 100, "{s:?}");
     assert!(s.energy.balance_residual_rel.abs() < 1e-8, "{:?}", s.energy);
     assert!(s.max_momentum_residual < 1e-10);
     assert!(s.max_slope_ratio < 0.9);
@@ -53,7 +55,7 @@ fn adaptive_deterministic_runs_are_bitwise_identical_for_1_2_and_4_threads() {
         &["time.end=8e-7", "output.snapshot_times=[4e-7, 8e-7]"],
     );
     let (reference, dir) = solve(&problem, 1, true);
-    assert!(reference.refinements > 0);
+    assert!(reference.refinements > 0 && reference.coarsenings > 0);
     let expected = outputs(dir.path());
     for threads in [2, 4] {
         let (summary, dir) = solve(&problem, threads, true);
@@ -62,6 +64,7 @@ fn adaptive_deterministic_runs_are_bitwise_identical_for_1_2_and_4_threads() {
             "{threads} threads"
         );
         assert_eq!(summary.refinements, reference.refinements);
+        assert_eq!(summary.coarsenings, reference.coarsenings);
         for ((name, a), (other, b)) in expected.iter().zip(&outputs(dir.path())) {
             assert_eq!(name, other);
             assert!(a == b, "{name} differs with {threads} threads");
@@ -79,7 +82,7 @@ fn asynchronous_adaptive_run_conserves_energy() {
         2,
         false,
     );
-    assert!(s.refinements > 0);
+    assert!(s.refinements > 0 && s.coarsenings > 0);
     assert!(s.energy.balance_residual_rel.abs() < 1e-8, "{:?}", s.energy);
     assert!(s.max_momentum_residual < 1e-10);
 }

@@ -12,7 +12,8 @@
 //! (`D` and `E_ref` are both quadratic in it) and of the mesh size (`V / (A L / c)` is the
 //! patch's share of one crossing of the domain): with every patch at `eta = tol`, a crossing
 //! dissipates a fraction `tol` of the energy. A patch with `eta > tol` is rejected and the front
-//! around its vertex refined.
+//! around its vertex refined; elements of patches with `eta < tol / coarsen_ratio` are calm, and
+//! a bisection vertex whose elements are all calm is removed again by a coarsening patch.
 
 use sdg_mesh::Mesh;
 
@@ -23,6 +24,8 @@ use crate::config::AdaptConfig;
 pub(crate) struct Adapt {
     /// Upper tolerance of `eta`.
     pub(crate) tol: f64,
+    /// Lower tolerance of `eta`: elements accepted below it may be coarsened.
+    pub(crate) lower: f64,
     /// No edge is halved into pieces shorter than this, m.
     pub(crate) min_edge: f64,
     /// Longest edge allowed before the first tent, m.
@@ -52,6 +55,7 @@ impl Adapt {
         let diameter = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
         Some(Self {
             tol: config.tol,
+            lower: config.tol / config.coarsen_ratio,
             min_edge: config.min_edge.unwrap_or(1e-3 * mesh.edge_length_range().0),
             max_edge: config.max_edge.unwrap_or(f64::INFINITY),
             crossing: area * diameter / c_max,

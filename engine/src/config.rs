@@ -76,6 +76,10 @@ pub struct AdaptConfig {
     /// around its vertex refined. Dimensionless, see `docs/method.md`. Default 1e-3.
     #[serde(default = "default_tol")]
     pub tol: f64,
+    /// Lower tolerance = `tol / coarsen_ratio`: elements accepted below it may be coarsened
+    /// again. Must exceed 1. Default 16.
+    #[serde(default = "default_coarsen_ratio")]
+    pub coarsen_ratio: f64,
     /// No edge is split into halves shorter than this, m. Default: no limit below 1/1000 of the
     /// initial shortest edge.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -89,11 +93,16 @@ fn default_tol() -> f64 {
     1e-3
 }
 
+fn default_coarsen_ratio() -> f64 {
+    16.0
+}
+
 impl Default for AdaptConfig {
     fn default() -> Self {
         Self {
             enabled: false,
             tol: default_tol(),
+            coarsen_ratio: default_coarsen_ratio(),
             min_edge: None,
             max_edge: None,
         }
@@ -553,6 +562,15 @@ impl Config {
         let fail = |key: &str, reason: String| Err((format!("adapt.{key}"), reason));
         if !(a.tol.is_finite() && a.tol > 0.0) {
             return fail("tol", format!("must be a positive number, got {}", a.tol));
+        }
+        if !(a.coarsen_ratio.is_finite() && a.coarsen_ratio > 1.0) {
+            return fail(
+                "coarsen_ratio",
+                format!(
+                    "must be a finite number above 1 (the lower tolerance is tol / ratio), got {}",
+                    a.coarsen_ratio
+                ),
+            );
         }
         for (key, value) in [("min_edge", a.min_edge), ("max_edge", a.max_edge)] {
             if let Some(v) = value {

@@ -7,11 +7,17 @@
 //! and a new vertex gets the front's time at its position, the mean of its edge's end times: the
 //! front surface does not move. A split is allowed only when the pitcher can keep the children
 //! causal ([`Pitcher::may_bisect`]).
+//!
+//! Coarsening undoes a bisection once the elements around its vertex `m` are calm: the
+//! coarsening patch ([`PatchSolver::solve_coarsening`]) fills the spacetime between the four (or
+//! two) children and their parents' facets with one element per parent, so the parents again
+//! lie each on one element, and `m` leaves the mesh (the last vertex takes its id).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use sdg_mesh::{Front, Mesh, Pitcher, Point, Split, TriangleId, VertexId};
+use sdg_mesh::{Front, Merge, Mesh, Pitcher, Point, Split, TriangleId, VertexId};
 use sdg_solver::element::FrontSolution;
+use sdg_solver::patch::PatchSolver;
 
 /// The space mesh, its front, the elements under the front and the pitcher.
 #[derive(Debug)]
@@ -23,6 +29,8 @@ pub(crate) struct Frontier {
     /// Per vertex: its next tent is accepted whatever the error indicator says (set when a
     /// refinement could split nothing around it).
     insist: Vec<AtomicBool>,
+    /// Per triangle: the element under it was accepted below the lower tolerance.
+    calm: Vec<AtomicBool>,
 }
 
 impl sdg_scheduler::State for Frontier {
@@ -50,16 +58,52 @@ pub(crate) struct Refined {
 impl Frontier {
     /// A frontier over `mesh` with `front`, `solution` and `pitcher` sized for it.
     pub(crate) fn new(mesh: Mesh, front: Front, solution: FrontSolution, pitcher: Pitcher) -> Self {
-        let insist = (0..mesh.vertices().len())
-            .map(|_| AtomicBool::new(false))
-            .collect();
+        let flags = |n: usize| (0..n).map(|_| AtomicBool::new(false)).collect();
         Self {
+            insist: flags(mesh.vertices().len()),
+            calm: flags(mesh.triangles().len()),
             mesh,
             front,
             solution,
             pitcher,
-            insist,
         }
+    }
+
+    /// Records whether the element just stored under triangle `t` (owned by the caller's claim)
+    /// is calm: accepted below the lower tolerance.
+    pub(crate) fn set_calm(&self, t: TriangleId, calm: bool) {
+        self.calm[t as usize].store(calm, Ordering::Relaxed);
+    }
+
+    /// True when every element around vertex `v` is calm.
+    pub(crate) fn calm_around(&self, v: VertexId) -> bool {
+        self.mesh
+            .vertex_triangles(v)
+            .iter()
+            .all(|&t| self.calm[t as usize].load(Ordering::Relaxed))
+    }
+
+    /// Removes vertex `m` after `solver` solved its coarsening patch: coarsens the mesh, drops
+    /// the removed vertex and children from the front, the solution and the pitcher, and stores
+    /// the patch's elements under the restored parents, calm as given. Returns the merge (ids
+    /// before it) or `None`, changing nothing, when `m` is not coarsenable.
+    pub(crate) fn coarsen(
+        &mut self,
+        m: VertexId,
+        solver: &PatchSolver,
+        calm: bool,
+    ) -> Option<Merge> {
+        let merge = self.mesh.coarsen(m)?;
+        self.front.remove(&merge);
+        self.solution.remove(&merge);
+        solver.commit_to(&self.solution, |t| merge.triangle_after(t));
+        self.pitcher.remove(&self.mesh, &merge);
+        merge.apply_to_vertices(&mut self.insist);
+        merge.apply_to_triangles(&mut self.calm);
+        for &(parent, _) in &merge.halves {
+            *self.calm[merge.triangle_after(parent) as usize].get_mut() = calm;
+        }
+        Some(merge)
     }
 
     /// Marks the next tent at `v` as accepted whatever its indicator.
@@ -91,6 +135,7 @@ impl Frontier {
             solution,
             pitcher,
             insist,
+            calm,
         } = self;
         let mut splits: Vec<Split> = Vec::new();
         // Triangles asked about that still carry initial data: (step, corners, apex corner).
@@ -126,6 +171,8 @@ impl Frontier {
             refined.vertices.push((v, t_mid));
             refined.touched.extend(split.ends);
             for &(kept, new) in &split.halves {
+                *calm[kept as usize].get_mut() = false;
+                calm.push(AtomicBool::new(false));
                 let copy = solution.push_copy(kept as usize);
                 debug_assert_eq!(copy, new as usize, "triangles are appended in split order");
                 for child in [kept, new] {

@@ -16,7 +16,7 @@ use serde::Serialize;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use sdg_mesh::{Front, Pitcher, Tent, TriangleId};
-use sdg_scheduler::{Events, VertexId, Work};
+use sdg_scheduler::{Changed, Events, VertexId, Work};
 use sdg_solver::element::{FrontSolution, Geometry, evaluate};
 use sdg_solver::norms::{front_energy, initial_energy, slice_errors};
 use sdg_solver::patch::{Initial, PatchReport, PatchSolver};
@@ -109,6 +109,8 @@ pub struct RunSummary {
     pub refinements: u64,
     /// Patches solved and rejected by the error indicator (included in `patches`).
     pub rejected_patches: u64,
+    /// Bisection vertices removed again by coarsening patches (included in `patches`).
+    pub coarsenings: u64,
     /// Shortest edge of the final space mesh, m.
     pub min_edge: f64,
     /// Longest edge of the final space mesh, m.
@@ -162,6 +164,15 @@ impl Milestones {
         }
     }
 
+    /// Forgets a vertex at time `t` (s) removed by coarsening.
+    fn remove_vertex(&mut self, t: f64) {
+        for (i, &(time, _)) in self.times.iter().enumerate().skip(self.next) {
+            if time > t {
+                self.below[i] -= 1;
+            }
+        }
+    }
+
     /// Records a vertex moving from `t_old` to `t_new`; returns the milestones the whole front
     /// has now passed, in order.
     fn advance(&mut self, t_old: f64, t_new: f64, passed: &mut Vec<(f64, Milestone)>) {
@@ -186,6 +197,7 @@ struct Book {
     patches: u64,
     rejected: u64,
     refinements: u64,
+    coarsenings: u64,
     /// Energy of the initial data as the solver takes it in (scaled units): on the initial front,
     /// corrected whenever refinement splits a triangle that still carries initial data.
     initial_energy: f64,
@@ -213,6 +225,8 @@ struct Solve<'a> {
     adapt: Option<Adapt>,
     /// Triangles a vertex star may have: the patch solvers' capacity.
     max_star: usize,
+    /// The patch solver of coarsening events.
+    spare: Mutex<PatchSolver>,
     /// `Book::energy_max` as bits, read by tents without the book's lock.
     energy_reference: AtomicU64,
     initial: Initial<'a>,
@@ -240,23 +254,133 @@ impl Solve<'_> {
         )
     }
 
-    /// True when the patch just solved for `tent` dissipates more than the tolerance allows.
-    fn too_dissipative(
-        &self,
-        adapt: &Adapt,
-        state: &Frontier,
-        tent: &Tent,
-        report: &PatchReport,
-    ) -> bool {
-        let mesh = &state.mesh;
-        let area: f64 = mesh
-            .vertex_triangles(tent.vertex)
-            .iter()
-            .map(|&t| mesh.area(t))
-            .sum();
-        let volume = area * (tent.t_new - tent.t_old) / 3.0;
+    /// The indicator of a patch with `report` over spacetime volume `volume` (m^2 s).
+    fn indicator(&self, adapt: &Adapt, report: &PatchReport, volume: f64) -> f64 {
         let energy = f64::from_bits(self.energy_reference.load(Ordering::Relaxed));
-        adapt.indicator(report.dissipation, volume, energy) > adapt.tol
+        adapt.indicator(report.dissipation, volume, energy)
+    }
+
+    /// Adds a solved patch to the totals.
+    fn add_patch(&self, book: &mut Book, report: &PatchReport) {
+        book.patches += 1;
+        book.elements += report.elements as u64;
+        book.dofs += report.dofs as u64;
+        book.totals.energy_in += report.energy_in;
+        book.totals.energy_out += report.energy_out;
+        book.totals.boundary_work += report.boundary_work;
+        book.totals.dissipation += report.dissipation;
+        book.totals.momentum_residual = book.totals.momentum_residual.max(report.momentum_residual);
+        book.energy_max = book
+            .energy_max
+            .max(book.initial_energy + book.totals.boundary_work);
+        self.energy_reference
+            .store(book.energy_max.to_bits(), Ordering::Relaxed);
+    }
+
+    /// Cuts the elements under `triangles`, just solved, by the snapshot planes.
+    fn add_to_snapshots(
+        &self,
+        book: &mut Book,
+        solution: &FrontSolution,
+        triangles: &[TriangleId],
+    ) {
+        for &t in triangles {
+            if solution.load(t as usize, &mut book.geometry, &mut book.coefficients) {
+                let (phi, values, geometry, coefficients) = (
+                    &mut book.phi,
+                    &mut book.values,
+                    &book.geometry,
+                    &book.coefficients,
+                );
+                book.snapshots.add_element(&geometry.vertices(), |x| {
+                    point_values(
+                        &self.problem.material,
+                        self,
+                        geometry,
+                        coefficients,
+                        x,
+                        phi,
+                        values,
+                    )
+                });
+            }
+        }
+    }
+
+    /// The coarsening event of vertex `m` (at `at`, m, to notice renumbering): when `m` still is
+    /// a calm bisection vertex, at least a quarter of its smallest tent budget below its edge's
+    /// midpoint, whose parents the pitcher can keep causal and whose edge is not longer than
+    /// `adapt.max_edge`, solves its coarsening patch and, below the tolerance, removes `m`.
+    fn coarsen(&self, state: &mut Frontier, m: VertexId, at: [f64; 2]) -> Changed {
+        let adapt = self.adapt.expect("coarsening only runs with adaptivity on");
+        let mesh = &state.mesh;
+        if (m as usize) >= mesh.vertices().len() || mesh.vertex(m) != at {
+            return Changed::default();
+        }
+        let Some(ends) = mesh.coarsenable(m) else {
+            return Changed::default();
+        };
+        let front = &state.front;
+        let (t_m, t_mid) = (
+            front.time(m),
+            0.5 * (front.time(ends[0]) + front.time(ends[1])),
+        );
+        let long = sdg_mesh::geometry::distance(mesh.vertex(ends[0]), mesh.vertex(ends[1]));
+        // The patch's height at m: a fraction of a tent's at least, or its elements are slivers
+        // (at round-off height they are singular).
+        let budget = mesh
+            .vertex_triangles(m)
+            .iter()
+            .map(|&t| state.pitcher.budget(t))
+            .fold(f64::INFINITY, f64::min);
+        if !(t_mid - t_m >= 0.25 * budget
+            && long <= adapt.max_edge
+            && state.calm_around(m)
+            && state.pitcher.may_coarsen(mesh, front, m, ends))
+        {
+            return Changed::default();
+        }
+        let mut solver = self.spare.lock();
+        let Some(report) = solver.solve_coarsening(
+            mesh,
+            front,
+            m,
+            &self.problem.boundary,
+            self.initial,
+            &state.solution,
+        ) else {
+            return Changed::default();
+        };
+        let area: f64 = mesh.vertex_triangles(m).iter().map(|&t| mesh.area(t)).sum();
+        let eta = self.indicator(&adapt, &report, area * (t_mid - t_m) / 3.0);
+        if eta > adapt.tol {
+            return Changed::default();
+        }
+        let neighbours = mesh.vertex_neighbors(m).to_vec();
+        let merge = state
+            .coarsen(m, &solver, eta < adapt.lower)
+            .expect("checked coarsenable");
+        let parents: Vec<TriangleId> = merge
+            .halves
+            .iter()
+            .map(|&(parent, _)| merge.triangle_after(parent))
+            .collect();
+        let t_end = self.problem.loaded.config.time.end;
+        let mut book = self.book.lock();
+        self.add_patch(&mut book, &report);
+        book.coarsenings += 1;
+        book.milestones.remove_vertex(t_m);
+        book.progress.grow(-(t_end - t_m));
+        self.add_to_snapshots(&mut book, &state.solution, &parents);
+        let mut offer: Vec<VertexId> = neighbours.iter().map(|&w| merge.vertex_after(w)).collect();
+        if (m as usize) < state.mesh.vertices().len() {
+            // The former last vertex now has m's id.
+            offer.push(m);
+        }
+        Changed {
+            offer,
+            below_end: -1,
+        }
     }
 
     /// True when star triangle `t` may be bisected now: its halves would not be too short, the
@@ -270,19 +394,24 @@ impl Solve<'_> {
             && state.pitcher.may_bisect(mesh, |w| state.front.time(w), t)
     }
 
-    /// The refinement event of a rejected patch at `v`: bisects the triangles of `star` that
-    /// are unchanged since. When none could be, the next tent at `v` is accepted whatever its
-    /// indicator, so that the front keeps moving. Returns the vertices whose readiness changed.
+    /// The refinement event of a rejected patch at `v` (at `at`, m, to notice renumbering by
+    /// coarsening): bisects the triangles of `star` that are unchanged since. When none could
+    /// be, the next tent at `v` is accepted whatever its indicator, so that the front keeps
+    /// moving. Returns the vertices whose readiness changed.
     fn refine(
         &self,
         state: &mut Frontier,
         v: VertexId,
+        at: [f64; 2],
         star: &[(TriangleId, [VertexId; 3])],
-    ) -> Vec<VertexId> {
+    ) -> Changed {
         let adapt = self.adapt.expect("refinement only runs with adaptivity on");
         let mut refined = Refined::default();
+        let unchanged = |state: &Frontier, t: TriangleId, corners: [VertexId; 3]| {
+            state.mesh.triangles().get(t as usize) == Some(&corners)
+        };
         for &(t, corners) in star {
-            if state.mesh.triangles()[t as usize] == corners {
+            if unchanged(state, t, corners) {
                 state.refine(
                     t,
                     adapt.min_edge,
@@ -292,10 +421,8 @@ impl Solve<'_> {
                 );
             }
         }
-        if !star
-            .iter()
-            .any(|&(t, corners)| state.mesh.triangles()[t as usize] != corners)
-        {
+        let here = (v as usize) < state.mesh.vertices().len() && state.mesh.vertex(v) == at;
+        if here && star.iter().all(|&(t, corners)| unchanged(state, t, corners)) {
             state.insist(v);
         }
         let t_end = self.problem.loaded.config.time.end;
@@ -307,11 +434,17 @@ impl Solve<'_> {
             book.progress.grow(t_end - t);
         }
         let mut touched = refined.touched;
-        touched.push(v);
-        touched.extend(state.mesh.vertex_neighbors(v));
+        if here {
+            touched.push(v);
+            touched.extend(state.mesh.vertex_neighbors(v));
+        }
+        touched.extend(refined.vertices.iter().map(|&(w, _)| w));
         touched.sort_unstable();
         touched.dedup();
-        touched
+        Changed {
+            offer: touched,
+            below_end: refined.vertices.iter().filter(|&&(_, t)| t < t_end).count() as isize,
+        }
     }
 
     /// Appends a `history.csv` row for the current front: it must not move meanwhile.
@@ -351,6 +484,8 @@ enum Outcome {
         t_old: f64,
         t_new: f64,
         report: PatchReport,
+        /// Below the lower tolerance: the new elements may be coarsened.
+        calm: bool,
     },
     /// The indicator rejected the patch: nothing advanced; these star triangles (with their
     /// corners, to notice a change) are to be bisected.
@@ -397,8 +532,11 @@ impl<'a> Work<'a> for Solve<'a> {
             self.initial,
             &state.solution,
         );
+        let mut calm = false;
         if let Some(adapt) = &self.adapt {
-            if !state.insists(v) && self.too_dissipative(adapt, state, &tent, &report) {
+            let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
+            let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
+            if !state.insists(v) && eta > adapt.tol {
                 let star = star
                     .iter()
                     .filter(|&&t| self.may_refine(adapt, state, t))
@@ -408,6 +546,10 @@ impl<'a> Work<'a> for Solve<'a> {
                     return Ok((tent.t_old, Outcome::Rejected { star }));
                 }
             }
+            calm = eta < adapt.lower;
+            for &t in star {
+                state.set_calm(t, calm);
+            }
         }
         solver.commit(&state.solution);
         front.set_time(v, t_new);
@@ -415,6 +557,7 @@ impl<'a> Work<'a> for Solve<'a> {
             t_old: tent.t_old,
             t_new,
             report,
+            calm,
         };
         Ok((t_new, outcome))
     }
@@ -426,18 +569,20 @@ impl<'a> Work<'a> for Solve<'a> {
         o: Outcome,
         events: &Events<'a, Frontier>,
     ) -> Result<(), EngineError> {
-        let (t_old, t_new, report) = match o {
+        let (t_old, t_new, report, calm) = match o {
             Outcome::Accepted {
                 t_old,
                 t_new,
                 report,
-            } => (t_old, t_new, report),
+                calm,
+            } => (t_old, t_new, report, calm),
             Outcome::Rejected { star } => {
                 let mut book = self.book.lock();
                 book.patches += 1;
                 book.rejected += 1;
+                let at = state.mesh.vertex(v);
                 events.push(Box::new(move |state: &mut Frontier| {
-                    self.refine(state, v, &star)
+                    self.refine(state, v, at, &star)
                 }));
                 return Ok(());
             }
@@ -451,42 +596,18 @@ impl<'a> Work<'a> for Solve<'a> {
             .fold(0.0, f64::max);
         let mut guard = self.book.lock();
         let book = &mut *guard;
-        book.patches += 1;
-        book.elements += report.elements as u64;
-        book.dofs += report.dofs as u64;
-        book.totals.energy_in += report.energy_in;
-        book.totals.energy_out += report.energy_out;
-        book.totals.boundary_work += report.boundary_work;
-        book.totals.dissipation += report.dissipation;
-        book.totals.momentum_residual = book.totals.momentum_residual.max(report.momentum_residual);
-        book.energy_max = book
-            .energy_max
-            .max(book.initial_energy + book.totals.boundary_work);
-        self.energy_reference
-            .store(book.energy_max.to_bits(), Ordering::Relaxed);
+        self.add_patch(book, &report);
         book.max_slope_ratio = book.max_slope_ratio.max(slope);
-        for &t in mesh.vertex_triangles(v) {
-            if state
-                .solution
-                .load(t as usize, &mut book.geometry, &mut book.coefficients)
-            {
-                let (phi, values, geometry, coefficients) = (
-                    &mut book.phi,
-                    &mut book.values,
-                    &book.geometry,
-                    &book.coefficients,
-                );
-                book.snapshots.add_element(&geometry.vertices(), |x| {
-                    point_values(
-                        &self.problem.material,
-                        self,
-                        geometry,
-                        coefficients,
-                        x,
-                        phi,
-                        values,
-                    )
-                });
+        self.add_to_snapshots(book, &state.solution, mesh.vertex_triangles(v));
+        if calm {
+            // A bisection vertex whose elements are all calm can go again.
+            for &w in mesh.vertex_neighbors(v).iter().chain([&v]) {
+                if mesh.coarsenable(w).is_some() && state.calm_around(w) {
+                    let at = mesh.vertex(w);
+                    events.push(Box::new(move |state: &mut Frontier| {
+                        self.coarsen(state, w, at)
+                    }));
+                }
             }
         }
         book.progress.advance(t_new - t_old, book.patches);
@@ -499,7 +620,7 @@ impl<'a> Work<'a> for Solve<'a> {
         if passed.iter().any(|p| p.1 == Milestone::History) {
             events.push(Box::new(move |state: &mut Frontier| {
                 self.history_row(state, &mut self.book.lock());
-                Vec::new()
+                Changed::default()
             }));
         }
         passed.clear();
@@ -569,6 +690,11 @@ pub fn solve_job(
         problem,
         adapt,
         max_star,
+        spare: Mutex::new(PatchSolver::new(
+            system.clone(),
+            config.solver.order,
+            max_star,
+        )),
         energy_reference: AtomicU64::new(energy0.total.to_bits()),
         initial,
         basis: basis.clone(),
@@ -577,6 +703,7 @@ pub fn solve_job(
             patches: 0,
             rejected: 0,
             refinements: 0,
+            coarsenings: 0,
             initial_energy: energy0.total,
             energy_max: energy0.total,
             elements: 0,
@@ -676,6 +803,7 @@ pub fn solve_job(
         snapshots: book.snapshots.written().to_vec(),
         refinements: book.refinements,
         rejected_patches: book.rejected,
+        coarsenings: book.coarsenings,
         min_edge,
         max_edge,
     };

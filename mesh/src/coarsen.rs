@@ -49,6 +49,21 @@ impl Merge {
         data.swap_remove(self.vertex as usize);
     }
 
+    /// The id after the merge of vertex `v` (not the removed one), given its id before.
+    pub fn vertex_after(&self, v: VertexId) -> VertexId {
+        match self.moved_vertex {
+            Some((from, to)) if from == v => to,
+            _ => v,
+        }
+    }
+
+    /// The id after the merge of triangle `t` (not a removed child), given its id before.
+    pub fn triangle_after(&self, t: TriangleId) -> TriangleId {
+        self.moved_triangles
+            .iter()
+            .fold(t, |t, &(from, to)| if t == from { to } else { t })
+    }
+
     /// Renumbers per-triangle data as the merge renumbered the triangles: `data.swap_remove(child)`
     /// for each of `halves` in order. `data` must have one entry per triangle before the merge;
     /// each parent's entry is kept as it is (update it before calling this).

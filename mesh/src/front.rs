@@ -6,6 +6,7 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use crate::coarsen::Merge;
 use crate::geometry;
 use crate::mesh::{Mesh, TriangleId, VertexId};
 use crate::refine::Split;
@@ -65,6 +66,11 @@ impl Front {
     pub fn push(&mut self, t: f64) -> VertexId {
         self.times.push(AtomicU64::new(t.to_bits()));
         (self.times.len() - 1) as VertexId
+    }
+
+    /// Drops the time of the vertex a coarsening removed, renumbering like the mesh.
+    pub fn remove(&mut self, merge: &Merge) {
+        merge.apply_to_vertices(&mut self.times);
     }
 
     /// Time (s) of `v`, which may be a vertex that the splits `done` created and that is not on

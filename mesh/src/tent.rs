@@ -33,6 +33,7 @@
 //! (crack alignment) changes the space position of the vertex; [`Tent`] records only times so
 //! far.
 
+use crate::coarsen::Merge;
 use crate::front::Front;
 use crate::geometry;
 use crate::mesh::{Mesh, TriangleId, VertexId};
@@ -136,6 +137,44 @@ impl Pitcher {
             .flat_map(geometry::altitudes)
             .fold(f64::INFINITY, f64::min);
         spread <= self.causal_width_factor() * width
+    }
+
+    /// Follows a coarsening of `mesh` (already applied): drops the removed children's budgets,
+    /// renumbering like the mesh, and computes the restored parents'.
+    pub fn remove(&mut self, mesh: &Mesh, merge: &Merge) {
+        merge.apply_to_triangles(&mut self.budgets);
+        self.update(
+            mesh,
+            merge
+                .halves
+                .iter()
+                .map(|&(parent, _)| merge.triangle_after(parent)),
+        );
+    }
+
+    /// True when the restored parents of coarsening vertex `m` (with edge `ends`, as
+    /// [`Mesh::coarsenable`] reports) keep invariant (I*) at the front's times: each parent
+    /// `(z, a, b)`'s time spread is within `s (1 - GUARD) / c` times its smallest altitude.
+    pub fn may_coarsen(
+        &self,
+        mesh: &Mesh,
+        front: &Front,
+        m: VertexId,
+        ends: [VertexId; 2],
+    ) -> bool {
+        let [a, b] = ends;
+        mesh.vertex_neighbors(m)
+            .iter()
+            .filter(|&&z| z != a && z != b)
+            .all(|&z| {
+                let times = [z, a, b].map(|w| front.time(w));
+                let spread = times.iter().fold(f64::NEG_INFINITY, |x, &y| x.max(y))
+                    - times.iter().fold(f64::INFINITY, |x, &y| x.min(y));
+                let width = geometry::altitudes([z, a, b].map(|w| mesh.vertex(w)))
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min);
+                spread <= self.causal_width_factor() * width
+            })
     }
 
     /// `s (1 - GUARD) / c`: a triangle of minimum width `h` whose time spread is at most `h`

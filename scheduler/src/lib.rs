@@ -39,7 +39,8 @@ pub struct Options {
 
 /// The data tents share: a space mesh and its front, plus whatever the engine keeps with them
 /// (the solution under the front). Tents see it shared; events get it exclusively and may change
-/// the mesh, appending vertices (ids are never reused or removed) with their front times.
+/// the mesh, appending vertices with their front times or removing them (the last vertex then
+/// takes the removed one's id).
 pub trait State: Send + Sync {
     /// The space mesh.
     fn mesh(&self) -> &Mesh;
@@ -103,9 +104,19 @@ pub trait Work<'a>: Sync {
     ) -> Result<(), Self::Error>;
 }
 
-/// An event: runs with exclusive access to the state (no tent in flight) and returns the
-/// vertices whose readiness it may have changed; vertices it appends are offered as well.
-pub type Action<'a, S> = Box<dyn FnOnce(&mut S) -> Vec<VertexId> + Send + 'a>;
+/// An event: runs with exclusive access to the state (no tent in flight) and reports what it
+/// changed.
+pub type Action<'a, S> = Box<dyn FnOnce(&mut S) -> Changed + Send + 'a>;
+
+/// What an event changed.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Changed {
+    /// Vertices whose readiness may have changed, appended ones included (ids as after the
+    /// event).
+    pub offer: Vec<VertexId>,
+    /// Vertices below the end time appended minus those removed.
+    pub below_end: isize,
+}
 
 /// The queue of pending events.
 pub struct Events<'a, S> {
@@ -177,10 +188,10 @@ fn is_ready<S: State>(state: &S, t_end: f64, v: VertexId) -> bool {
     (v as usize) < front.len() && front.time(v) < t_end && front.is_local_minimum(state.mesh(), v)
 }
 
-/// Vertices of `state` below `t_end` among `vertices`.
-fn below_end<S: State>(state: &S, t_end: f64, vertices: std::ops::Range<usize>) -> usize {
-    vertices
-        .filter(|&v| state.front().time(v as VertexId) < t_end)
+/// Vertices of `state` below `t_end`.
+fn below_end<S: State>(state: &S, t_end: f64) -> usize {
+    (0..state.front().len() as VertexId)
+        .filter(|&v| state.front().time(v) < t_end)
         .count()
 }
 

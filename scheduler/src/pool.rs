@@ -55,7 +55,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
         .filter(|&v| is_ready(&*state, t_end, v))
         .collect();
     let shared = Shared {
-        remaining: AtomicUsize::new(below_end(&*state, t_end, 0..n)),
+        remaining: AtomicUsize::new(below_end(&*state, t_end)),
         locked: RwLock::new(Locked {
             state,
             claims: ClaimTable::new(n),
@@ -90,13 +90,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
     // the end: no tent is in flight any more, so they run here in queue order.
     let locked = shared.locked.into_inner();
     for action in shared.events.take() {
-        let before = locked.state.mesh().vertices().len();
-        action(locked.state);
-        let after = locked.state.mesh().vertices().len();
-        shared.remaining.fetch_add(
-            below_end(&*locked.state, t_end, before..after),
-            Ordering::SeqCst,
-        );
+        let changed = action(locked.state);
+        count_remaining(&shared.remaining, changed.below_end);
         shared.events_run.fetch_add(1, Ordering::Relaxed);
     }
     let remaining = shared.remaining.load(Ordering::SeqCst);
@@ -251,6 +246,15 @@ fn tent<'a, W: Work<'a>>(
     }
 }
 
+/// Adds `delta` to the count of vertices below the end time.
+fn count_remaining(remaining: &AtomicUsize, delta: isize) {
+    if delta >= 0 {
+        remaining.fetch_add(delta as usize, Ordering::SeqCst);
+    } else {
+        remaining.fetch_sub(delta.unsigned_abs(), Ordering::SeqCst);
+    }
+}
+
 /// Runs every queued event with the state held exclusively (waiting for the tents in flight),
 /// then offers the vertices the events touched or appended.
 fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<VertexId>) {
@@ -264,19 +268,19 @@ fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<Vertex
     }
     let mut touched = Vec::new();
     for action in actions {
-        let before = locked.state.mesh().vertices().len();
-        touched.extend(action(locked.state));
-        let after = locked.state.mesh().vertices().len();
-        locked.claims.grow(after);
-        shared.remaining.fetch_add(
-            below_end(&*locked.state, shared.t_end, before..after),
-            Ordering::SeqCst,
-        );
-        touched.extend(before as VertexId..after as VertexId);
+        let changed = action(locked.state);
+        let vertices = locked.state.mesh().vertices().len();
+        locked.claims.grow(vertices);
+        count_remaining(&shared.remaining, changed.below_end);
+        touched.extend(changed.offer);
         shared.events_run.fetch_add(1, Ordering::Relaxed);
         shared.events.pending.fetch_sub(1, Ordering::AcqRel);
     }
+    let end_reached = shared.remaining.load(Ordering::SeqCst) == 0;
     drop(locked);
+    if end_reached {
+        wake_all(shared);
+    }
     for v in touched {
         offer(shared, local, v);
     }

@@ -83,7 +83,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                         .map(|v| (s.front().time(v), v)),
                 );
                 if ready.is_empty() {
-                    let remaining = below_end(s, t_end, 0..n);
+                    let remaining = below_end(s, t_end);
                     return if remaining == 0 {
                         Ok(())
                     } else {

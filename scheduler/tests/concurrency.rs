@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use parking_lot::Mutex;
 use sdg_mesh::{Diagonal, Front, Mesh, Pitcher, Point, Rectangle};
-use sdg_scheduler::{Events, Fixed, Options, RunError, VertexId, Work};
+use sdg_scheduler::{Changed, Events, Fixed, Options, RunError, VertexId, Work};
 
 const C: f64 = 1.0;
 const SAFETY: f64 = 0.9;
@@ -161,7 +161,10 @@ where
         if self.event_every > 0 && k % self.event_every == 0 {
             events.push(Box::new(move |state: &mut Fixed<'m>| {
                 self.smooth(state.mesh, v);
-                vec![v]
+                Changed {
+                    offer: vec![v],
+                    below_end: 0,
+                }
             }));
         }
         Ok(())

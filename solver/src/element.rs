@@ -155,6 +155,12 @@ impl FrontSolution {
         self.cells.len() - 1
     }
 
+    /// Follows a coarsening of the mesh: drops the removed children's entries, renumbering like
+    /// the mesh. The parents keep their entries until the coarsening patch is committed.
+    pub fn remove(&mut self, merge: &sdg_mesh::Merge) {
+        merge.apply_to_triangles(&mut self.cells);
+    }
+
     /// True once an element lies under triangle `t` (false while it carries initial data).
     pub fn is_solved(&self, t: usize) -> bool {
         self.cells[t].lock().solved
