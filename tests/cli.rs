@@ -148,7 +148,10 @@ fn invalid_adaptivity_settings() {
     let (_dir, config) = config_file(CONFIG);
     for (set, words) in [
         ("adapt.tol=-1e-3", ["adapt.tol", "positive"]),
-        ("adapt.coarsen_ratio=0.5", ["adapt.coarsen_ratio", "above 1"]),
+        (
+            "adapt.coarsen_ratio=0.5",
+            ["adapt.coarsen_ratio", "above 1"],
+        ),
         ("adapt.min_edge=0.0", ["adapt.min_edge", "positive length"]),
         (
             "adapt.max_edge=1e-4",

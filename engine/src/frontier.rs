@@ -16,8 +16,7 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use sdg_mesh::{Front, Merge, Mesh, Pitcher, Point, Split, TriangleId, VertexId};
-use sdg_solver::element::FrontSolution;
-use sdg_solver::patch::PatchSolver;
+use sdg_solver::element::{FrontSolution, Geometry};
 
 /// The space mesh, its front, the elements under the front and the pitcher.
 #[derive(Debug)]
@@ -41,6 +40,21 @@ impl sdg_scheduler::State for Frontier {
     fn front(&self) -> &Front {
         &self.front
     }
+}
+
+/// A coarsening patch solved by the tent at its vertex, applied by an event.
+#[derive(Debug)]
+pub(crate) struct Coarsening {
+    /// The vertex to remove and its position, m (to notice renumbering).
+    pub(crate) vertex: VertexId,
+    pub(crate) at: Point,
+    /// The vertex and its neighbours with their front times (s) when the patch was solved.
+    pub(crate) times: Vec<(VertexId, f64)>,
+    /// Per element: the corners of the child `(m, z, a)` whose id its parent takes, the
+    /// element's geometry and coefficients.
+    pub(crate) elements: Vec<([VertexId; 3], Geometry, Vec<f64>)>,
+    /// Accepted below the lower tolerance.
+    pub(crate) calm: bool,
 }
 
 /// What a refinement changed.
@@ -83,27 +97,47 @@ impl Frontier {
             .all(|&t| self.calm[t as usize].load(Ordering::Relaxed))
     }
 
-    /// Removes vertex `m` after `solver` solved its coarsening patch: coarsens the mesh, drops
-    /// the removed vertex and children from the front, the solution and the pitcher, and stores
-    /// the patch's elements under the restored parents, calm as given. Returns the merge (ids
-    /// before it) or `None`, changing nothing, when `m` is not coarsenable.
-    pub(crate) fn coarsen(
-        &mut self,
-        m: VertexId,
-        solver: &PatchSolver,
-        calm: bool,
-    ) -> Option<Merge> {
+    /// Applies a coarsening patch solved by the tent at its vertex, if nothing it depends on
+    /// changed since (the vertex, its star's corners and its neighbours' times): coarsens the
+    /// mesh, drops the removed vertex and children from the front, the solution and the pitcher,
+    /// and stores the patch's elements under the restored parents. Returns the merge (ids before
+    /// it) and the parents (ids after it), or `None`, changing nothing.
+    pub(crate) fn coarsen(&mut self, c: &Coarsening) -> Option<(Merge, Vec<TriangleId>)> {
+        let m = c.vertex;
+        let mesh = &self.mesh;
+        if (m as usize) >= mesh.vertices().len()
+            || mesh.vertex(m) != c.at
+            || mesh.coarsenable(m).is_none()
+            || c.times
+                .iter()
+                .any(|&(w, t)| (w as usize) >= mesh.vertices().len() || self.front.time(w) != t)
+        {
+            return None;
+        }
+        let star = mesh.vertex_triangles(m);
+        let children: Vec<TriangleId> = c
+            .elements
+            .iter()
+            .map(|(corners, _, _)| {
+                star.iter()
+                    .copied()
+                    .find(|&t| mesh.triangles()[t as usize] == *corners)
+            })
+            .collect::<Option<_>>()?;
         let merge = self.mesh.coarsen(m)?;
         self.front.remove(&merge);
         self.solution.remove(&merge);
-        solver.commit_to(&self.solution, |t| merge.triangle_after(t));
+        let parents: Vec<TriangleId> = children.iter().map(|&t| merge.triangle_after(t)).collect();
+        for (&parent, (_, geometry, coefficients)) in parents.iter().zip(&c.elements) {
+            self.solution.store(parent as usize, geometry, coefficients);
+        }
         self.pitcher.remove(&self.mesh, &merge);
         merge.apply_to_vertices(&mut self.insist);
         merge.apply_to_triangles(&mut self.calm);
-        for &(parent, _) in &merge.halves {
-            *self.calm[merge.triangle_after(parent) as usize].get_mut() = calm;
+        for &parent in &parents {
+            *self.calm[parent as usize].get_mut() = c.calm;
         }
-        Some(merge)
+        Some((merge, parents))
     }
 
     /// Marks the next tent at `v` as accepted whatever its indicator.

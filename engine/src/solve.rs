@@ -25,7 +25,7 @@ use sdg_solver::{Material, Plane};
 
 use crate::adapt::Adapt;
 use crate::error::EngineError;
-use crate::frontier::{Frontier, Refined, refinement_edge_length};
+use crate::frontier::{Coarsening, Frontier, Refined, refinement_edge_length};
 use crate::output::write_atomic;
 use crate::problem::Problem;
 use crate::progress::Progress;
@@ -107,10 +107,14 @@ pub struct RunSummary {
     pub snapshots: Vec<(f64, String)>,
     /// Edge bisections (new vertices) made by adaptive refinement.
     pub refinements: u64,
-    /// Patches solved and rejected by the error indicator (included in `patches`).
+    /// Patches (tents or coarsenings) solved and rejected by the error indicator (included in
+    /// `patches`).
     pub rejected_patches: u64,
     /// Bisection vertices removed again by coarsening patches (included in `patches`).
     pub coarsenings: u64,
+    /// Scheduler events run (refinement, coarsening, history rows): each holds the whole
+    /// front, so the other workers wait for it.
+    pub events: u64,
     /// Shortest edge of the final space mesh, m.
     pub min_edge: f64,
     /// Longest edge of the final space mesh, m.
@@ -225,8 +229,6 @@ struct Solve<'a> {
     adapt: Option<Adapt>,
     /// Triangles a vertex star may have: the patch solvers' capacity.
     max_star: usize,
-    /// The patch solver of coarsening events.
-    spare: Mutex<PatchSolver>,
     /// `Book::energy_max` as bits, read by tents without the book's lock.
     energy_reference: AtomicU64,
     initial: Initial<'a>,
@@ -307,72 +309,123 @@ impl Solve<'_> {
         }
     }
 
-    /// The coarsening event of vertex `m` (at `at`, m, to notice renumbering): when `m` still is
-    /// a calm bisection vertex, at least a quarter of its smallest tent budget below its edge's
-    /// midpoint, whose parents the pitcher can keep causal and whose edge is not longer than
-    /// `adapt.max_edge`, solves its coarsening patch and, below the tolerance, removes `m`.
-    fn coarsen(&self, state: &mut Frontier, m: VertexId, at: [f64; 2]) -> Changed {
-        let adapt = self.adapt.expect("coarsening only runs with adaptivity on");
-        let mesh = &state.mesh;
-        if (m as usize) >= mesh.vertices().len() || mesh.vertex(m) != at {
-            return Changed::default();
-        }
-        let Some(ends) = mesh.coarsenable(m) else {
-            return Changed::default();
-        };
-        let front = &state.front;
+    /// The edge ends of bisection vertex `m` and the front times of `m` and of the edge's
+    /// midpoint (s) when `m` may be coarsened now: its elements are calm, it is at least a
+    /// quarter of its smallest tent budget below the edge's midpoint (thinner coarsening
+    /// elements are slivers, singular at round-off height), the restored parents keep the
+    /// pitcher's invariant and the edge is not longer than `adapt.max_edge`.
+    fn coarsening(
+        &self,
+        adapt: &Adapt,
+        state: &Frontier,
+        m: VertexId,
+    ) -> Option<([VertexId; 2], f64, f64)> {
+        let (mesh, front) = (&state.mesh, &state.front);
+        let ends = mesh.coarsenable(m)?;
         let (t_m, t_mid) = (
             front.time(m),
             0.5 * (front.time(ends[0]) + front.time(ends[1])),
         );
         let long = sdg_mesh::geometry::distance(mesh.vertex(ends[0]), mesh.vertex(ends[1]));
-        // The patch's height at m: a fraction of a tent's at least, or its elements are slivers
-        // (at round-off height they are singular).
         let budget = mesh
             .vertex_triangles(m)
             .iter()
             .map(|&t| state.pitcher.budget(t))
             .fold(f64::INFINITY, f64::min);
-        if !(t_mid - t_m >= 0.25 * budget
+        (t_mid - t_m >= 0.25 * budget
             && long <= adapt.max_edge
             && state.calm_around(m)
             && state.pitcher.may_coarsen(mesh, front, m, ends))
-        {
-            return Changed::default();
-        }
-        let mut solver = self.spare.lock();
-        let Some(report) = solver.solve_coarsening(
+        .then_some((ends, t_m, t_mid))
+    }
+
+    /// Solves the coarsening patch of vertex `m`, claimed for a tent, when `m` may be coarsened
+    /// now and the patch is within the tolerance: the outcome for the coarsening event.
+    fn try_coarsening(
+        &self,
+        adapt: &Adapt,
+        state: &Frontier,
+        solver: &mut PatchSolver,
+        m: VertexId,
+    ) -> Option<Outcome> {
+        let (_, t_m, t_mid) = self.coarsening(adapt, state, m)?;
+        let (mesh, front) = (&state.mesh, &state.front);
+        let report = solver.solve_coarsening(
             mesh,
             front,
             m,
             &self.problem.boundary,
             self.initial,
             &state.solution,
-        ) else {
+        )?;
+        let area: f64 = mesh.vertex_triangles(m).iter().map(|&t| mesh.area(t)).sum();
+        let eta = self.indicator(adapt, &report, area * (t_mid - t_m) / 3.0);
+        if eta > adapt.tol {
+            return None;
+        }
+        let times = mesh
+            .vertex_neighbors(m)
+            .iter()
+            .chain([&m])
+            .map(|&w| (w, front.time(w)))
+            .collect();
+        let elements = solver
+            .elements()
+            .map(|(t, geometry, coefficients)| {
+                (
+                    mesh.triangles()[t as usize],
+                    *geometry,
+                    coefficients.to_vec(),
+                )
+            })
+            .collect();
+        let coarsening = Coarsening {
+            vertex: m,
+            at: mesh.vertex(m),
+            times,
+            elements,
+            calm: eta < adapt.lower,
+        };
+        Some(Outcome::Coarsen {
+            coarsening: Box::new(coarsening),
+            report,
+        })
+    }
+
+    /// The coarsening event: applies `coarsening` (with `report`) if nothing changed since it
+    /// was solved; otherwise the patch counts as rejected.
+    fn coarsen(
+        &self,
+        state: &mut Frontier,
+        coarsening: &Coarsening,
+        report: &PatchReport,
+    ) -> Changed {
+        let m = coarsening.vertex;
+        let Some((merge, parents)) = state.coarsen(coarsening) else {
+            let mut book = self.book.lock();
+            book.patches += 1;
+            book.rejected += 1;
             return Changed::default();
         };
-        let area: f64 = mesh.vertex_triangles(m).iter().map(|&t| mesh.area(t)).sum();
-        let eta = self.indicator(&adapt, &report, area * (t_mid - t_m) / 3.0);
-        if eta > adapt.tol {
-            return Changed::default();
-        }
-        let neighbours = mesh.vertex_neighbors(m).to_vec();
-        let merge = state
-            .coarsen(m, &solver, eta < adapt.lower)
-            .expect("checked coarsenable");
-        let parents: Vec<TriangleId> = merge
-            .halves
+        let t_m = coarsening
+            .times
             .iter()
-            .map(|&(parent, _)| merge.triangle_after(parent))
-            .collect();
+            .find(|&&(w, _)| w == m)
+            .map(|&(_, t)| t)
+            .expect("the times include the vertex");
         let t_end = self.problem.loaded.config.time.end;
         let mut book = self.book.lock();
-        self.add_patch(&mut book, &report);
+        self.add_patch(&mut book, report);
         book.coarsenings += 1;
         book.milestones.remove_vertex(t_m);
         book.progress.grow(-(t_end - t_m));
         self.add_to_snapshots(&mut book, &state.solution, &parents);
-        let mut offer: Vec<VertexId> = neighbours.iter().map(|&w| merge.vertex_after(w)).collect();
+        let mut offer: Vec<VertexId> = coarsening
+            .times
+            .iter()
+            .filter(|&&(w, _)| w != m)
+            .map(|&(w, _)| merge.vertex_after(w))
+            .collect();
         if (m as usize) < state.mesh.vertices().len() {
             // The former last vertex now has m's id.
             offer.push(m);
@@ -422,7 +475,11 @@ impl Solve<'_> {
             }
         }
         let here = (v as usize) < state.mesh.vertices().len() && state.mesh.vertex(v) == at;
-        if here && star.iter().all(|&(t, corners)| unchanged(state, t, corners)) {
+        if here
+            && star
+                .iter()
+                .all(|&(t, corners)| unchanged(state, t, corners))
+        {
             state.insist(v);
         }
         let t_end = self.problem.loaded.config.time.end;
@@ -484,13 +541,16 @@ enum Outcome {
         t_old: f64,
         t_new: f64,
         report: PatchReport,
-        /// Below the lower tolerance: the new elements may be coarsened.
-        calm: bool,
     },
     /// The indicator rejected the patch: nothing advanced; these star triangles (with their
     /// corners, to notice a change) are to be bisected.
     Rejected {
         star: Vec<(TriangleId, [VertexId; 3])>,
+    },
+    /// The tent's vertex is to be removed by the coarsening patch solved in its place.
+    Coarsen {
+        coarsening: Box<Coarsening>,
+        report: PatchReport,
     },
 }
 
@@ -516,6 +576,11 @@ impl<'a> Work<'a> for Solve<'a> {
                 self.max_star
             )));
         }
+        if let Some(adapt) = &self.adapt {
+            if let Some(outcome) = self.try_coarsening(adapt, state, solver, v) {
+                return Ok((front.time(v), outcome));
+            }
+        }
         let t_new = state.pitcher.pole_height(mesh, front, v).ok_or_else(|| {
             EngineError::Runtime(format!("vertex {v} was claimed but cannot be pitched"))
         })?;
@@ -532,7 +597,6 @@ impl<'a> Work<'a> for Solve<'a> {
             self.initial,
             &state.solution,
         );
-        let mut calm = false;
         if let Some(adapt) = &self.adapt {
             let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
             let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
@@ -546,9 +610,8 @@ impl<'a> Work<'a> for Solve<'a> {
                     return Ok((tent.t_old, Outcome::Rejected { star }));
                 }
             }
-            calm = eta < adapt.lower;
             for &t in star {
-                state.set_calm(t, calm);
+                state.set_calm(t, eta < adapt.lower);
             }
         }
         solver.commit(&state.solution);
@@ -557,7 +620,6 @@ impl<'a> Work<'a> for Solve<'a> {
             t_old: tent.t_old,
             t_new,
             report,
-            calm,
         };
         Ok((t_new, outcome))
     }
@@ -569,13 +631,18 @@ impl<'a> Work<'a> for Solve<'a> {
         o: Outcome,
         events: &Events<'a, Frontier>,
     ) -> Result<(), EngineError> {
-        let (t_old, t_new, report, calm) = match o {
+        let (t_old, t_new, report) = match o {
             Outcome::Accepted {
                 t_old,
                 t_new,
                 report,
-                calm,
-            } => (t_old, t_new, report, calm),
+            } => (t_old, t_new, report),
+            Outcome::Coarsen { coarsening, report } => {
+                events.push(Box::new(move |state: &mut Frontier| {
+                    self.coarsen(state, &coarsening, &report)
+                }));
+                return Ok(());
+            }
             Outcome::Rejected { star } => {
                 let mut book = self.book.lock();
                 book.patches += 1;
@@ -599,17 +666,6 @@ impl<'a> Work<'a> for Solve<'a> {
         self.add_patch(book, &report);
         book.max_slope_ratio = book.max_slope_ratio.max(slope);
         self.add_to_snapshots(book, &state.solution, mesh.vertex_triangles(v));
-        if calm {
-            // A bisection vertex whose elements are all calm can go again.
-            for &w in mesh.vertex_neighbors(v).iter().chain([&v]) {
-                if mesh.coarsenable(w).is_some() && state.calm_around(w) {
-                    let at = mesh.vertex(w);
-                    events.push(Box::new(move |state: &mut Frontier| {
-                        self.coarsen(state, w, at)
-                    }));
-                }
-            }
-        }
         book.progress.advance(t_new - t_old, book.patches);
         let mut passed = std::mem::take(&mut book.passed);
         book.milestones.advance(t_old, t_new, &mut passed);
@@ -690,11 +746,6 @@ pub fn solve_job(
         problem,
         adapt,
         max_star,
-        spare: Mutex::new(PatchSolver::new(
-            system.clone(),
-            config.solver.order,
-            max_star,
-        )),
         energy_reference: AtomicU64::new(energy0.total.to_bits()),
         initial,
         basis: basis.clone(),
@@ -804,6 +855,7 @@ pub fn solve_job(
         refinements: book.refinements,
         rejected_patches: book.rejected,
         coarsenings: book.coarsenings,
+        events: stats.events,
         min_edge,
         max_edge,
     };

@@ -546,14 +546,19 @@ impl PatchSolver {
     /// is the triangle each element's top face was built for: the tent's star triangles, or for
     /// a coarsening patch the child `(m, z, a)` whose id the parent takes, moved by renumbering.
     pub fn commit_to(&self, solution: &FrontSolution, id: impl Fn(TriangleId) -> TriangleId) {
-        let size = self.basis.len() * self.width();
-        for (i, slot) in self.slots[..self.used].iter().enumerate() {
-            solution.store(
-                id(slot.triangle) as usize,
-                &slot.geometry,
-                &self.output[i * size..(i + 1) * size],
-            );
+        for (t, geometry, coefficients) in self.elements() {
+            solution.store(id(t) as usize, geometry, coefficients);
         }
+    }
+
+    /// The elements of the last patch: the triangle each was built for (see
+    /// [`Self::commit_to`]), its geometry and its coefficients.
+    pub fn elements(&self) -> impl Iterator<Item = (TriangleId, &Geometry, &[f64])> {
+        let size = self.basis.len() * self.width();
+        self.slots[..self.used]
+            .iter()
+            .zip(self.output.chunks_exact(size))
+            .map(|(slot, c)| (slot.triangle, &slot.geometry, c))
     }
 
     /// Energy terms and diagnostics of element `i` after the solve; also copies its field
