@@ -361,32 +361,7 @@ mod tests {
     use super::*;
     use crate::geometry::Point;
     use crate::rectangle::{Diagonal, GridSegment, Rectangle};
-    use crate::refine::Split;
-
-    fn square(n: u32, diagonal: Diagonal, perturb: f64) -> Rectangle {
-        Rectangle {
-            width: 1.0,
-            height: 1.0,
-            nx: n,
-            ny: n,
-            diagonal,
-            interface: None,
-            perturb,
-            seed: 7,
-        }
-    }
-
-    fn allow_all(_: &Mesh, _: &[Split], _: TriangleId) -> bool {
-        true
-    }
-
-    /// Bisects `t` with every split allowed and checks the result.
-    fn refine(m: &mut Mesh, t: TriangleId) -> Vec<Split> {
-        let mut splits = Vec::new();
-        assert!(m.bisect(t, &mut allow_all, &mut splits));
-        m.validate().unwrap();
-        splits
-    }
+    use crate::testing::{XorShift, refine, square, tagged, total_area};
 
     /// Coarsens `v`, which must be coarsenable, and checks the result.
     fn coarsen(m: &mut Mesh, v: VertexId) -> Merge {
@@ -395,18 +370,6 @@ mod tests {
         assert_eq!(merge.ends, ends);
         m.validate().unwrap();
         merge
-    }
-
-    /// xorshift64: a deterministic pseudo-random sequence.
-    struct XorShift(u64);
-
-    impl XorShift {
-        fn below(&mut self, n: usize) -> u32 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 % n as u64) as u32
-        }
     }
 
     /// Positions, triangles with their edges, edges, vertex stars and vertex neighbours.
@@ -443,21 +406,6 @@ mod tests {
                 .collect(),
             vertices.map(|v| m.vertex_neighbors(v).to_vec()).collect(),
         )
-    }
-
-    fn total_area(m: &Mesh) -> f64 {
-        (0..m.triangles().len() as TriangleId)
-            .map(|t| m.area(t))
-            .sum()
-    }
-
-    /// Total length (metres) of the edges tagged `name`.
-    fn tagged_length(m: &Mesh, name: &str) -> f64 {
-        let tag = m.tag_id(name);
-        (0..m.edges().len() as EdgeId)
-            .filter(|&e| m.edges()[e as usize].tag == tag)
-            .map(|e| m.edge_length(e))
-            .sum()
     }
 
     #[test]
@@ -508,7 +456,7 @@ mod tests {
         assert_eq!(merge.halves, split.halves);
         assert_eq!((merge.moved_vertex, merge.moved_triangles), (None, vec![]));
         assert!(canonical(&m) == before);
-        assert!((tagged_length(&m, "bottom") - 1.0).abs() < 1e-15);
+        assert!((tagged(&m, "bottom").1 - 1.0).abs() < 1e-15);
     }
 
     #[test]
@@ -670,7 +618,7 @@ mod tests {
         let original = shapes(&m);
         let (vertices, triangles) = (m.vertices().len(), m.triangles().len());
         let names = ["left", "right", "bottom", "top", "crack"];
-        let lengths = names.map(|s| tagged_length(&m, s));
+        let lengths = names.map(|s| tagged(&m, s).1);
         let mut positions = m.vertices().to_vec();
         let mut areas: Vec<f64> = (0..triangles as TriangleId).map(|t| m.area(t)).collect();
         let mut rng = XorShift(seed);
@@ -715,7 +663,7 @@ mod tests {
         assert_eq!(m.triangles().len(), triangles);
         assert!((total_area(&m) - 1.0).abs() < 1e-12);
         for (name, length) in names.iter().zip(lengths) {
-            assert!((tagged_length(&m, name) - length).abs() < 1e-12, "{name}");
+            assert!((tagged(&m, name).1 - length).abs() < 1e-12, "{name}");
         }
         assert_eq!(shapes(&m), original);
         for (t, area) in areas.iter().enumerate() {

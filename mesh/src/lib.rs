@@ -12,6 +12,8 @@ pub mod mesh;
 pub mod rectangle;
 pub mod refine;
 pub mod tent;
+#[cfg(test)]
+mod testing;
 
 pub use coarsen::Merge;
 pub use front::Front;

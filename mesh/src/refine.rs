@@ -306,46 +306,8 @@ fn replace_sorted(list: &mut Vec<u32>, old: u32, new: u32) {
 mod tests {
     use super::*;
     use crate::geometry;
-    use crate::rectangle::{Diagonal, GridSegment, Rectangle};
-
-    fn square(n: u32, diagonal: Diagonal, perturb: f64) -> Rectangle {
-        Rectangle {
-            width: 1.0,
-            height: 1.0,
-            nx: n,
-            ny: n,
-            diagonal,
-            interface: None,
-            perturb,
-            seed: 7,
-        }
-    }
-
-    fn allow_all(_: &Mesh, _: &[Split], _: TriangleId) -> bool {
-        true
-    }
-
-    /// Bisects `t` with every split allowed and checks the result.
-    fn refine(m: &mut Mesh, t: TriangleId) -> Vec<Split> {
-        let mut splits = Vec::new();
-        assert!(m.bisect(t, &mut allow_all, &mut splits));
-        m.validate().unwrap();
-        splits
-    }
-
-    fn total_area(m: &Mesh) -> f64 {
-        (0..m.triangles().len() as TriangleId)
-            .map(|t| m.area(t))
-            .sum()
-    }
-
-    /// Number and total length (metres) of the edges tagged `name`.
-    fn tagged(m: &Mesh, name: &str) -> (usize, f64) {
-        let tag = m.tag_id(name);
-        (0..m.edges().len() as EdgeId)
-            .filter(|&e| m.edges()[e as usize].tag == tag)
-            .fold((0, 0.0), |(n, l), e| (n + 1, l + m.edge_length(e)))
-    }
+    use crate::rectangle::{Diagonal, GridSegment};
+    use crate::testing::{XorShift, allow_all, refine, square, tagged, total_area};
 
     fn counts(m: &Mesh) -> [usize; 3] {
         [m.vertices().len(), m.triangles().len(), m.edges().len()]
@@ -355,18 +317,6 @@ mod tests {
         (0..m.triangles().len() as TriangleId)
             .flat_map(|t| m.angles(t))
             .fold(f64::INFINITY, f64::min)
-    }
-
-    /// xorshift64: a deterministic pseudo-random sequence.
-    struct XorShift(u64);
-
-    impl XorShift {
-        fn below(&mut self, n: usize) -> u32 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 % n as u64) as u32
-        }
     }
 
     /// `count` bisections of random triangles, validating after each.
