@@ -9,6 +9,7 @@ pub mod boundary;
 pub mod element;
 pub mod exact;
 pub mod history;
+pub mod interface;
 pub mod material;
 pub mod norms;
 pub mod patch;

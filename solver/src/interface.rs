@@ -1,0 +1,646 @@
+//! Interface laws: the target values on the vertical faces above a tagged interior edge
+//! (seed 3.2.1-3.2.2, 3.3.1).
+//!
+//! An interface is a flag on mesh edges, not a cut: both sides are elements of the same patch and
+//! the law replaces the bonded Riemann solution between them. Each law maps the characteristics
+//! arriving at the face, `w_a = s_a - Z v_a` from side a and `w_b = s_b + Z v_b` from side b (per
+//! frame direction, scaled units, normal `m` from a to b), and the interface state (the normal
+//! separation `delta`, m) to side a's targets: velocity `v*_a` and traction `s*`. Side b's targets
+//! are the same law seen from b: swap `w_a` and `w_b` (the frame flips with the normal, which
+//! leaves frame tractions and characteristics unchanged).
+//!
+//! Every target keeps side a's outgoing characteristic (`s* - Z v*_a = w_a`), so the numerical
+//! dissipation `(v_a - v*_a) . (s_a - s*)` of each side stays non-negative whatever the law.
+//!
+//! Laws:
+//! - [`Law::Bonded`]: the bonded ("first kind") solution (3.21)-(3.23); linear.
+//! - [`Law::Free`]: both faces traction-free (separation, (3.34)); linear.
+//! - [`Law::Contact`]: unilateral contact with Coulomb friction: area fractions separation
+//!   `1 - eta`, stick `eta gamma`, slip `eta (1 - gamma)` (3.43), targets as area-weighted
+//!   averages of the modal Riemann values (3.44); `eta = eta_delta(delta) eta_s(sI_n)` with cubic
+//!   smoothsteps (3.36)-(3.39); `gamma = 1` when `|sI_t| <= k <-sI_n>_+` (3.25); slip traction
+//!   `k <-sI_n>_+` in the direction of the stick traction (3.32). Nonlinear: patches with a
+//!   contact face are solved by Newton iterations.
+
+use sdg_mesh::TagId;
+
+use crate::system::{FrameTrace, System};
+
+/// Parameters of a contact interface, physical units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactParams {
+    /// Coulomb friction coefficient `k` (>= 0).
+    pub friction: f64,
+    /// Separation at and below which the faces are fully in contact, `r_c <= 0` (m).
+    pub r_c: f64,
+    /// Separation at and above which the faces are fully separated, `r_s >= r_c` (m).
+    pub r_s: f64,
+    /// Normal bonded traction at and below which the faces are fully in contact, `s_c >= 0` (Pa).
+    pub s_c: f64,
+    /// Normal bonded traction at and above which the faces are fully separated, `s_s >= s_c`
+    /// (Pa).
+    pub s_s: f64,
+}
+
+/// Why contact parameters are invalid: the parameter's name and the reason.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{key}: {reason}")]
+pub struct LawError {
+    /// `friction`, `r_c`, `r_s`, `s_c` or `s_s`.
+    pub key: &'static str,
+    /// What is wrong.
+    pub reason: String,
+}
+
+impl ContactParams {
+    /// Checks the seed's ranges: `k >= 0`, `r_c <= 0`, `r_c <= r_s`, `s_c >= 0`, `s_c <= s_s`,
+    /// all finite.
+    pub fn validate(&self) -> Result<(), LawError> {
+        let err = |key, reason: &str| {
+            Err(LawError {
+                key,
+                reason: reason.into(),
+            })
+        };
+        for (key, value) in [
+            ("friction", self.friction),
+            ("r_c", self.r_c),
+            ("r_s", self.r_s),
+            ("s_c", self.s_c),
+            ("s_s", self.s_s),
+        ] {
+            if !value.is_finite() {
+                return err(key, "must be a finite number");
+            }
+        }
+        if self.friction < 0.0 {
+            return err("friction", "must be >= 0");
+        }
+        if self.r_c > 0.0 {
+            return err(
+                "r_c",
+                "must be <= 0 (m): full contact at a separation of r_c or less",
+            );
+        }
+        if self.r_c > self.r_s {
+            return err("r_s", "must be >= r_c");
+        }
+        if self.s_c < 0.0 {
+            return err("s_c", "must be >= 0 (Pa)");
+        }
+        if self.s_c > self.s_s {
+            return err("s_s", "must be >= s_c");
+        }
+        Ok(())
+    }
+}
+
+/// The law of an interface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Law {
+    /// Perfectly bonded: the bonded Riemann solution (the default for untagged interior edges).
+    Bonded,
+    /// Both faces traction-free.
+    Free,
+    /// Unilateral contact with Coulomb friction.
+    Contact(ContactParams),
+}
+
+impl Law {
+    /// True when the targets depend nonlinearly on the traces (a Newton patch).
+    pub fn is_nonlinear(&self) -> bool {
+        matches!(self, Law::Contact(_))
+    }
+}
+
+/// Which contact mode dominates at a point: the largest area fraction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Bonded law.
+    Bonded,
+    /// Contact-stick.
+    Stick,
+    /// Contact-slip.
+    Slip,
+    /// Separation.
+    Separation,
+}
+
+impl Mode {
+    /// A short lowercase name for outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Bonded => "bonded",
+            Mode::Stick => "stick",
+            Mode::Slip => "slip",
+            Mode::Separation => "separation",
+        }
+    }
+}
+
+/// A contact law in scaled units: tractions over `Z_ref`, impedances over `rho c_ref`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contact {
+    /// Scaled impedances per frame direction (normal, tangential).
+    pub z: [f64; 2],
+    /// Friction coefficient.
+    pub k: f64,
+    /// `r_c`, `r_s` (m).
+    pub r: [f64; 2],
+    /// `s_c`, `s_s` scaled.
+    pub s: [f64; 2],
+}
+
+/// Side a's targets of a contact face and their derivatives.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Targets {
+    /// `v*_a` and `s*` in side a's frame (scaled).
+    pub star: FrameTrace,
+    /// `d star / d w_a[j]`, rows in the order `v[0], v[1], s[0], s[1]`.
+    pub d_wa: [[f64; 2]; 4],
+    /// `d star / d w_b[j]`.
+    pub d_wb: [[f64; 2]; 4],
+    /// `d star / d delta` (per m).
+    pub d_delta: [f64; 4],
+    /// Separation rate `[[v*_n]] = v*_b,n - v*_a,n` (m/s), the same from both sides.
+    pub rate: f64,
+    /// `d rate / d w_a[j]`, `d rate / d w_b[j]`, `d rate / d delta`.
+    pub rate_wa: [f64; 2],
+    /// See [`Self::rate_wa`].
+    pub rate_wb: [f64; 2],
+    /// See [`Self::rate_wa`].
+    pub rate_delta: f64,
+    /// Bonded Riemann tractions `sI` (normal, tangential; scaled).
+    pub bonded_traction: [f64; 2],
+    /// Contact area fraction `eta`.
+    pub eta: f64,
+    /// Stick flag `gamma` (0 or 1).
+    pub gamma: f64,
+}
+
+impl Targets {
+    /// The mode with the largest area fraction.
+    pub fn mode(&self) -> Mode {
+        if self.eta < 0.5 {
+            Mode::Separation
+        } else if self.gamma > 0.5 {
+            Mode::Stick
+        } else {
+            Mode::Slip
+        }
+    }
+}
+
+/// Cubic smoothstep `r(xi) = 3 xi^2 - 2 xi^3` of `xi = (hi - x) / (hi - lo)`, clamped: 1 at and
+/// below `lo`, 0 at and above `hi` (a step at `lo` when `lo == hi`). Returns the value and its
+/// derivative with respect to `x`.
+fn fraction(x: f64, lo: f64, hi: f64) -> (f64, f64) {
+    if x <= lo {
+        (1.0, 0.0)
+    } else if x >= hi {
+        (0.0, 0.0)
+    } else {
+        let xi = (hi - x) / (hi - lo);
+        (
+            xi * xi * (3.0 - 2.0 * xi),
+            -6.0 * xi * (1.0 - xi) / (hi - lo),
+        )
+    }
+}
+
+impl Contact {
+    /// The scaled law of `params` for `system` (in-plane modes only).
+    pub fn new(system: &System, params: &ContactParams) -> Self {
+        let z_ref = system.z_ref();
+        Self {
+            z: system.impedance(),
+            k: params.friction,
+            r: [params.r_c, params.r_s],
+            s: [params.s_c / z_ref, params.s_s / z_ref],
+        }
+    }
+
+    /// Side a's targets from the arriving characteristics `w_a`, `w_b` (normal, tangential) and
+    /// the normal separation `delta` (m).
+    pub fn targets(&self, w_a: [f64; 2], w_b: [f64; 2], delta: f64) -> Targets {
+        let [z0, z1] = self.z;
+        let si = [0.5 * (w_a[0] + w_b[0]), 0.5 * (w_a[1] + w_b[1])];
+        let vi = [
+            (w_b[0] - w_a[0]) / (2.0 * z0),
+            (w_b[1] - w_a[1]) / (2.0 * z1),
+        ];
+        let v3 = [-w_a[0] / z0, -w_a[1] / z1];
+        let (eta_d, deta_d) = fraction(delta, self.r[0], self.r[1]);
+        let (eta_s, deta_s) = fraction(si[0], self.s[0], self.s[1]);
+        let eta = eta_d * eta_s;
+        // d eta / d w_x0 (either side: sI_n = (w_a0 + w_b0) / 2) and d eta / d delta.
+        let eta_w = 0.5 * eta_d * deta_s;
+        let eta_delta = deta_d * eta_s;
+
+        // Tangential contact traction T and side a's velocity V: stick or slip.
+        let bound = self.k * (-si[0]).max(0.0);
+        let stick = si[1].abs() <= bound;
+        let sign = if si[1] < 0.0 { -1.0 } else { 1.0 };
+        // d bound / d w_x0.
+        let bound_w = if si[0] < 0.0 { -0.5 * self.k } else { 0.0 };
+        let (t, t_w0, t_wa1, t_wb1, v, v_w0, v_wa1, v_wb1);
+        if stick {
+            t = si[1];
+            (t_w0, t_wa1, t_wb1) = (0.0, 0.5, 0.5);
+            v = vi[1];
+            (v_w0, v_wa1, v_wb1) = (0.0, -0.5 / z1, 0.5 / z1);
+        } else {
+            t = sign * bound;
+            (t_w0, t_wa1, t_wb1) = (sign * bound_w, 0.0, 0.0);
+            v = (t - w_a[1]) / z1;
+            (v_w0, v_wa1, v_wb1) = (t_w0 / z1, -1.0 / z1, 0.0);
+        }
+
+        let mut out = Targets {
+            bonded_traction: si,
+            eta,
+            gamma: if stick { 1.0 } else { 0.0 },
+            ..Default::default()
+        };
+        out.star = FrameTrace {
+            v: [
+                eta * vi[0] + (1.0 - eta) * v3[0],
+                eta * v + (1.0 - eta) * v3[1],
+            ],
+            s: [eta * si[0], eta * t],
+        };
+        // Rows: v0, v1, s0, s1; columns: normal, tangential characteristic.
+        let dv0 = eta_w * (vi[0] - v3[0]);
+        out.d_wa[0] = [dv0 - eta * 0.5 / z0 - (1.0 - eta) / z0, 0.0];
+        out.d_wb[0] = [dv0 + eta * 0.5 / z0, 0.0];
+        let dv1 = eta_w * (v - v3[1]) + eta * v_w0;
+        out.d_wa[1] = [dv1, eta * v_wa1 - (1.0 - eta) / z1];
+        out.d_wb[1] = [dv1, eta * v_wb1];
+        let ds0 = eta_w * si[0] + 0.5 * eta;
+        out.d_wa[2] = [ds0, 0.0];
+        out.d_wb[2] = [ds0, 0.0];
+        let ds1 = eta_w * t + eta * t_w0;
+        out.d_wa[3] = [ds1, eta * t_wa1];
+        out.d_wb[3] = [ds1, eta * t_wb1];
+        out.d_delta = [
+            eta_delta * (vi[0] - v3[0]),
+            eta_delta * (v - v3[1]),
+            eta_delta * si[0],
+            eta_delta * t,
+        ];
+
+        let open = (w_a[0] + w_b[0]) / z0;
+        out.rate = (1.0 - eta) * open;
+        let rate_w = -eta_w * open + (1.0 - eta) / z0;
+        out.rate_wa = [rate_w, 0.0];
+        out.rate_wb = [rate_w, 0.0];
+        out.rate_delta = -eta_delta * open;
+        out
+    }
+}
+
+/// The characteristics arriving at a face from side a and side b, from their frame traces.
+pub fn characteristics(z: [f64; 2], a: &FrameTrace, b: &FrameTrace) -> ([f64; 2], [f64; 2]) {
+    (
+        [a.s[0] - z[0] * a.v[0], a.s[1] - z[1] * a.v[1]],
+        [b.s[0] + z[0] * b.v[0], b.s[1] + z[1] * b.v[1]],
+    )
+}
+
+/// Laws per interface tag; interior edges without one are bonded.
+#[derive(Clone, Debug, Default)]
+pub struct Interfaces {
+    by_tag: Vec<Option<Law>>,
+}
+
+impl Interfaces {
+    /// Laws indexed by tag id.
+    pub fn new(by_tag: Vec<Option<Law>>) -> Self {
+        Self { by_tag }
+    }
+
+    /// The law on interior edges tagged `tag`.
+    pub fn law(&self, tag: Option<TagId>) -> Law {
+        tag.and_then(|t| self.by_tag.get(t as usize).copied().flatten())
+            .unwrap_or(Law::Bonded)
+    }
+
+    /// True when some tag has a nonlinear law.
+    pub fn any_nonlinear(&self) -> bool {
+        self.by_tag.iter().flatten().any(Law::is_nonlinear)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{Material, Plane};
+    use crate::riemann;
+
+    fn system() -> System {
+        System::new(&Material::new(3.24e9, 0.35, 1190.0, Plane::Strain).unwrap())
+    }
+
+    fn law(sys: &System, friction: f64, r: [f64; 2], s: [f64; 2]) -> Contact {
+        Contact::new(
+            sys,
+            &ContactParams {
+                friction,
+                r_c: r[0],
+                r_s: r[1],
+                s_c: s[0],
+                s_s: s[1],
+            },
+        )
+    }
+
+    /// Independent characteristic computation of side a's targets for a pure mode, in terms of
+    /// the traces (seed (3.22), (3.32), (3.34)), with impedances `z`.
+    fn expected(z: [f64; 2], a: &FrameTrace, b: &FrameTrace, mode: Mode, k: f64) -> FrameTrace {
+        let bonded = |j: usize| {
+            let s = (a.s[j] * z[j] + b.s[j] * z[j]) / (2.0 * z[j]) + 0.5 * z[j] * (b.v[j] - a.v[j]);
+            let v = (b.s[j] - a.s[j]) / (2.0 * z[j]) + 0.5 * (a.v[j] + b.v[j]);
+            (v, s)
+        };
+        let (vn, sn) = bonded(0);
+        let (vt, st) = bonded(1);
+        match mode {
+            Mode::Bonded | Mode::Stick => FrameTrace {
+                v: [vn, vt],
+                s: [sn, st],
+            },
+            Mode::Slip => {
+                let t = k * (-sn).max(0.0) * st.signum();
+                FrameTrace {
+                    v: [vn, a.v[1] + (t - a.s[1]) / z[1]],
+                    s: [sn, t],
+                }
+            }
+            Mode::Separation => FrameTrace {
+                v: [a.v[0] - a.s[0] / z[0], a.v[1] - a.s[1] / z[1]],
+                s: [0.0, 0.0],
+            },
+        }
+    }
+
+    /// Checks `targets` against [`expected`] in every pure mode; returns the first mismatch.
+    fn check_modes(
+        targets: impl Fn(&Contact, [f64; 2], [f64; 2], f64) -> Targets,
+    ) -> Result<(), String> {
+        let sys = system();
+        let z = sys.impedance();
+        // Sharp regularization far from the states used, friction 0.3.
+        let c = law(&sys, 0.3, [-1e-6, 1e-6], [1e3, 2e3]);
+        let cases = [
+            // (a, b, delta, mode)
+            (
+                FrameTrace {
+                    v: [0.1, 0.02],
+                    s: [-0.5, 0.05],
+                },
+                FrameTrace {
+                    v: [-0.1, 0.01],
+                    s: [-0.4, 0.04],
+                },
+                -2e-6,
+                Mode::Stick,
+            ),
+            (
+                FrameTrace {
+                    v: [0.1, 0.3],
+                    s: [-0.5, 0.6],
+                },
+                FrameTrace {
+                    v: [-0.1, -0.2],
+                    s: [-0.4, 0.7],
+                },
+                -2e-6,
+                Mode::Slip,
+            ),
+            (
+                FrameTrace {
+                    v: [0.1, -0.3],
+                    s: [-0.5, -0.6],
+                },
+                FrameTrace {
+                    v: [-0.1, 0.2],
+                    s: [-0.4, -0.7],
+                },
+                -2e-6,
+                Mode::Slip,
+            ),
+            (
+                FrameTrace {
+                    v: [0.1, 0.02],
+                    s: [0.5, 0.05],
+                },
+                FrameTrace {
+                    v: [0.3, 0.01],
+                    s: [0.4, 0.04],
+                },
+                0.0,
+                Mode::Separation,
+            ),
+            (
+                FrameTrace {
+                    v: [0.1, 0.02],
+                    s: [-0.5, 0.05],
+                },
+                FrameTrace {
+                    v: [-0.1, 0.01],
+                    s: [-0.4, 0.04],
+                },
+                5e-6,
+                Mode::Separation,
+            ),
+        ];
+        for (a, b, delta, mode) in cases {
+            let (w_a, w_b) = characteristics(z, &a, &b);
+            let got = targets(&c, w_a, w_b, delta);
+            let want = expected(z, &a, &b, mode, c.k);
+            if got.mode() != mode {
+                return Err(format!("{mode:?}: got mode {:?}", got.mode()));
+            }
+            for j in 0..2 {
+                if (got.star.v[j] - want.v[j]).abs() > 1e-14
+                    || (got.star.s[j] - want.s[j]).abs() > 1e-14
+                {
+                    return Err(format!("{mode:?}: {:?} against {want:?}", got.star));
+                }
+            }
+            // Side b from its own view: swapped characteristics, same tractions, velocities
+            // of b; the separation rate is the jump of the normal velocities.
+            let from_b = targets(&c, w_b, w_a, delta);
+            let rate = -from_b.star.v[0] - got.star.v[0];
+            if (from_b.star.s[0] - got.star.s[0]).abs() > 1e-14
+                || (from_b.star.s[1] - got.star.s[1]).abs() > 1e-14
+                || (rate - got.rate).abs() > 1e-14
+            {
+                return Err(format!("{mode:?}: sides disagree"));
+            }
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn every_mode_matches_the_characteristic_solution() {
+        check_modes(Contact::targets).unwrap();
+    }
+
+    #[test]
+    fn a_sign_flip_in_the_solution_is_caught() {
+        // The same check on a law whose slip traction points against the stick traction.
+        let flipped = |c: &Contact, w_a: [f64; 2], w_b: [f64; 2], delta: f64| {
+            let mut t = c.targets(w_a, w_b, delta);
+            if t.mode() == Mode::Slip {
+                t.star.s[1] = -t.star.s[1];
+            }
+            t
+        };
+        assert!(check_modes(flipped).is_err());
+        // And one whose separation velocity takes the wrong characteristic sign.
+        let wrong = |c: &Contact, w_a: [f64; 2], w_b: [f64; 2], delta: f64| {
+            c.targets([-w_a[0], w_a[1]], w_b, delta)
+        };
+        assert!(check_modes(wrong).is_err());
+    }
+
+    #[test]
+    fn compressive_stick_is_the_bonded_solution() {
+        let sys = system();
+        let c = law(&sys, 0.5, [-1e-6, 0.0], [0.0, 1e3]);
+        let a = FrameTrace {
+            v: [0.2, -0.1],
+            s: [-0.8, 0.1],
+        };
+        let b = FrameTrace {
+            v: [-0.1, 0.05],
+            s: [-0.7, 0.12],
+        };
+        let (w_a, w_b) = characteristics(sys.impedance(), &a, &b);
+        let t = c.targets(w_a, w_b, -2e-6);
+        let bonded = riemann::bonded(&sys, &a, &b);
+        assert_eq!(t.mode(), Mode::Stick);
+        for j in 0..2 {
+            assert!((t.star.v[j] - bonded.v[j]).abs() < 1e-15);
+            assert!((t.star.s[j] - bonded.s[j]).abs() < 1e-15);
+        }
+        assert_eq!(t.rate, 0.0);
+    }
+
+    #[test]
+    fn outgoing_characteristic_is_kept_in_blended_modes() {
+        let sys = system();
+        let z = sys.impedance();
+        let c = law(&sys, 0.25, [-1e-6, 1e-6], [0.0, 0.3]);
+        for (i, delta) in [-5e-7, 0.0, 3e-7].into_iter().enumerate() {
+            let w_a = [0.1 - 0.2 * i as f64, 0.3];
+            let w_b = [-0.2, 0.1 + 0.1 * i as f64];
+            let t = c.targets(w_a, w_b, delta);
+            assert!(
+                t.eta > 0.0 && t.eta < 1.0,
+                "blend at {delta}: eta {}",
+                t.eta
+            );
+            for j in 0..2 {
+                assert!((t.star.s[j] - z[j] * t.star.v[j] - w_a[j]).abs() < 1e-15);
+            }
+        }
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let sys = system();
+        let c = law(&sys, 0.25, [-1e-6, 1e-6], [0.0, 0.3]);
+        let values = |t: &Targets| [t.star.v[0], t.star.v[1], t.star.s[0], t.star.s[1], t.rate];
+        let h = 1e-7;
+        // Blended contact, slip and stick points away from kinks.
+        for (w_a, w_b, delta) in [
+            ([-0.1, 0.3], [-0.15, 0.1], -2e-7),
+            ([-0.1, 0.01], [-0.15, 0.02], 4e-7),
+            ([0.05, 0.01], [0.1, 0.02], 1e-7),
+        ] {
+            let t = c.targets(w_a, w_b, delta);
+            let mut d_wa = [[0.0; 2]; 5];
+            let mut d_wb = [[0.0; 2]; 5];
+            for j in 0..2 {
+                let (mut pa, mut ma, mut pb, mut mb) = (w_a, w_a, w_b, w_b);
+                pa[j] += h;
+                ma[j] -= h;
+                pb[j] += h;
+                mb[j] -= h;
+                let fa = values(&c.targets(pa, w_b, delta));
+                let ga = values(&c.targets(ma, w_b, delta));
+                let fb = values(&c.targets(w_a, pb, delta));
+                let gb = values(&c.targets(w_a, mb, delta));
+                for r in 0..5 {
+                    d_wa[r][j] = (fa[r] - ga[r]) / (2.0 * h);
+                    d_wb[r][j] = (fb[r] - gb[r]) / (2.0 * h);
+                }
+            }
+            let hd = 1e-10;
+            let fd = values(&c.targets(w_a, w_b, delta + hd));
+            let gd = values(&c.targets(w_a, w_b, delta - hd));
+            let analytic_wa = [t.d_wa[0], t.d_wa[1], t.d_wa[2], t.d_wa[3], t.rate_wa];
+            let analytic_wb = [t.d_wb[0], t.d_wb[1], t.d_wb[2], t.d_wb[3], t.rate_wb];
+            let analytic_d = [
+                t.d_delta[0],
+                t.d_delta[1],
+                t.d_delta[2],
+                t.d_delta[3],
+                t.rate_delta,
+            ];
+            for r in 0..5 {
+                for j in 0..2 {
+                    assert!(
+                        (analytic_wa[r][j] - d_wa[r][j]).abs() < 1e-6 * (1.0 + d_wa[r][j].abs()),
+                        "row {r} w_a[{j}]: {} vs {}",
+                        analytic_wa[r][j],
+                        d_wa[r][j]
+                    );
+                    assert!(
+                        (analytic_wb[r][j] - d_wb[r][j]).abs() < 1e-6 * (1.0 + d_wb[r][j].abs()),
+                        "row {r} w_b[{j}]"
+                    );
+                }
+                let fd_delta = (fd[r] - gd[r]) / (2.0 * hd);
+                assert!(
+                    (analytic_d[r] - fd_delta).abs() < 1e-5 * (1.0 + fd_delta.abs()),
+                    "row {r} delta: {} vs {fd_delta}",
+                    analytic_d[r]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn invalid_parameters_are_named() {
+        let ok = ContactParams {
+            friction: 0.25,
+            r_c: -1e-6,
+            r_s: 0.0,
+            s_c: 0.0,
+            s_s: 6e5,
+        };
+        assert!(ok.validate().is_ok());
+        let key = |p: ContactParams| p.validate().unwrap_err().key;
+        assert_eq!(
+            key(ContactParams {
+                friction: -0.1,
+                ..ok
+            }),
+            "friction"
+        );
+        assert_eq!(key(ContactParams { r_c: 1e-6, ..ok }), "r_c");
+        assert_eq!(
+            key(ContactParams {
+                r_c: -1e-6,
+                r_s: -2e-6,
+                ..ok
+            }),
+            "r_s"
+        );
+        assert_eq!(key(ContactParams { s_c: 7e5, ..ok }), "s_s");
+        assert_eq!(key(ContactParams { s_c: -1.0, ..ok }), "s_c");
+    }
+}
