@@ -40,6 +40,10 @@ pub struct Merge {
     /// larger child first means earlier removals never move a later `child`, so `to` is its id
     /// before the merge; a parent may be moved.
     pub moved_triangles: Vec<(TriangleId, TriangleId)>,
+    /// The removed edges (ids before the merge), in removal order: each removal moves the then
+    /// last edge into the freed id (`swap_remove`). The restored edge keeps the id of its half
+    /// at its smaller end.
+    pub removed_edges: Vec<EdgeId>,
 }
 
 impl Merge {
@@ -70,6 +74,14 @@ impl Merge {
     pub fn apply_to_triangles<T>(&self, data: &mut Vec<T>) {
         for &(_, child) in &self.halves {
             data.swap_remove(child as usize);
+        }
+    }
+
+    /// Renumbers per-edge data as the merge renumbered the edges: `data.swap_remove(e)` for each
+    /// of `removed_edges` in order. `data` must have one entry per edge before the merge.
+    pub fn apply_to_edges<T>(&self, data: &mut Vec<T>) {
+        for &e in &self.removed_edges {
+            data.swap_remove(e as usize);
         }
     }
 }
@@ -162,7 +174,7 @@ impl Mesh {
         let mut dead: Vec<EdgeId> = halves.iter().map(|h| h.zm).collect();
         dead.push(other_half);
         dead.sort_unstable_by_key(|&e| Reverse(e));
-        for e in dead {
+        for &e in &dead {
             self.remove_edge(e);
         }
         let moved_triangles = halves
@@ -176,6 +188,7 @@ impl Mesh {
             halves: halves.iter().map(|h| (h.parent, h.child)).collect(),
             moved_vertex,
             moved_triangles,
+            removed_edges: dead,
         })
     }
 
@@ -428,8 +441,10 @@ mod tests {
                 halves: vec![(1, 9), (0, 8)],
                 moved_vertex: None,
                 moved_triangles: vec![],
+                removed_edges: merge.removed_edges.clone(),
             }
         );
+        assert_eq!(merge.removed_edges.len(), 3, "both edges zm and one half of ab");
         assert!(canonical(&m) == original);
     }
 
@@ -582,6 +597,7 @@ mod tests {
             halves,
             moved_vertex: None,
             moved_triangles,
+            removed_edges: vec![],
         };
         let mut vertices = vec![10, 11, 12, 13];
         merge(1, vec![], vec![]).apply_to_vertices(&mut vertices);

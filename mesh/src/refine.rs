@@ -26,6 +26,9 @@ pub struct Split {
     /// refinement edge `ab`, `kept` keeps its id and becomes `(vertex, z, a)`, and `new` is a
     /// freshly appended triangle `(vertex, b, z)`.
     pub halves: Vec<(TriangleId, TriangleId)>,
+    /// The halves of the split edge: the one at `ends[0]` keeps the edge's id, the one at
+    /// `ends[1]` is freshly appended; both keep its tag.
+    pub edges: [EdgeId; 2],
 }
 
 impl Mesh {
@@ -263,6 +266,7 @@ impl Mesh {
             vertex: m,
             ends: [p, q],
             halves,
+            edges: [e, eq],
         }
     }
 }
@@ -354,8 +358,11 @@ mod tests {
                 vertex: 9,
                 ends: [0, 4],
                 halves: vec![(0, 8), (1, 9)],
+                edges: splits[0].edges,
             }]
         );
+        let halves = splits[0].edges.map(|e| m.edges()[e as usize].vertices);
+        assert_eq!(halves, [[0, 9], [4, 9]]);
         assert_eq!(counts(&m), [10, 10, 19]);
         assert_eq!(m.vertex(9), [0.25, 0.25]);
         for (k, ((kept, new), children)) in splits[0].halves.iter().zip(predicted).enumerate() {
