@@ -60,14 +60,16 @@ fn patches(c: &mut Criterion) {
                     for (i, j) in (1..=5).flat_map(|i| (1..=5).map(move |j| (2 * i, 2 * j))) {
                         let v = j * 13 + i;
                         let tent = pitcher.pitch(&mesh, front, v).expect("local minimum");
-                        solver.solve(
-                            &mesh,
-                            front,
-                            &tent,
-                            &boundary,
-                            Initial::Wave(&wave),
-                            solution,
-                        );
+                        solver
+                            .solve(
+                                &mesh,
+                                front,
+                                &tent,
+                                &boundary,
+                                Initial::Wave(&wave),
+                                solution,
+                            )
+                            .expect("a linear patch");
                         solver.commit(solution);
                     }
                 },

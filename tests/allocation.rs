@@ -82,14 +82,16 @@ fn patch_solves_do_not_allocate() {
             .unwrap();
         let before = ALLOCATIONS.load(Ordering::Relaxed);
         let tent = pitcher.pitch(&mesh, &front, v).unwrap();
-        solver.solve(
-            &mesh,
-            &front,
-            &tent,
-            &boundary,
-            Initial::Wave(&wave),
-            &solution,
-        );
+        solver
+            .solve(
+                &mesh,
+                &front,
+                &tent,
+                &boundary,
+                Initial::Wave(&wave),
+                &solution,
+            )
+            .unwrap();
         solver.commit(&solution);
         counts.push(ALLOCATIONS.load(Ordering::Relaxed) - before);
     }

@@ -164,7 +164,9 @@ fn coarsening_patch_balances_momentum_and_energy() {
         }
         tents_at_m += usize::from(v == m);
         let tent = pitcher.pitch(&mesh, &front, v).unwrap();
-        solver.solve(&mesh, &front, &tent, &boundary, init, &solution);
+        solver
+            .solve(&mesh, &front, &tent, &boundary, init, &solution)
+            .unwrap();
         solver.commit(&solution);
     };
     assert_eq!(report.elements, 2);

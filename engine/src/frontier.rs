@@ -216,6 +216,7 @@ impl Frontier {
                 }
             }
         }
+        solution.follow_splits(mesh.edges().len(), &splits);
         pitcher.update(
             mesh,
             splits

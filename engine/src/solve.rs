@@ -47,8 +47,25 @@ pub struct EnergySummary {
     pub boundary_work: f64,
     /// Numerical dissipation of all elements (each non-negative).
     pub dissipation: f64,
-    /// `(initial + boundary_work - final - dissipation) / (initial + |boundary_work|)`.
+    /// Work absorbed by interfaces (contact, free): the power their targets take out of the
+    /// elements on both sides, integrated.
+    pub interface_work: f64,
+    /// Part of `interface_work` done by tangential tractions on tangential velocity jumps.
+    pub friction_dissipation: f64,
+    /// `(initial + boundary_work - final - dissipation - interface_work) /
+    /// (initial + |boundary_work|)`.
     pub balance_residual_rel: f64,
+}
+
+/// Nonlinear interface patches of a run.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct InterfaceSummary {
+    /// Patches solved by Newton iterations (with a contact face).
+    pub nonlinear_patches: u64,
+    /// Mean linear solves per nonlinear patch (the first from the bonded solution).
+    pub newton_iterations_mean: f64,
+    /// Most linear solves of one nonlinear patch.
+    pub newton_iterations_max: usize,
 }
 
 /// Relative L2 errors at the end time against the exact solution.
@@ -100,6 +117,8 @@ pub struct RunSummary {
     pub threads: usize,
     /// Energy accounting.
     pub energy: EnergySummary,
+    /// Newton statistics of patches with contact faces.
+    pub interface: InterfaceSummary,
     /// Errors against `[exact]`, when configured.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<ErrorSummary>,
@@ -202,6 +221,9 @@ struct Book {
     rejected: u64,
     refinements: u64,
     coarsenings: u64,
+    nonlinear_patches: u64,
+    newton_iterations: u64,
+    newton_max: usize,
     /// Energy of the initial data as the solver takes it in (scaled units): on the initial front,
     /// corrected whenever refinement splits a triangle that still carries initial data.
     initial_energy: f64,
@@ -270,7 +292,14 @@ impl Solve<'_> {
         book.totals.energy_in += report.energy_in;
         book.totals.energy_out += report.energy_out;
         book.totals.boundary_work += report.boundary_work;
+        book.totals.interface_work += report.interface_work;
+        book.totals.friction_dissipation += report.friction_dissipation;
         book.totals.dissipation += report.dissipation;
+        if report.newton_iterations > 0 {
+            book.nonlinear_patches += 1;
+            book.newton_iterations += report.newton_iterations as u64;
+            book.newton_max = book.newton_max.max(report.newton_iterations);
+        }
         book.totals.momentum_residual = book.totals.momentum_residual.max(report.momentum_residual);
         book.energy_max = book
             .energy_max
@@ -517,10 +546,13 @@ impl Solve<'_> {
             |x| initial_state(self.problem, self.initial, x),
         );
         let totals = &book.totals;
-        let balance = book.initial_energy + totals.boundary_work - e.total - totals.dissipation;
+        let balance = book.initial_energy + totals.boundary_work
+            - e.total
+            - totals.dissipation
+            - totals.interface_work;
         let _ = writeln!(
             book.history,
-            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e}",
+            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
             state.front.min_time(),
             book.patches,
             rho * e.total,
@@ -528,6 +560,8 @@ impl Solve<'_> {
             rho * e.strain,
             rho * totals.boundary_work,
             rho * totals.dissipation,
+            rho * totals.interface_work,
+            rho * totals.friction_dissipation,
             rho * balance
         );
     }
@@ -589,7 +623,7 @@ impl<'a> Work<'a> for Solve<'a> {
             t_old: front.time(v),
             t_new,
         };
-        let report = solver.solve(
+        let solved = solver.solve(
             mesh,
             front,
             &tent,
@@ -597,6 +631,29 @@ impl<'a> Work<'a> for Solve<'a> {
             self.initial,
             &state.solution,
         );
+        let report = match solved {
+            Ok(report) => report,
+            Err(failure) => {
+                // Not converged: refine around the vertex when adaptivity can, else stop.
+                let star: Vec<_> = self
+                    .adapt
+                    .iter()
+                    .flat_map(|adapt| {
+                        star.iter()
+                            .filter(|&&t| self.may_refine(adapt, state, t))
+                            .map(|&t| (t, mesh.triangles()[t as usize]))
+                    })
+                    .collect();
+                if star.is_empty() {
+                    let [x, y] = mesh.vertex(v);
+                    return Err(EngineError::Runtime(format!(
+                        "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {failure}",
+                        tent.t_old
+                    )));
+                }
+                return Ok((tent.t_old, Outcome::Rejected { star }));
+            }
+        };
         if let Some(adapt) = &self.adapt {
             let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
             let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
@@ -727,7 +784,8 @@ pub fn solve_job(
     let mut state = Frontier::new(
         mesh.clone(),
         Front::flat(mesh.vertices().len(), 0.0),
-        FrontSolution::new(mesh.triangles().len(), basis.len(), width),
+        FrontSolution::new(mesh.triangles().len(), basis.len(), width)
+            .with_edges(mesh.edges().len()),
         pitcher,
     );
     if let Some(adapt) = &adapt {
@@ -755,6 +813,9 @@ pub fn solve_job(
             rejected: 0,
             refinements: 0,
             coarsenings: 0,
+            nonlinear_patches: 0,
+            newton_iterations: 0,
+            newton_max: 0,
             initial_energy: energy0.total,
             energy_max: energy0.total,
             elements: 0,
@@ -769,7 +830,7 @@ pub fn solve_job(
             passed: Vec::new(),
             history: String::from(
                 "time_s,patches,front_energy_j,kinetic_j,strain_j,boundary_work_j,dissipation_j,\
-                 balance_residual_j\n",
+                 interface_work_j,friction_dissipation_j,balance_residual_j\n",
             ),
             progress: Progress::new(options.progress, state.mesh.vertices().len() as f64 * t_end),
             phi: vec![0.0; basis.len()],
@@ -788,8 +849,18 @@ pub fn solve_job(
         "solve started"
     );
     let start = Instant::now();
-    let stats = sdg_scheduler::run(&mut state, t_end, &solve, solvers, &scheduler)
-        .map_err(scheduler_error)?;
+    let stats = match sdg_scheduler::run(&mut state, t_end, &solve, solvers, &scheduler) {
+        Ok(stats) => stats,
+        Err(e) => {
+            // Keep what the run produced so far: the history up to the failure and the
+            // snapshots already complete.
+            let mut book = solve.book.lock();
+            book.progress.finish();
+            solve.history_row(&state, &mut book);
+            write_atomic(&dir, "history.csv", book.history.as_bytes())?;
+            return Err(scheduler_error(e));
+        }
+    };
     let wall_time_s = start.elapsed().as_secs_f64();
     let mut book = solve.book.lock();
     book.progress.finish();
@@ -809,6 +880,7 @@ pub fn solve_job(
     let initial_j = rho * book.initial_energy;
     let work = rho * book.totals.boundary_work;
     let dissipation = rho * book.totals.dissipation;
+    let interface_work = rho * book.totals.interface_work;
     let final_j = rho * e.total;
     let energy = EnergySummary {
         initial: initial_j,
@@ -817,8 +889,16 @@ pub fn solve_job(
         r#final: final_j,
         boundary_work: work,
         dissipation,
-        balance_residual_rel: (initial_j + work - final_j - dissipation)
+        interface_work,
+        friction_dissipation: rho * book.totals.friction_dissipation,
+        balance_residual_rel: (initial_j + work - final_j - dissipation - interface_work)
             / (initial_j + work.abs()).max(f64::MIN_POSITIVE),
+    };
+    let interface = InterfaceSummary {
+        nonlinear_patches: book.nonlinear_patches,
+        newton_iterations_mean: book.newton_iterations as f64
+            / book.nonlinear_patches.max(1) as f64,
+        newton_iterations_max: book.newton_max,
     };
     let error = problem.exact.as_ref().map(|w| {
         let e = slice_errors(mesh, solution, &basis, system, t_end, w);
@@ -850,6 +930,7 @@ pub fn solve_job(
         patches_per_second: book.patches as f64 / wall_time_s.max(f64::MIN_POSITIVE),
         threads: scheduler.threads,
         energy,
+        interface,
         error,
         snapshots: book.snapshots.written().to_vec(),
         refinements: book.refinements,

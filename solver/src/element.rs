@@ -4,6 +4,7 @@
 use parking_lot::Mutex;
 
 use crate::basis::Basis;
+use crate::face::FaceState;
 
 /// A point `(x, y, tau)` in scaled spacetime, metres.
 pub type SpacePoint = [f64; 3];
@@ -88,11 +89,16 @@ impl Geometry {
 /// displacement components), in the orthonormal basis of the element's reference tetrahedron.
 /// Each triangle's entry has its own lock, so threads whose tents own disjoint triangles work on
 /// one `FrontSolution` without waiting for each other.
+///
+/// It also holds the interface state on the front: per mesh edge, the last interface face solved
+/// over it (see [`crate::face`]), or nothing while the edge carries the initial state (zero
+/// separation and slip). Only the tent at one of an edge's ends touches its entry.
 #[derive(Debug)]
 pub struct FrontSolution {
     basis_len: usize,
     width: usize,
     cells: Vec<Mutex<Cell>>,
+    faces: Vec<Mutex<Option<Box<FaceState>>>>,
 }
 
 /// The element under one front triangle.
@@ -113,6 +119,11 @@ impl Clone for FrontSolution {
                 .iter()
                 .map(|c| Mutex::new(c.lock().clone()))
                 .collect(),
+            faces: self
+                .faces
+                .iter()
+                .map(|f| Mutex::new(f.lock().clone()))
+                .collect(),
         }
     }
 }
@@ -129,6 +140,47 @@ impl FrontSolution {
             basis_len,
             width,
             cells: (0..triangles).map(|_| Mutex::new(cell.clone())).collect(),
+            faces: Vec::new(),
+        }
+    }
+
+    /// Adds room for the interface state of `edges` mesh edges, all in the initial state. Needed
+    /// before solving patches with nonlinear interface faces.
+    pub fn with_edges(mut self, edges: usize) -> Self {
+        self.faces = (0..edges).map(|_| Mutex::new(None)).collect();
+        self
+    }
+
+    /// Number of edges with room for interface state.
+    pub fn edges(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// The interface face over edge `e`, or `None` in the initial state.
+    pub fn face(&self, e: usize) -> Option<FaceState> {
+        self.faces[e].lock().as_deref().copied()
+    }
+
+    /// Replaces the interface face over edge `e`.
+    pub fn store_face(&self, e: usize, face: &FaceState) {
+        let mut slot = self.faces[e].lock();
+        match slot.as_deref_mut() {
+            Some(old) => *old = *face,
+            None => *slot = Some(Box::new(*face)),
+        }
+    }
+
+    /// Follows a refinement of the mesh, now of `edges` edges: each split edge's appended half
+    /// lies on the same face as the half that kept its id (exact restriction, no projection).
+    pub fn follow_splits(&mut self, edges: usize, splits: &[sdg_mesh::Split]) {
+        if self.faces.is_empty() {
+            return;
+        }
+        self.faces.resize_with(edges, || Mutex::new(None));
+        for split in splits {
+            let [kept, new] = split.edges.map(|e| e as usize);
+            let face = self.faces[kept].get_mut().clone();
+            *self.faces[new].get_mut() = face;
         }
     }
 
@@ -155,10 +207,13 @@ impl FrontSolution {
         self.cells.len() - 1
     }
 
-    /// Follows a coarsening of the mesh: drops the removed children's entries, renumbering like
-    /// the mesh. The parents keep their entries until the coarsening patch is committed.
+    /// Follows a coarsening of the mesh: drops the removed children's and edges' entries,
+    /// renumbering like the mesh. The parents keep their entries until the coarsening patch is committed.
     pub fn remove(&mut self, merge: &sdg_mesh::Merge) {
         merge.apply_to_triangles(&mut self.cells);
+        if !self.faces.is_empty() {
+            merge.apply_to_edges(&mut self.faces);
+        }
     }
 
     /// True once an element lies under triangle `t` (false while it carries initial data).

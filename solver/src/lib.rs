@@ -8,6 +8,7 @@ pub mod basis;
 pub mod boundary;
 pub mod element;
 pub mod exact;
+pub mod face;
 pub mod history;
 pub mod interface;
 pub mod material;

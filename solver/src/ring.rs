@@ -28,6 +28,17 @@ pub struct BlockSystem {
     product: Vec<f64>,
     column: Vec<f64>,
     stack: MemBuffer,
+    /// A copy of the assembled system for Newton iterations ([`Self::save`]); grown on first use.
+    saved: Saved,
+}
+
+/// An assembled, unfactored system: the used blocks, their index and the right-hand side.
+#[derive(Debug, Default)]
+struct Saved {
+    index: Vec<Option<usize>>,
+    pool: Vec<f64>,
+    used: usize,
+    rhs: Vec<f64>,
 }
 
 impl std::fmt::Debug for BlockSystem {
@@ -66,6 +77,59 @@ impl BlockSystem {
             product: vec![0.0; max_size * max_size],
             column: vec![0.0; max_size],
             stack: MemBuffer::new(req),
+            saved: Saved::default(),
+        }
+    }
+
+    /// Keeps a copy of the assembled system (blocks and right-hand side) for [`Self::restore`]
+    /// and [`Self::residual`]. The copy's buffers grow on first use and are reused after.
+    pub fn save(&mut self) {
+        let n = self.size * self.size;
+        let saved = &mut self.saved;
+        saved.index.clone_from(&self.index);
+        saved.used = self.used;
+        if saved.pool.len() < self.used * n {
+            saved.pool.resize(self.used * n, 0.0);
+        }
+        saved.pool[..self.used * n].copy_from_slice(&self.pool[..self.used * n]);
+        saved.rhs.clear();
+        saved
+            .rhs
+            .extend_from_slice(&self.rhs[..self.blocks * self.size]);
+    }
+
+    /// Puts back the system kept by [`Self::save`], replacing any factorization or solution.
+    pub fn restore(&mut self) {
+        let n = self.size * self.size;
+        let saved = &self.saved;
+        self.index.copy_from_slice(&saved.index);
+        self.used = saved.used;
+        self.pool[..saved.used * n].copy_from_slice(&saved.pool[..saved.used * n]);
+        self.rhs[..saved.rhs.len()].copy_from_slice(&saved.rhs);
+    }
+
+    /// `out = b - A x` for the system kept by [`Self::save`]; `x` and `out` hold one vector of
+    /// all block rows.
+    pub fn residual(&self, x: &[f64], out: &mut [f64]) {
+        let (m, n) = (self.size, self.size * self.size);
+        let saved = &self.saved;
+        out[..saved.rhs.len()].copy_from_slice(&saved.rhs);
+        for i in 0..self.blocks {
+            for j in 0..self.blocks {
+                let Some(k) = saved.index[i * self.max_blocks + j] else {
+                    continue;
+                };
+                let block = &saved.pool[k * n..(k + 1) * n];
+                let row = &mut out[i * m..(i + 1) * m];
+                for (c, &xc) in x[j * m..(j + 1) * m].iter().enumerate() {
+                    if xc == 0.0 {
+                        continue;
+                    }
+                    for (o, a) in row.iter_mut().zip(&block[c * m..(c + 1) * m]) {
+                        *o -= a * xc;
+                    }
+                }
+            }
         }
     }
 
@@ -296,6 +360,7 @@ mod tests {
                     b[i * m + r] = *x;
                 }
             }
+            system.save();
             // A scrambled ring order still solves correctly (with more fill).
             let order: Vec<usize> = (0..blocks).rev().collect();
             system.solve(&order);
@@ -303,6 +368,14 @@ mod tests {
             for (x, e) in system.rhs().iter().zip(&expected) {
                 assert!((x - e).abs() < 1e-10, "{blocks} blocks: {x} vs {e}");
             }
+            // The saved system gives the solution's residual and solves again after restore.
+            let x = system.rhs().to_vec();
+            let mut r = vec![1.0; n];
+            system.residual(&x, &mut r);
+            assert!(r.iter().all(|v| v.abs() < 1e-12), "{blocks} blocks: {r:?}");
+            system.restore();
+            system.solve(&order);
+            assert_eq!(system.rhs(), &x[..]);
         }
     }
 }

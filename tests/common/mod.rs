@@ -93,7 +93,8 @@ use sdg_solver::Material;
 use sdg_solver::boundary::Boundary;
 use sdg_solver::element::FrontSolution;
 use sdg_solver::exact::PlaneWave;
-use sdg_solver::patch::{ElementReport, Initial, PatchSolver};
+use sdg_solver::interface::Interfaces;
+use sdg_solver::patch::{ElementReport, Initial, Newton, PatchSolver};
 use sdg_solver::system::System;
 
 /// The state of a run driven directly through the solver API.
@@ -105,6 +106,8 @@ pub struct Direct {
     pub front: Front,
     /// Sum of all patches' dissipation (scaled units).
     pub dissipation: f64,
+    /// Sum of all patches' Newton iterations.
+    pub newton_iterations: usize,
 }
 
 /// Solves `mesh` to `t_end` with `boundary`, initial data `initial` (rest if none) and order
@@ -116,6 +119,24 @@ pub fn solve_direct(
     initial: Option<&PlaneWave>,
     order: usize,
     t_end: f64,
+    check: impl FnMut(&ElementReport),
+) -> Direct {
+    let none = Interfaces::default();
+    solve_direct_with(
+        mesh, material, boundary, &none, initial, order, t_end, check,
+    )
+}
+
+/// [`solve_direct`] with interface laws.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_direct_with(
+    mesh: Mesh,
+    material: &Material,
+    boundary: &Boundary,
+    interfaces: &Interfaces,
+    initial: Option<&PlaneWave>,
+    order: usize,
+    t_end: f64,
     mut check: impl FnMut(&ElementReport),
 ) -> Direct {
     let system = System::new(material);
@@ -123,16 +144,22 @@ pub fn solve_direct(
         .map(|v| mesh.vertex_triangles(v).len())
         .max()
         .unwrap();
-    let mut solver = PatchSolver::new(system.clone(), order, max_star);
-    let solution = FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
+    let mut solver = PatchSolver::new(system.clone(), order, max_star)
+        .with_interfaces(interfaces.clone(), Newton::default());
+    let solution = FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width())
+        .with_edges(mesh.edges().len());
     let pitcher = Pitcher::new(&mesh, system.c_ref(), 0.9, t_end).unwrap();
     let front = Front::flat(mesh.vertices().len(), 0.0);
     let init = initial.map_or(Initial::Rest, Initial::Wave);
     let mut dissipation = 0.0;
+    let mut newton_iterations = 0;
     sdg_engine::pitch_to_end(&mesh, &pitcher, &front, |tent, front| {
-        let r = solver.solve(&mesh, front, tent, boundary, init, &solution);
+        let r = solver
+            .solve(&mesh, front, tent, boundary, init, &solution)
+            .expect("linear patches always solve");
         solver.commit(&solution);
         dissipation += r.dissipation;
+        newton_iterations += r.newton_iterations;
         solver.element_reports().iter().for_each(&mut check);
     })
     .unwrap();
@@ -143,6 +170,7 @@ pub fn solve_direct(
         solution,
         front,
         dissipation,
+        newton_iterations,
     }
 }
 

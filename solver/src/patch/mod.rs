@@ -10,21 +10,32 @@
 //! vertical faces, which couple the ring of elements around the tent pole, or carry the boundary
 //! data. The patch system is solved by block elimination around the ring of elements
 //! ([`crate::ring`]).
+//!
+//! Above an interface edge the vertical faces take their targets from the interface's law
+//! ([`crate::interface`]): bonded faces keep the linear path, free faces are traction-free on
+//! both sides (still linear), and contact faces make the patch a Newton solve ([`contact`]).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::{MatMut, MatRef, Par};
 
-use sdg_mesh::{Front, Mesh, TagId, Tent, TriangleId, VertexId};
+use sdg_mesh::{EdgeId, Front, Mesh, TagId, Tent, TriangleId, VertexId};
 
 use crate::basis::Basis;
 use crate::boundary::{Boundary, Condition};
 use crate::element::{FrontSolution, Geometry, SpacePoint, evaluate};
 use crate::exact::PlaneWave;
+use crate::face::FaceState;
+use crate::interface::{Contact, Interfaces, Law};
 use crate::quadrature::{self, Rule};
-use crate::riemann;
+use crate::riemann::{self, Side};
 use crate::ring::BlockSystem;
 use crate::system::{FrameTrace, MAX_FIELDS, Matrix, State, System};
+
+mod contact;
+
+use contact::ContactFaces;
+pub use contact::{Newton, NewtonFailure};
 
 /// Energy terms and diagnostics of one solved element, in scaled units (physical: times the
 /// density; see [`crate::system`]).
@@ -38,6 +49,12 @@ pub struct ElementReport {
     pub vertical_work: f64,
     /// Part of `vertical_work` through the domain boundary.
     pub boundary_work: f64,
+    /// Energy taken out of the element by interface faces (minus their part of
+    /// `vertical_work`): summed over both sides of a face, the work absorbed by the interface.
+    pub interface_work: f64,
+    /// Part of `interface_work` done by tangential tractions on tangential velocity jumps:
+    /// friction.
+    pub friction_dissipation: f64,
     /// Numerical dissipation from the jumps against the targets: a sum of non-negative terms.
     pub dissipation: f64,
     /// Dissipation from the energy balance `energy_in - energy_out + vertical_work`; equal to
@@ -61,10 +78,17 @@ pub struct PatchReport {
     pub energy_out: f64,
     /// See [`ElementReport::boundary_work`].
     pub boundary_work: f64,
+    /// See [`ElementReport::interface_work`].
+    pub interface_work: f64,
+    /// See [`ElementReport::friction_dissipation`].
+    pub friction_dissipation: f64,
     /// See [`ElementReport::dissipation`].
     pub dissipation: f64,
     /// Largest [`ElementReport::momentum_residual`] of its elements.
     pub momentum_residual: f64,
+    /// Newton iterations (linear solves) of a patch with nonlinear faces; zero for a linear
+    /// patch.
+    pub newton_iterations: usize,
 }
 
 /// Initial data: the state at `t = 0`, a plane wave or rest.
@@ -87,10 +111,22 @@ struct Slot {
     /// element.
     inflow: [(Face, usize); 2],
     inflow_count: usize,
-    /// Vertical faces: the face, the index in the patch of the element across it (none on the
-    /// domain boundary), and the tag of its space edge.
-    sides: [(Face, Option<usize>, Option<TagId>); 2],
+    /// Vertical faces.
+    sides: [Vertical; 2],
     side_count: usize,
+}
+
+/// A vertical face of a patch element.
+#[derive(Clone, Copy, Debug, Default)]
+struct Vertical {
+    face: Face,
+    /// The patch element across it (none on the domain boundary).
+    neighbour: Option<usize>,
+    /// Tag and id of its space edge.
+    tag: Option<TagId>,
+    edge: EdgeId,
+    /// Its index among the patch's contact faces.
+    contact: Option<usize>,
 }
 
 /// A face of a tetrahedron: its corners (indices into the element's vertices) and the opposite one.
@@ -105,7 +141,7 @@ impl Slot {
         &self.inflow[..self.inflow_count]
     }
 
-    fn sides(&self) -> &[(Face, Option<usize>, Option<TagId>)] {
+    fn sides(&self) -> &[Vertical] {
         &self.sides[..self.side_count]
     }
 }
@@ -183,6 +219,15 @@ pub struct PatchSolver {
     inflow: Inflow,
     reports: Vec<ElementReport>,
     used: usize,
+    interfaces: Interfaces,
+    newton: Newton,
+    contact: ContactFaces,
+    /// Newton iterate, `N(Q)` and residual: one value per patch unknown.
+    iterate: Vec<f64>,
+    nonlinear: Vec<f64>,
+    residual: Vec<f64>,
+    /// Interface states of the last patch's contact faces, stored by [`Self::commit`].
+    faces: Vec<(EdgeId, FaceState)>,
 }
 
 impl std::fmt::Debug for PatchSolver {
@@ -248,9 +293,31 @@ impl PatchSolver {
             },
             reports: vec![ElementReport::default(); max_star],
             used: 0,
+            interfaces: Interfaces::default(),
+            newton: Newton::default(),
+            contact: ContactFaces::new(
+                max_star,
+                order,
+                quadrature::triangle(2 * order + 2).points.len(),
+                n,
+                n * fields,
+            ),
+            iterate: vec![0.0; max_star * n * fields],
+            nonlinear: vec![0.0; max_star * n * fields],
+            residual: vec![0.0; max_star * n * fields],
+            faces: Vec::with_capacity(max_star),
             system,
             basis,
         }
+    }
+
+    /// The same solver with interface laws by tag (interior edges without one are bonded) and
+    /// the Newton settings for patches with nonlinear faces. Contact laws need an in-plane
+    /// system.
+    pub fn with_interfaces(mut self, interfaces: Interfaces, newton: Newton) -> Self {
+        self.interfaces = interfaces;
+        self.newton = newton;
+        self
     }
 
     /// The system solved.
@@ -276,7 +343,8 @@ impl PatchSolver {
     /// Solves the patch of `tent` on `front` (only the times of the tent vertex's neighbours are
     /// read; the tent gives its own) with inflow from the elements in `solution`, which it does
     /// not change: [`Self::commit`] stores the result. The caller owns the star: no other thread
-    /// touches these triangles or the neighbours' times meanwhile.
+    /// touches these triangles, their edges or the neighbours' times meanwhile. Fails when the
+    /// Newton iterations of a patch with contact faces do not converge.
     pub fn solve(
         &mut self,
         mesh: &Mesh,
@@ -285,7 +353,7 @@ impl PatchSolver {
         boundary: &Boundary,
         initial: Initial,
         solution: &FrontSolution,
-    ) -> PatchReport {
+    ) -> Result<PatchReport, NewtonFailure> {
         let c = self.system.c_ref();
         let v = tent.vertex;
         let star = mesh.vertex_triangles(v);
@@ -325,7 +393,7 @@ impl PatchSolver {
         }
 
         self.inflow.gather(star, solution);
-        self.solve_slots(boundary, initial)
+        self.solve_slots(boundary, initial, solution)
     }
 
     /// Solves the coarsening patch that removes vertex `m`, the midpoint of edge `ends` (as
@@ -336,7 +404,8 @@ impl PatchSolver {
     /// the boundary condition. This is the tent at `m` raised onto edge `ab`, with one polynomial
     /// per parent (seed Fig. 4.6), so that every parent again lies on one element. The caller
     /// checks that `m` is below edge `ab` on the front and that the parents' facets are causal.
-    /// [`Self::commit_to`] stores the result. Returns `None` when `m` is not coarsenable.
+    /// [`Self::commit_to`] stores the result. Returns `None` when `m` is not coarsenable or edge
+    /// `ab` is an interface whose law is not bonded (vertices on interfaces stay).
     pub fn solve_coarsening(
         &mut self,
         mesh: &Mesh,
@@ -347,6 +416,17 @@ impl PatchSolver {
         solution: &FrontSolution,
     ) -> Option<PatchReport> {
         let ends = mesh.coarsenable(m)?;
+        let on_interface = mesh.vertex_triangles(m).iter().any(|&t| {
+            mesh.triangle_edges(t).iter().any(|&e| {
+                let edge = mesh.edges()[e as usize];
+                edge.vertices.contains(&m)
+                    && edge.is_interface()
+                    && self.interfaces.law(edge.tag) != Law::Bonded
+            })
+        });
+        if on_interface {
+            return None;
+        }
         let c = self.system.c_ref();
         let at = |w: VertexId| {
             let p = mesh.vertex(w);
@@ -388,31 +468,44 @@ impl PatchSolver {
                 ],
                 inflow_count: 2,
                 sides: [
-                    (([0, 2, 3], 1), None, mesh.edges()[e as usize].tag),
-                    (TOP, None, None),
+                    Vertical {
+                        face: ([0, 2, 3], 1),
+                        tag: mesh.edges()[e as usize].tag,
+                        edge: e,
+                        ..Default::default()
+                    },
+                    Vertical::default(),
                 ],
                 side_count: 1,
             };
             parents += 1;
         }
         if parents == 2 {
-            self.slots[0].sides[0].1 = Some(1);
-            self.slots[1].sides[0].1 = Some(0);
+            self.slots[0].sides[0].neighbour = Some(1);
+            self.slots[1].sides[0].neighbour = Some(0);
         }
         self.used = parents;
         self.inflow.gather(&sources[..2 * parents], solution);
-        Some(self.solve_slots(boundary, initial))
+        let report = self.solve_slots(boundary, initial, solution);
+        Some(report.expect("a coarsening patch has no contact face"))
     }
 
     /// Assembles and solves the patch of the first `self.used` slots, whose inflow sources are
-    /// gathered, and computes the element reports.
-    fn solve_slots(&mut self, boundary: &Boundary, initial: Initial) -> PatchReport {
+    /// gathered, and computes the element reports. `solution` holds the interface faces below
+    /// the patch's contact faces.
+    fn solve_slots(
+        &mut self,
+        boundary: &Boundary,
+        initial: Initial,
+        solution: &FrontSolution,
+    ) -> Result<PatchReport, NewtonFailure> {
         let c = self.system.c_ref();
         let d = self.used;
         let n = self.basis.len();
         let fields = self.system.fields();
         let m = n * fields;
         self.blocks.reset(d, m);
+        self.find_contact_faces(solution);
         let a_mu = [
             self.system.a_n([1.0, 0.0, 0.0]),
             self.system.a_n([0.0, 1.0, 0.0]),
@@ -460,13 +553,20 @@ impl PatchSolver {
             let (system, basis) = (&self.system, &self.basis);
             let phi = &mut self.phi;
             let mass = &mut self.mass[..n * n];
-            // Vertical faces: Riemann fluxes with the ring neighbour or the boundary data.
-            for &(face, neighbour, tag) in slot.sides() {
-                let condition = boundary.condition(tag);
+            // Vertical faces: Riemann fluxes with the ring neighbour or the boundary data; free
+            // interfaces are traction-free on each side. Contact faces are assembled bonded: the
+            // Newton iterations add the difference of their targets from the bonded ones.
+            for side in slot.sides() {
+                let (face, tag) = (side.face, side.tag);
+                let law = side.neighbour.map(|_| self.interfaces.law(tag));
+                let (neighbour, condition) = match law {
+                    Some(Law::Free) => (None, &Condition::Free),
+                    _ => (side.neighbour, boundary.condition(tag)),
+                };
                 let normal = face_normal(&slot.vertices, face);
+                let a_m = system.a_n([normal[0], normal[1], 0.0]);
                 let (m_a, m_b) =
                     face_matrices(system, boundary, condition, neighbour.is_some(), normal);
-                let a_m = system.a_n([normal[0], normal[1], 0.0]);
                 let mut self_block = m_a;
                 for (srow, arow) in self_block.iter_mut().zip(&a_m) {
                     for (x, y) in srow.iter_mut().zip(arow) {
@@ -516,11 +616,17 @@ impl PatchSolver {
         }
 
         ring_order(&self.slots[..d], &mut self.order);
-        self.blocks.solve(&self.order[..d]);
+        let newton_iterations = if self.contact.faces().is_empty() {
+            self.blocks.solve(&self.order[..d]);
+            0
+        } else {
+            self.solve_newton()?
+        };
 
         let mut report = PatchReport {
             elements: d,
             dofs: d * m,
+            newton_iterations,
             ..Default::default()
         };
         for i in 0..d {
@@ -528,12 +634,123 @@ impl PatchSolver {
             report.energy_in += r.energy_in;
             report.energy_out += r.energy_out;
             report.boundary_work += r.boundary_work;
+            report.interface_work += r.interface_work;
+            report.friction_dissipation += r.friction_dissipation;
             report.dissipation += r.dissipation;
             report.momentum_residual = report.momentum_residual.max(r.momentum_residual);
             self.reports[i] = r;
             self.displacement(i, initial);
         }
-        report
+        self.faces.clear();
+        self.faces.extend(self.contact.finish(&self.system));
+        Ok(report)
+    }
+
+    /// Registers the vertical faces between patch elements whose edge has a contact law, once
+    /// per face (from the element of smaller index, side a), and marks them on both elements.
+    fn find_contact_faces(&mut self, solution: &FrontSolution) {
+        self.contact.clear();
+        for i in 0..self.used {
+            for s in 0..self.slots[i].side_count {
+                let side = self.slots[i].sides[s];
+                let (Some(j), Law::Contact(params)) =
+                    (side.neighbour, self.interfaces.law(side.tag))
+                else {
+                    continue;
+                };
+                if j < i {
+                    continue;
+                }
+                assert!(
+                    (side.edge as usize) < solution.edges(),
+                    "contact faces need interface state on the front (FrontSolution::with_edges)"
+                );
+                let slot = self.slots[i];
+                let corners = side.face.0.map(|k| slot.vertices[k]);
+                let (rule, geometry_b) = (&self.face_rule, self.slots[j].geometry);
+                let index = self.contact.add(
+                    (i, j),
+                    (&slot.geometry, &geometry_b),
+                    side.edge,
+                    Contact::new(&self.system, &params),
+                    corners,
+                    &self.basis,
+                    solution,
+                    |visit| face_points(rule, &slot.vertices, side.face, visit),
+                );
+                self.slots[i].sides[s].contact = Some(index);
+                let count = self.slots[j].side_count;
+                let across = self.slots[j].sides[..count]
+                    .iter_mut()
+                    .find(|v| v.neighbour == Some(i))
+                    .expect("a face's elements are each other's neighbours");
+                across.contact = Some(index);
+            }
+        }
+    }
+
+    /// Solves the assembled patch with contact faces (assembled bonded) by Newton iterations
+    /// from the bonded solution; leaves the solution where [`BlockSystem::rhs`] has it. Returns
+    /// the number of linear solves.
+    fn solve_newton(&mut self) -> Result<usize, NewtonFailure> {
+        let d = self.used;
+        let size = d * self.basis.len() * self.system.fields();
+        let norm = |x: &[f64]| x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let b_norm = norm(self.blocks.rhs());
+        self.blocks.save();
+        self.blocks.solve(&self.order[..d]);
+        let (q, nl, r) = (
+            &mut self.iterate[..size],
+            &mut self.nonlinear[..size],
+            &mut self.residual[..size],
+        );
+        q.copy_from_slice(self.blocks.rhs());
+        let failure = |iterations, residual| NewtonFailure {
+            iterations,
+            residual,
+        };
+        let mut iterations = 1;
+        loop {
+            nl.fill(0.0);
+            if !self.contact.evaluate(&self.system, q, nl) {
+                return Err(failure(iterations, f64::NAN));
+            }
+            self.blocks.residual(q, r);
+            for (ri, ni) in r.iter_mut().zip(nl.iter()) {
+                *ri -= ni;
+            }
+            let scale = b_norm + norm(nl);
+            let relative = if scale > 0.0 { norm(r) / scale } else { 0.0 };
+            if !relative.is_finite() {
+                return Err(failure(iterations, relative));
+            }
+            if relative <= self.newton.tol {
+                break;
+            }
+            if iterations == self.newton.max_iter {
+                return Err(failure(iterations, relative));
+            }
+            self.blocks.restore();
+            self.contact.add_jacobians(&self.system, &mut self.blocks);
+            let m = size / d;
+            for i in 0..d {
+                self.blocks
+                    .rhs_mut(i)
+                    .copy_from_slice(&r[i * m..(i + 1) * m]);
+            }
+            self.blocks.solve(&self.order[..d]);
+            for (qi, dq) in q.iter_mut().zip(self.blocks.rhs()) {
+                *qi += dq;
+            }
+            iterations += 1;
+        }
+        let m = size / d;
+        for i in 0..d {
+            self.blocks
+                .rhs_mut(i)
+                .copy_from_slice(&q[i * m..(i + 1) * m]);
+        }
+        Ok(iterations)
     }
 
     /// Replaces the elements under the star's front triangles in `solution` by the last patch
@@ -549,6 +766,14 @@ impl PatchSolver {
         for (t, geometry, coefficients) in self.elements() {
             solution.store(id(t) as usize, geometry, coefficients);
         }
+        for (e, face) in &self.faces {
+            solution.store_face(*e as usize, face);
+        }
+    }
+
+    /// The interface faces of the last patch: per contact face, its edge and interface state.
+    pub fn interface_faces(&self) -> &[(EdgeId, FaceState)] {
+        &self.faces
     }
 
     /// The elements of the last patch: the triangle each was built for (see
@@ -619,19 +844,35 @@ impl PatchSolver {
             });
             add_momentum(face_momentum);
         }
-        for &(face, neighbour, tag) in slot.sides() {
-            let condition = boundary.condition(tag);
+        for side in slot.sides() {
+            let condition = boundary.condition(side.tag);
+            let law = side.neighbour.map(|_| self.interfaces.law(side.tag));
+            let contact = side.contact.map(|f| {
+                let face = &self.contact.faces()[f];
+                if face.a == i {
+                    &face.targets_a
+                } else {
+                    &face.targets_b
+                }
+            });
             face_momentum = [0.0; 2];
-            face_points(face_rule, &slot.vertices, face, |x, w, nrm| {
+            let mut point = 0;
+            face_points(face_rule, &slot.vertices, side.face, |x, w, nrm| {
                 let normal = [nrm[0], nrm[1]];
                 let a = system.frame(&own(x, phi), normal);
-                let star_trace = match neighbour {
-                    Some(j) => {
+                let star_trace = match (side.neighbour, law) {
+                    (Some(_), Some(Law::Contact(_))) => {
+                        contact.expect("contact faces are registered")[point].star
+                    }
+                    (Some(_), Some(Law::Free)) => {
+                        riemann::solve(system, &a, &[Side::Traction(0.0); 2])
+                    }
+                    (Some(j), _) => {
                         basis.eval(self.slots[j].geometry.to_reference(x), phi_j);
                         let q_b = combine(&solution[j * m..(j + 1) * m], phi_j, fields);
                         riemann::bonded(system, &a, &system.frame(&q_b, normal))
                     }
-                    None => {
+                    (None, _) => {
                         let sides = boundary.sides(
                             system,
                             condition,
@@ -647,9 +888,15 @@ impl PatchSolver {
                     * (0..system.directions())
                         .map(|k| star_trace.v[k] * star_trace.s[k])
                         .sum::<f64>();
+                point += 1;
                 r.vertical_work += power;
-                if neighbour.is_none() {
-                    r.boundary_work += power;
+                match law {
+                    None => r.boundary_work += power,
+                    Some(Law::Bonded) => {}
+                    Some(_) => {
+                        r.interface_work -= power;
+                        r.friction_dissipation -= w * star_trace.v[1] * star_trace.s[1];
+                    }
                 }
                 r.dissipation += w * riemann::dissipation(system, &a, &star_trace);
                 let f = system.flux(&star_trace, normal);
@@ -753,8 +1000,8 @@ fn add_kron(target: &mut [f64], m: usize, n: usize, fields: usize, scalar: &[f64
 fn ring_order(slots: &[Slot], order: &mut Vec<usize>) {
     order.clear();
     let d = slots.len();
-    let next = |i: usize| slots[i].sides[1].1;
-    let starts_chain = |i: usize| slots[i].sides[0].1.is_none();
+    let next = |i: usize| slots[i].sides[1].neighbour;
+    let starts_chain = |i: usize| slots[i].sides[0].neighbour.is_none();
     for pass in [true, false] {
         for first in 0..d {
             if order.contains(&first) || (pass && !starts_chain(first)) {
@@ -782,14 +1029,9 @@ fn add_outer(out: &mut [f64], w: f64, a: &[f64], b: &[f64]) {
 }
 
 /// The two vertical faces of the tent element over triangle `t`, whose tent vertex is its corner
-/// `corner`: the face, the index in the star of the element across it (none on the domain
-/// boundary), and the tag of its space edge.
-fn vertical_faces(
-    mesh: &Mesh,
-    star: &[TriangleId],
-    t: TriangleId,
-    corner: usize,
-) -> [(Face, Option<usize>, Option<TagId>); 2] {
+/// `corner`, with the element across each (an index in the star; none on the domain boundary)
+/// and its space edge.
+fn vertical_faces(mesh: &Mesh, star: &[TriangleId], t: TriangleId, corner: usize) -> [Vertical; 2] {
     [(SIDE_A, 2), (SIDE_B, 1)].map(|(face, opposite_corner)| {
         let e = mesh.triangle_edges(t)[(corner + opposite_corner) % 3];
         let edge = mesh.edges()[e as usize];
@@ -803,7 +1045,13 @@ fn vertical_faces(
                     .position(|&s| s == u)
                     .expect("edge neighbour is in the star")
             });
-        (face, neighbour, edge.tag)
+        Vertical {
+            face,
+            neighbour,
+            tag: edge.tag,
+            edge: e,
+            contact: None,
+        }
     })
 }
 

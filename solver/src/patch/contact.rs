@@ -1,0 +1,611 @@
+//! The nonlinear faces of a patch: vertical faces above interface edges with a contact law.
+//!
+//! A patch with such faces solves `K Q + N(Q) = b` by Newton iterations, where `K Q = b` is the
+//! linear patch system with the contact faces bonded, and `N(Q)` gathers
+//! `int_F phi . (F*(q_a, q_b, delta) - F_bonded(q_a, q_b))` of the contact faces: how far the law's
+//! target flux from the two sides' traces and the normal separation `delta` on the face departs
+//! from the bonded one. The iterations start from the bonded solution, which a face in stick
+//! keeps. `delta` is itself the solution of the face's upwind DG in time
+//! (see [`crate::face`]), a nonlinear function of the traces (the law's area fractions depend on
+//! it); each iteration solves it exactly for the current traces (inner Newton on the face), and
+//! the Jacobian carries its dependence on the traces through the face system's implicit
+//! derivative, so the outer iterations converge quadratically. The Jacobian keeps the ring
+//! structure: a contact face couples only the two elements beside it.
+
+use sdg_mesh::EdgeId;
+
+use crate::basis::Basis;
+use crate::element::{FrontSolution, Geometry, SpacePoint};
+use crate::face::{FaceBasis, FaceGeometry, FaceState, MAX_FACE_BASIS, solve_dense};
+use crate::interface::{Contact, Targets, characteristics};
+use crate::quadrature::{self, Rule};
+use crate::ring::BlockSystem;
+use crate::system::{FrameTrace, MAX_FIELDS, Matrix, System};
+
+/// Settings of the Newton iterations of patches with nonlinear faces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Newton {
+    /// Converged when `|b - K Q - N(Q)| <= tol (|b| + |N(Q)|)` (Euclidean norms over the patch).
+    pub tol: f64,
+    /// Iterations allowed before the patch counts as not converged.
+    pub max_iter: usize,
+}
+
+impl Default for Newton {
+    fn default() -> Self {
+        Self {
+            tol: 1e-10,
+            max_iter: 30,
+        }
+    }
+}
+
+/// A patch whose Newton iterations did not converge.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "Newton iterations did not converge: relative residual {residual:.3e} after {iterations} \
+     iterations"
+)]
+pub struct NewtonFailure {
+    /// Iterations done.
+    pub iterations: usize,
+    /// Relative residual of the last iterate.
+    pub residual: f64,
+}
+
+/// One contact face of the patch, seen from its side a (normal `m` from a to b).
+#[derive(Debug)]
+pub(super) struct ContactFace {
+    pub(super) a: usize,
+    pub(super) b: usize,
+    edge: EdgeId,
+    law: Contact,
+    normal: [f64; 2],
+    geometry: FaceGeometry,
+    /// Quadrature points on the face: weights (m^2), face basis values and `tau` derivatives,
+    /// and the basis values of the elements on sides a and b.
+    weights: Vec<f64>,
+    psi: Vec<f64>,
+    psi_tau: Vec<f64>,
+    phi_a: Vec<f64>,
+    phi_b: Vec<f64>,
+    /// The face system's constant part: `int psi_k dpsi_l/dtau + int_bottom L psi_k psi_l`, and
+    /// the bottom edge's inflow of `delta` and of the slip.
+    m0: Vec<f64>,
+    inflow_delta: Vec<f64>,
+    inflow_slip: Vec<f64>,
+    delta: [f64; MAX_FACE_BASIS],
+    slip: [f64; MAX_FACE_BASIS],
+    /// Per quadrature point: arriving characteristics and both sides' targets.
+    w_a: Vec<[f64; 2]>,
+    w_b: Vec<[f64; 2]>,
+    pub(super) targets_a: Vec<Targets>,
+    pub(super) targets_b: Vec<Targets>,
+}
+
+/// The contact faces of the patch being solved and their scratch memory.
+#[derive(Debug)]
+pub(super) struct ContactFaces {
+    basis: FaceBasis,
+    bottom_rule: Rule<1>,
+    faces: Vec<ContactFace>,
+    count: usize,
+    psi: Vec<f64>,
+    grad: Vec<[f64; 2]>,
+    jacobian: Vec<f64>,
+    columns: Vec<f64>,
+    coupling: [Vec<f64>; 2],
+    outer: Vec<f64>,
+    block: Vec<f64>,
+}
+
+/// Linear maps of one side's state to a face frame: rows `v[0], v[1], s[0], s[1]`.
+type FrameRows = [[f64; MAX_FIELDS]; 4];
+
+fn frame_rows(system: &System, m: [f64; 2]) -> FrameRows {
+    let mut rows = [[0.0; MAX_FIELDS]; 4];
+    for j in 0..system.fields() {
+        let mut e = [0.0; MAX_FIELDS];
+        e[j] = 1.0;
+        let f = system.frame(&e, m);
+        for (row, value) in rows.iter_mut().zip([f.v[0], f.v[1], f.s[0], f.s[1]]) {
+            row[j] = value;
+        }
+    }
+    rows
+}
+
+/// `d w / d q` of the characteristic arriving from side a (`sign = -1`: `s - Z v`) or side b
+/// (`sign = 1`: `s + Z v`), rows normal and tangential.
+fn characteristic_rows(rows: &FrameRows, z: [f64; 2], sign: f64) -> [[f64; MAX_FIELDS]; 2] {
+    [0, 1].map(|k| std::array::from_fn(|j| rows[2 + k][j] + sign * z[k] * rows[k][j]))
+}
+
+/// The flux `A_m q*` as a linear map of the frame values `(v[0], v[1], s[0], s[1])`: columns.
+fn flux_columns(system: &System, m: [f64; 2]) -> [[f64; MAX_FIELDS]; 4] {
+    std::array::from_fn(|c| {
+        let mut star = FrameTrace::default();
+        if c < 2 {
+            star.v[c] = 1.0;
+        } else {
+            star.s[c - 2] = 1.0;
+        }
+        system.flux(&star, m)
+    })
+}
+
+/// `d flux / d w` (fields x 2) for targets with `d star / d w = dstar` and `d w / d q = dw`:
+/// returns the `fields x fields` Jacobian `F dstar dw`.
+fn chain(
+    flux: &[[f64; MAX_FIELDS]; 4],
+    dstar: &[[f64; 2]; 4],
+    dw: &[[f64; MAX_FIELDS]; 2],
+) -> Matrix {
+    let mut out = [[0.0; MAX_FIELDS]; MAX_FIELDS];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = (0..4)
+                .map(|c| flux[c][i] * (dstar[c][0] * dw[0][j] + dstar[c][1] * dw[1][j]))
+                .sum();
+        }
+    }
+    out
+}
+
+/// Side a's targets minus the bonded ones, from the arriving characteristics.
+fn departure(t: &Targets, z: [f64; 2], w_a: [f64; 2], w_b: [f64; 2]) -> FrameTrace {
+    let mut star = t.star;
+    for k in 0..2 {
+        star.v[k] -= (w_b[k] - w_a[k]) / (2.0 * z[k]);
+        star.s[k] -= 0.5 * (w_a[k] + w_b[k]);
+    }
+    star
+}
+
+/// `t` with the bonded targets' derivatives taken off `d_wa` and `d_wb` (see [`departure`]).
+fn departure_derivatives(t: &Targets, z: [f64; 2]) -> Targets {
+    let mut out = *t;
+    for (k, zk) in z.iter().enumerate() {
+        out.d_wa[k][k] += 0.5 / zk;
+        out.d_wb[k][k] -= 0.5 / zk;
+        out.d_wa[2 + k][k] -= 0.5;
+        out.d_wb[2 + k][k] -= 0.5;
+    }
+    out
+}
+
+impl ContactFaces {
+    /// Scratch for up to `max_faces` faces, polynomial order `order`, `points` quadrature points
+    /// per face, element basis length `n` and element unknowns `m`.
+    pub(super) fn new(max_faces: usize, order: usize, points: usize, n: usize, m: usize) -> Self {
+        let basis = FaceBasis::new(order);
+        let nf = basis.len();
+        let face = || ContactFace {
+            a: 0,
+            b: 0,
+            edge: 0,
+            law: Contact {
+                z: [1.0; 2],
+                k: 0.0,
+                r: [0.0; 2],
+                s: [0.0; 2],
+            },
+            normal: [1.0, 0.0],
+            geometry: FaceGeometry::default(),
+            weights: vec![0.0; points],
+            psi: vec![0.0; points * nf],
+            psi_tau: vec![0.0; points * nf],
+            phi_a: vec![0.0; points * n],
+            phi_b: vec![0.0; points * n],
+            m0: vec![0.0; nf * nf],
+            inflow_delta: vec![0.0; nf],
+            inflow_slip: vec![0.0; nf],
+            delta: [0.0; MAX_FACE_BASIS],
+            slip: [0.0; MAX_FACE_BASIS],
+            w_a: vec![[0.0; 2]; points],
+            w_b: vec![[0.0; 2]; points],
+            targets_a: vec![Targets::default(); points],
+            targets_b: vec![Targets::default(); points],
+        };
+        Self {
+            bottom_rule: quadrature::gauss_legendre(order + 2),
+            faces: (0..max_faces).map(|_| face()).collect(),
+            count: 0,
+            psi: vec![0.0; nf],
+            grad: vec![[0.0; 2]; nf],
+            jacobian: vec![0.0; nf * nf],
+            columns: vec![0.0; nf * 2 * m],
+            coupling: [vec![0.0; m * nf], vec![0.0; m * nf]],
+            outer: vec![0.0; n * n],
+            block: vec![0.0; m * m],
+            basis,
+        }
+    }
+
+    /// Forgets the faces of the previous patch.
+    pub(super) fn clear(&mut self) {
+        self.count = 0;
+    }
+
+    /// The faces of the current patch.
+    pub(super) fn faces(&self) -> &[ContactFace] {
+        &self.faces[..self.count]
+    }
+
+    /// Adds the face between patch elements `a` and `b` over `edge`: corners `P0` (pole bottom),
+    /// `P1` (far end), `P2` (pole top); `points` visits its quadrature points (the patch's face
+    /// rule on side a's face) as `(x, weight, normal)`. Reads the face below from `solution`.
+    /// Returns the face's index.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn add(
+        &mut self,
+        (a, b): (usize, usize),
+        (geometry_a, geometry_b): (&Geometry, &Geometry),
+        edge: EdgeId,
+        law: Contact,
+        corners: [SpacePoint; 3],
+        element_basis: &Basis,
+        solution: &FrontSolution,
+        points: impl FnOnce(&mut dyn FnMut(SpacePoint, f64, [f64; 3])),
+    ) -> usize {
+        let index = self.count;
+        self.count += 1;
+        let nf = self.basis.len();
+        let n = element_basis.len();
+        let (basis, psi, grad) = (&self.basis, &mut self.psi, &mut self.grad);
+        let face = &mut self.faces[index];
+        face.a = a;
+        face.b = b;
+        face.edge = edge;
+        face.law = law;
+        face.geometry = FaceGeometry::new(corners);
+        let d_tau = face.geometry.d_tau();
+        let mut q = 0;
+        points(&mut |x, w, nrm| {
+            face.normal = [nrm[0], nrm[1]];
+            face.weights[q] = w;
+            basis.eval_with_gradient(face.geometry.to_reference(x), psi, grad);
+            face.psi[q * nf..(q + 1) * nf].copy_from_slice(psi);
+            for (t, g) in face.psi_tau[q * nf..(q + 1) * nf].iter_mut().zip(&*grad) {
+                *t = g[0] * d_tau[0] + g[1] * d_tau[1];
+            }
+            element_basis.eval(
+                geometry_a.to_reference(x),
+                &mut face.phi_a[q * n..(q + 1) * n],
+            );
+            element_basis.eval(
+                geometry_b.to_reference(x),
+                &mut face.phi_b[q * n..(q + 1) * n],
+            );
+            q += 1;
+        });
+        let points = q;
+        // Constant part of the face system and the inflow through the bottom edge P0 P1.
+        let m0 = &mut face.m0[..nf * nf];
+        m0.fill(0.0);
+        for q in 0..points {
+            let w = face.weights[q];
+            for k in 0..nf {
+                for l in 0..nf {
+                    m0[k * nf + l] += w * face.psi[q * nf + k] * face.psi_tau[q * nf + l];
+                }
+            }
+        }
+        face.inflow_delta.fill(0.0);
+        face.inflow_slip.fill(0.0);
+        let below = solution.face(edge as usize);
+        let [p0, p1, _] = corners;
+        let length = face.geometry.length();
+        for (t, &wg) in self
+            .bottom_rule
+            .points
+            .iter()
+            .zip(&self.bottom_rule.weights)
+        {
+            let x = [0, 1, 2].map(|i| p0[i] + t[0] * (p1[i] - p0[i]));
+            let (delta, slip) = below
+                .as_ref()
+                .map_or((0.0, 0.0), |f| f.evaluate(basis, x, psi));
+            basis.eval(face.geometry.to_reference(x), psi);
+            let w = wg * length;
+            for k in 0..nf {
+                for l in 0..nf {
+                    m0[k * nf + l] += w * psi[k] * psi[l];
+                }
+                face.inflow_delta[k] += w * psi[k] * delta;
+                face.inflow_slip[k] += w * psi[k] * slip;
+            }
+        }
+        face.delta = [0.0; MAX_FACE_BASIS];
+        face.slip = [0.0; MAX_FACE_BASIS];
+        index
+    }
+
+    /// Evaluates every face at the patch solution `q` (block rows of `m` unknowns): solves each
+    /// face's separation and its targets and adds `N(q)` to `nl`. Returns false when a face's
+    /// separation cannot be solved.
+    pub(super) fn evaluate(&mut self, system: &System, q: &[f64], nl: &mut [f64]) -> bool {
+        for f in 0..self.count {
+            if !self.solve_face(system, f, q) {
+                return false;
+            }
+            self.add_flux(system, f, nl);
+        }
+        true
+    }
+
+    /// Adds the Jacobian of `N` at the last evaluated solution to the block system.
+    pub(super) fn add_jacobians(&mut self, system: &System, blocks: &mut BlockSystem) {
+        for f in 0..self.count {
+            self.add_jacobian(system, f, blocks);
+        }
+    }
+
+    /// Traces, separation (face DG, inner Newton) and targets of face `f` at the solution `q`.
+    fn solve_face(&mut self, system: &System, f: usize, q: &[f64]) -> bool {
+        let fields = system.fields();
+        let c = system.c_ref();
+        let nf = self.basis.len();
+        let face = &mut self.faces[f];
+        let n = face.phi_a.len() / face.weights.len();
+        let m = n * fields;
+        let points = face.weights.len();
+        let z = face.law.z;
+        let (qa, qb) = (
+            &q[face.a * m..(face.a + 1) * m],
+            &q[face.b * m..(face.b + 1) * m],
+        );
+        for p in 0..points {
+            let trace = |coefficients: &[f64], phi: &[f64]| {
+                let mut s = [0.0; MAX_FIELDS];
+                for (k, &ph) in phi.iter().enumerate() {
+                    for (si, c) in s
+                        .iter_mut()
+                        .zip(&coefficients[k * fields..(k + 1) * fields])
+                    {
+                        *si += ph * c;
+                    }
+                }
+                s
+            };
+            let ta = trace(qa, &face.phi_a[p * n..(p + 1) * n]);
+            let tb = trace(qb, &face.phi_b[p * n..(p + 1) * n]);
+            let (w_a, w_b) = characteristics(
+                z,
+                &system.frame(&ta, face.normal),
+                &system.frame(&tb, face.normal),
+            );
+            face.w_a[p] = w_a;
+            face.w_b[p] = w_b;
+        }
+        // Inner Newton on the face: M0 d - inflow - int psi rate(delta) / c = 0.
+        let scale = face.law.r[0].abs().max(face.law.r[1].abs());
+        let mut converged = false;
+        for _ in 0..60 {
+            let jac = &mut self.jacobian[..nf * nf];
+            jac.copy_from_slice(&face.m0[..nf * nf]);
+            let g = &mut self.columns[..nf];
+            for (k, gk) in g.iter_mut().enumerate() {
+                *gk = face.inflow_delta[k]
+                    - (0..nf)
+                        .map(|l| face.m0[k * nf + l] * face.delta[l])
+                        .sum::<f64>();
+            }
+            for p in 0..points {
+                let psi = &face.psi[p * nf..(p + 1) * nf];
+                let delta: f64 = psi.iter().zip(&face.delta).map(|(a, b)| a * b).sum();
+                let t = face.law.targets(face.w_a[p], face.w_b[p], delta);
+                let w = face.weights[p] / c;
+                for k in 0..nf {
+                    g[k] += w * psi[k] * t.rate;
+                    for l in 0..nf {
+                        jac[k * nf + l] -= w * psi[k] * psi[l] * t.rate_delta;
+                    }
+                }
+            }
+            if !solve_dense(jac, nf, g, 1) {
+                return false;
+            }
+            let mut step = 0.0f64;
+            let mut size = scale;
+            for (d, s) in face.delta.iter_mut().zip(g.iter()) {
+                *d += s;
+                step = step.max(s.abs());
+                size = size.max(d.abs());
+            }
+            if !step.is_finite() {
+                return false;
+            }
+            if step <= 1e-13 * size || step == 0.0 {
+                converged = true;
+                break;
+            }
+        }
+        for p in 0..points {
+            let psi = &face.psi[p * nf..(p + 1) * nf];
+            let delta: f64 = psi.iter().zip(&face.delta).map(|(a, b)| a * b).sum();
+            face.targets_a[p] = face.law.targets(face.w_a[p], face.w_b[p], delta);
+            face.targets_b[p] = face.law.targets(face.w_b[p], face.w_a[p], delta);
+        }
+        converged
+    }
+
+    /// Adds `int phi (F* - F_bonded)` of face `f` for both sides to `nl`.
+    fn add_flux(&self, system: &System, f: usize, nl: &mut [f64]) {
+        let fields = system.fields();
+        let face = &self.faces[f];
+        let n = face.phi_a.len() / face.weights.len();
+        let m = n * fields;
+        let minus = face.normal.map(|x| -x);
+        for p in 0..face.weights.len() {
+            let w = face.weights[p];
+            let (z, w_a, w_b) = (face.law.z, face.w_a[p], face.w_b[p]);
+            let fa = system.flux(&departure(&face.targets_a[p], z, w_a, w_b), face.normal);
+            let fb = system.flux(&departure(&face.targets_b[p], z, w_b, w_a), minus);
+            for (side, flux, phi) in [
+                (face.a, fa, &face.phi_a[p * n..(p + 1) * n]),
+                (face.b, fb, &face.phi_b[p * n..(p + 1) * n]),
+            ] {
+                let rows = &mut nl[side * m..(side + 1) * m];
+                for (k, &ph) in phi.iter().enumerate() {
+                    for (r, fl) in rows[k * fields..(k + 1) * fields].iter_mut().zip(&flux) {
+                        *r += w * ph * fl;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Adds the Jacobian of face `f`'s `int phi F*` with respect to both sides' coefficients,
+    /// through the traces directly and through the face's separation.
+    fn add_jacobian(&mut self, system: &System, f: usize, blocks: &mut BlockSystem) {
+        let fields = system.fields();
+        let c = system.c_ref();
+        let nf = self.basis.len();
+        let face = &self.faces[f];
+        let n = face.phi_a.len() / face.weights.len();
+        let m = n * fields;
+        let z = face.law.z;
+        let minus = face.normal.map(|x| -x);
+        let rows = frame_rows(system, face.normal);
+        let (dwa, dwb) = (
+            characteristic_rows(&rows, z, -1.0),
+            characteristic_rows(&rows, z, 1.0),
+        );
+        let (flux_a, flux_b) = (
+            flux_columns(system, face.normal),
+            flux_columns(system, minus),
+        );
+        let (a, b) = (face.a, face.b);
+        let [coupling_a, coupling_b] = &mut self.coupling;
+        coupling_a.fill(0.0);
+        coupling_b.fill(0.0);
+        let columns = &mut self.columns[..nf * 2 * m];
+        columns.fill(0.0);
+        let jac = &mut self.jacobian[..nf * nf];
+        jac.copy_from_slice(&face.m0[..nf * nf]);
+        for p in 0..face.weights.len() {
+            let w = face.weights[p];
+            let (ta, tb) = (
+                &departure_derivatives(&face.targets_a[p], z),
+                &departure_derivatives(&face.targets_b[p], z),
+            );
+            let phi_a = &face.phi_a[p * n..(p + 1) * n];
+            let phi_b = &face.phi_b[p * n..(p + 1) * n];
+            let psi = &face.psi[p * nf..(p + 1) * nf];
+            // Direct dependence on the traces: four blocks.
+            for (row, col, phi_r, phi_c, j) in [
+                (a, a, phi_a, phi_a, chain(&flux_a, &ta.d_wa, &dwa)),
+                (a, b, phi_a, phi_b, chain(&flux_a, &ta.d_wb, &dwb)),
+                (b, b, phi_b, phi_b, chain(&flux_b, &tb.d_wa, &dwb)),
+                (b, a, phi_b, phi_a, chain(&flux_b, &tb.d_wb, &dwa)),
+            ] {
+                for (k, &pr) in phi_r.iter().enumerate() {
+                    for (l, &pc) in phi_c.iter().enumerate() {
+                        self.outer[k * n + l] = w * pr * pc;
+                    }
+                }
+                super::add_kron(
+                    blocks.block_mut(row, col),
+                    m,
+                    n,
+                    fields,
+                    &self.outer[..n * n],
+                    &j,
+                );
+            }
+            // Dependence through delta: d flux / d delta per side, and the face system's
+            // derivative with respect to the traces.
+            for (coupling, flux, t, phi) in [
+                (&mut *coupling_a, &flux_a, ta, phi_a),
+                (&mut *coupling_b, &flux_b, tb, phi_b),
+            ] {
+                let df: [f64; MAX_FIELDS] =
+                    std::array::from_fn(|i| (0..4).map(|c| flux[c][i] * t.d_delta[c]).sum());
+                for (k, &ph) in phi.iter().enumerate() {
+                    for (i, &d) in df[..fields].iter().enumerate() {
+                        let row = &mut coupling[(k * fields + i) * nf..][..nf];
+                        for (r, &ps) in row.iter_mut().zip(psi) {
+                            *r += w * ph * d * ps;
+                        }
+                    }
+                }
+            }
+            let drate: [[f64; MAX_FIELDS]; 2] = [(&ta.rate_wa, &dwa), (&ta.rate_wb, &dwb)]
+                .map(|(r, dw)| std::array::from_fn(|j| r[0] * dw[0][j] + r[1] * dw[1][j]));
+            for (side, phi) in [phi_a, phi_b].into_iter().enumerate() {
+                for (k, &ps) in psi.iter().enumerate() {
+                    for (l, &ph) in phi.iter().enumerate() {
+                        for (i, &dr) in drate[side][..fields].iter().enumerate() {
+                            columns[(side * m + l * fields + i) * nf + k] += w / c * ps * ph * dr;
+                        }
+                    }
+                }
+            }
+            for k in 0..nf {
+                for l in 0..nf {
+                    jac[k * nf + l] -= w / c * psi[k] * psi[l] * ta.rate_delta;
+                }
+            }
+        }
+        // d delta / d q = J^-1 (int psi (d rate / d q) / c), one column per side unknown.
+        if !solve_dense(jac, nf, columns, 2 * m) {
+            return;
+        }
+        for (row_side, coupling) in [(a, &*coupling_a), (b, &*coupling_b)] {
+            for (col_side, offset) in [(a, 0), (b, m)] {
+                let block = &mut self.block[..m * m];
+                for col in 0..m {
+                    let dd = &columns[(offset + col) * nf..][..nf];
+                    for row in 0..m {
+                        block[col * m + row] = coupling[row * nf..(row + 1) * nf]
+                            .iter()
+                            .zip(dd)
+                            .map(|(x, y)| x * y)
+                            .sum();
+                    }
+                }
+                for (t, s) in blocks
+                    .block_mut(row_side, col_side)
+                    .iter_mut()
+                    .zip(block.iter())
+                {
+                    *t += s;
+                }
+            }
+        }
+    }
+
+    /// Solves each face's slip for the converged targets and returns, per face, the edge and
+    /// the interface state to store on the front.
+    pub(super) fn finish(&mut self, system: &System) -> impl Iterator<Item = (EdgeId, FaceState)> {
+        let c = system.c_ref();
+        let nf = self.basis.len();
+        for face in &mut self.faces[..self.count] {
+            let jac = &mut self.jacobian[..nf * nf];
+            jac.copy_from_slice(&face.m0[..nf * nf]);
+            let rhs = &mut self.columns[..nf];
+            rhs.copy_from_slice(&face.inflow_slip[..nf]);
+            for p in 0..face.weights.len() {
+                // Tangential velocity jump v*_b,t - v*_a,t in side a's frame (b's frame flips it).
+                let jump = -face.targets_b[p].star.v[1] - face.targets_a[p].star.v[1];
+                let w = face.weights[p] / c;
+                for (r, ps) in rhs.iter_mut().zip(&face.psi[p * nf..(p + 1) * nf]) {
+                    *r += w * ps * jump;
+                }
+            }
+            solve_dense(jac, nf, rhs, 1);
+            face.slip[..nf].copy_from_slice(rhs);
+        }
+        self.faces[..self.count].iter().map(|face| {
+            (
+                face.edge,
+                FaceState {
+                    geometry: face.geometry,
+                    delta: face.delta,
+                    slip: face.slip,
+                },
+            )
+        })
+    }
+}
