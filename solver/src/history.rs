@@ -17,6 +17,9 @@ pub enum History {
     },
     /// Piecewise linear through `(t, h)` points with increasing `t`; constant outside.
     Table(Vec<(f64, f64)>),
+    /// Through `(t, h)` points like `Table`, but each piece is the C1 cubic
+    /// `h0 + (h1 - h0) (3 r^2 - 2 r^3)`: levels joined by smooth ramps (seed 3.4.1's loads).
+    SmoothTable(Vec<(f64, f64)>),
 }
 
 impl History {
@@ -29,17 +32,8 @@ impl History {
                 let r = (t / ramp).clamp(0.0, 1.0);
                 r * r * (3.0 - 2.0 * r)
             }
-            Self::Table(points) => {
-                let i = points.partition_point(|&(ti, _)| ti <= t);
-                match (i, points.get(i)) {
-                    (0, _) => points.first().map_or(0.0, |p| p.1),
-                    (_, None) => points[i - 1].1,
-                    (_, Some(&(t1, h1))) => {
-                        let (t0, h0) = points[i - 1];
-                        h0 + (h1 - h0) * (t - t0) / (t1 - t0)
-                    }
-                }
-            }
+            Self::Table(points) => interpolate(points, t, |r| r),
+            Self::SmoothTable(points) => interpolate(points, t, |r| r * r * (3.0 - 2.0 * r)),
         }
     }
 
@@ -51,8 +45,10 @@ impl History {
                 Err(format!("ramp must be a positive time in s, got {ramp}"))
             }
             Self::Linear { .. } | Self::Smooth { .. } => Ok(()),
-            Self::Table(points) if points.is_empty() => Err("the table has no points".into()),
-            Self::Table(points) => {
+            Self::Table(points) | Self::SmoothTable(points) if points.is_empty() => {
+                Err("the table has no points".into())
+            }
+            Self::Table(points) | Self::SmoothTable(points) => {
                 if points.iter().any(|p| !(p.0.is_finite() && p.1.is_finite())) {
                     return Err("table values must be finite".into());
                 }
@@ -61,6 +57,20 @@ impl History {
                 }
                 Ok(())
             }
+        }
+    }
+}
+
+/// The value at `t` through `points`, shaped by `shape(r)` for `r` in [0, 1] between two points;
+/// constant outside.
+fn interpolate(points: &[(f64, f64)], t: f64, shape: impl Fn(f64) -> f64) -> f64 {
+    let i = points.partition_point(|&(ti, _)| ti <= t);
+    match (i, points.get(i)) {
+        (0, _) => points.first().map_or(0.0, |p| p.1),
+        (_, None) => points[i - 1].1,
+        (_, Some(&(t1, h1))) => {
+            let (t0, h0) = points[i - 1];
+            h0 + (h1 - h0) * shape((t - t0) / (t1 - t0))
         }
     }
 }
@@ -90,5 +100,13 @@ mod tests {
                 .is_err()
         );
         assert!(History::Smooth { ramp: 0.0 }.validate().is_err());
+        let square = History::SmoothTable(vec![(0.0, 0.0), (1.0, -1.0), (3.0, -1.0), (4.0, 1.0)]);
+        assert_eq!(
+            (square.value(0.5), square.value(2.0), square.value(3.5)),
+            (-0.5, -1.0, 0.0)
+        );
+        // C1: the slope vanishes at the points.
+        let slope = (square.value(1.0 + 1e-6) - square.value(1.0 - 1e-6)) / 2e-6;
+        assert!(slope.abs() < 1e-5);
     }
 }

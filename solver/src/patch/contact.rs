@@ -58,10 +58,10 @@ pub struct NewtonFailure {
 pub(super) struct ContactFace {
     pub(super) a: usize,
     pub(super) b: usize,
-    edge: EdgeId,
-    law: Contact,
-    normal: [f64; 2],
-    geometry: FaceGeometry,
+    pub(super) edge: EdgeId,
+    pub(super) law: Contact,
+    pub(super) normal: [f64; 2],
+    pub(super) geometry: FaceGeometry,
     /// Quadrature points on the face: weights (m^2), face basis values and `tau` derivatives,
     /// and the basis values of the elements on sides a and b.
     weights: Vec<f64>,
@@ -220,6 +220,17 @@ impl ContactFaces {
             block: vec![0.0; m * m],
             basis,
         }
+    }
+
+    /// `(delta, slip)` (m) of face `f` at the point `x` of its plane, after [`Self::finish`].
+    pub(super) fn state_at(&mut self, f: usize, x: SpacePoint) -> (f64, f64) {
+        let face = &self.faces[f];
+        let state = FaceState {
+            geometry: face.geometry,
+            delta: face.delta,
+            slip: face.slip,
+        };
+        state.evaluate(&self.basis, x, &mut self.psi)
     }
 
     /// Forgets the faces of the previous patch.

@@ -91,6 +91,30 @@ pub struct PatchReport {
     pub newton_iterations: usize,
 }
 
+/// The state of a contact interface at one point, physical units, in the frame of the face
+/// (normal, tangential; each value is the same whichever side the normal points from).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InterfaceSample {
+    /// Time, s.
+    pub time: f64,
+    /// Target traction `s*`, Pa.
+    pub traction: [f64; 2],
+    /// Bonded Riemann traction `sI`, Pa.
+    pub bonded_traction: [f64; 2],
+    /// Normal separation, m.
+    pub delta: f64,
+    /// Tangential slip, m.
+    pub slip: f64,
+    /// Jump of the target velocities `[[v*]]`, m/s.
+    pub velocity_jump: [f64; 2],
+    /// Contact area fraction.
+    pub eta: f64,
+    /// Stick flag.
+    pub gamma: f64,
+    /// The mode with the largest area fraction.
+    pub mode: crate::interface::Mode,
+}
+
 /// Initial data: the state at `t = 0`, a plane wave or rest.
 #[derive(Clone, Copy, Debug)]
 pub enum Initial<'a> {
@@ -774,6 +798,61 @@ impl PatchSolver {
     /// The interface faces of the last patch: per contact face, its edge and interface state.
     pub fn interface_faces(&self) -> &[(EdgeId, FaceState)] {
         &self.faces
+    }
+
+    /// The interface of the last patch at the point `x` (m) of edge `edge`, halfway up the
+    /// contact face over it there; `None` when the patch has no contact face over `edge` or the
+    /// face has no height at `x` (its far end).
+    pub fn interface_sample(&mut self, edge: EdgeId, x: [f64; 2]) -> Option<InterfaceSample> {
+        let f = self.contact.faces().iter().position(|f| f.edge == edge)?;
+        let face = &self.contact.faces()[f];
+        let [p0, p1, p2] = face.geometry.corners();
+        let length = face.geometry.length();
+        let along = ((x[0] - p0[0]) * (p1[0] - p0[0]) + (x[1] - p0[1]) * (p1[1] - p0[1]))
+            / (length * length);
+        let bottom = p0[2] + along * (p1[2] - p0[2]);
+        let top = p2[2] + along * (p1[2] - p2[2]);
+        if top - bottom <= 1e-9 * (p2[2] - p0[2]) {
+            return None;
+        }
+        let point = [x[0], x[1], 0.5 * (bottom + top)];
+        let (law, normal, sides) = (face.law, face.normal, [face.a, face.b]);
+        let (n, width, fields) = (self.basis.len(), self.width(), self.system.fields());
+        let [qa, qb] = sides.map(|i| {
+            let coefficients = &self.output[i * n * width..(i + 1) * n * width];
+            let geometry = &self.slots[i].geometry;
+            evaluate(
+                &self.basis,
+                geometry,
+                coefficients,
+                point,
+                &mut self.phi,
+                &mut self.values,
+            );
+            let mut q = [0.0; MAX_FIELDS];
+            q[..fields].copy_from_slice(&self.values[..fields]);
+            q
+        });
+        let (delta, slip) = self.contact.state_at(f, point);
+        let (w_a, w_b) = crate::interface::characteristics(
+            law.z,
+            &self.system.frame(&qa, normal),
+            &self.system.frame(&qb, normal),
+        );
+        let (a, b) = (law.targets(w_a, w_b, delta), law.targets(w_b, w_a, delta));
+        let z_ref = self.system.z_ref();
+        Some(InterfaceSample {
+            time: point[2] / self.system.c_ref(),
+            traction: a.star.s.map(|s| s * z_ref),
+            bonded_traction: a.bonded_traction.map(|s| s * z_ref),
+            delta,
+            slip,
+            // Side b's frame velocities flip with its normal.
+            velocity_jump: [-b.star.v[0] - a.star.v[0], -b.star.v[1] - a.star.v[1]],
+            eta: a.eta,
+            gamma: a.gamma,
+            mode: a.mode(),
+        })
     }
 
     /// The elements of the last patch: the triangle each was built for (see

@@ -1,0 +1,243 @@
+//! Adaptivity policy of a solve: which patches are rejected and refined around, which bisection
+//! vertices are coarsened, and the refinement before the first tent.
+
+use std::sync::atomic::Ordering;
+
+use sdg_mesh::TriangleId;
+use sdg_scheduler::{Changed, VertexId};
+use sdg_solver::patch::{PatchReport, PatchSolver};
+
+use super::{Outcome, Solve};
+use crate::adapt::Adapt;
+use crate::error::EngineError;
+use crate::frontier::{Coarsening, Frontier, Refined, refinement_edge_length};
+
+impl Solve<'_> {
+    /// The indicator of a patch with `report` over spacetime volume `volume` (m^2 s).
+    pub(super) fn indicator(&self, adapt: &Adapt, report: &PatchReport, volume: f64) -> f64 {
+        let energy = f64::from_bits(self.energy_reference.load(Ordering::Relaxed));
+        adapt.indicator(report.dissipation, volume, energy)
+    }
+
+    /// The edge ends of bisection vertex `m` and the front times of `m` and of the edge's
+    /// midpoint (s) when `m` may be coarsened now: its elements are calm, it is at least a
+    /// quarter of its smallest tent budget below the edge's midpoint (thinner coarsening
+    /// elements are slivers, singular at round-off height), the restored parents keep the
+    /// pitcher's invariant and the edge is not longer than `adapt.max_edge`.
+    pub(super) fn coarsening(
+        &self,
+        adapt: &Adapt,
+        state: &Frontier,
+        m: VertexId,
+    ) -> Option<([VertexId; 2], f64, f64)> {
+        let (mesh, front) = (&state.mesh, &state.front);
+        let ends = mesh.coarsenable(m)?;
+        let (t_m, t_mid) = (
+            front.time(m),
+            0.5 * (front.time(ends[0]) + front.time(ends[1])),
+        );
+        let long = sdg_mesh::geometry::distance(mesh.vertex(ends[0]), mesh.vertex(ends[1]));
+        let budget = mesh
+            .vertex_triangles(m)
+            .iter()
+            .map(|&t| state.pitcher.budget(t))
+            .fold(f64::INFINITY, f64::min);
+        (t_mid - t_m >= 0.25 * budget
+            && long <= adapt.max_edge
+            && state.calm_around(m)
+            && state.pitcher.may_coarsen(mesh, front, m, ends))
+        .then_some((ends, t_m, t_mid))
+    }
+
+    /// Solves the coarsening patch of vertex `m`, claimed for a tent, when `m` may be coarsened
+    /// now and the patch is within the tolerance: the outcome for the coarsening event.
+    pub(super) fn try_coarsening(
+        &self,
+        adapt: &Adapt,
+        state: &Frontier,
+        solver: &mut PatchSolver,
+        m: VertexId,
+    ) -> Option<Outcome> {
+        let (_, t_m, t_mid) = self.coarsening(adapt, state, m)?;
+        let (mesh, front) = (&state.mesh, &state.front);
+        let report = solver.solve_coarsening(
+            mesh,
+            front,
+            m,
+            &self.problem.boundary,
+            self.initial,
+            &state.solution,
+        )?;
+        let area: f64 = mesh.vertex_triangles(m).iter().map(|&t| mesh.area(t)).sum();
+        let eta = self.indicator(adapt, &report, area * (t_mid - t_m) / 3.0);
+        if eta > adapt.tol {
+            return None;
+        }
+        let times = mesh
+            .vertex_neighbors(m)
+            .iter()
+            .chain([&m])
+            .map(|&w| (w, front.time(w)))
+            .collect();
+        let elements = solver
+            .elements()
+            .map(|(t, geometry, coefficients)| {
+                (
+                    mesh.triangles()[t as usize],
+                    *geometry,
+                    coefficients.to_vec(),
+                )
+            })
+            .collect();
+        let coarsening = Coarsening {
+            vertex: m,
+            at: mesh.vertex(m),
+            times,
+            elements,
+            calm: eta < adapt.lower,
+        };
+        Some(Outcome::Coarsen {
+            coarsening: Box::new(coarsening),
+            report,
+        })
+    }
+
+    /// The coarsening event: applies `coarsening` (with `report`) if nothing changed since it
+    /// was solved; otherwise the patch counts as rejected.
+    pub(super) fn coarsen(
+        &self,
+        state: &mut Frontier,
+        coarsening: &Coarsening,
+        report: &PatchReport,
+    ) -> Changed {
+        let m = coarsening.vertex;
+        let Some((merge, parents)) = state.coarsen(coarsening) else {
+            let mut book = self.book.lock();
+            book.patches += 1;
+            book.rejected += 1;
+            return Changed::default();
+        };
+        let t_m = coarsening
+            .times
+            .iter()
+            .find(|&&(w, _)| w == m)
+            .map(|&(_, t)| t)
+            .expect("the times include the vertex");
+        let t_end = self.problem.loaded.config.time.end;
+        let mut book = self.book.lock();
+        self.add_patch(&mut book, report);
+        book.coarsenings += 1;
+        book.milestones.remove_vertex(t_m);
+        book.progress.grow(-(t_end - t_m));
+        self.add_to_snapshots(&mut book, &state.solution, &parents);
+        let mut offer: Vec<VertexId> = coarsening
+            .times
+            .iter()
+            .filter(|&&(w, _)| w != m)
+            .map(|&(w, _)| merge.vertex_after(w))
+            .collect();
+        if (m as usize) < state.mesh.vertices().len() {
+            // The former last vertex now has m's id.
+            offer.push(m);
+        }
+        Changed {
+            offer,
+            below_end: -1,
+        }
+    }
+
+    /// True when star triangle `t` may be bisected now: its halves would not be too short, the
+    /// front stays causal, and the star of the corner that gains a triangle stays within the
+    /// patch solvers' capacity.
+    pub(super) fn may_refine(&self, adapt: &Adapt, state: &Frontier, t: TriangleId) -> bool {
+        let mesh = &state.mesh;
+        let apex = mesh.triangles()[t as usize][mesh.refinement_edge(t)];
+        refinement_edge_length(mesh, t) >= 2.0 * adapt.min_edge
+            && mesh.vertex_triangles(apex).len() < self.max_star
+            && state.pitcher.may_bisect(mesh, |w| state.front.time(w), t)
+    }
+
+    /// The refinement event of a rejected patch at `v` (at `at`, m, to notice renumbering by
+    /// coarsening): bisects the triangles of `star` that are unchanged since. When none could
+    /// be, the next tent at `v` is accepted whatever its indicator, so that the front keeps
+    /// moving. Returns the vertices whose readiness changed.
+    pub(super) fn refine(
+        &self,
+        state: &mut Frontier,
+        v: VertexId,
+        at: [f64; 2],
+        star: &[(TriangleId, [VertexId; 3])],
+    ) -> Changed {
+        let adapt = self.adapt.expect("refinement only runs with adaptivity on");
+        let mut refined = Refined::default();
+        let unchanged = |state: &Frontier, t: TriangleId, corners: [VertexId; 3]| {
+            state.mesh.triangles().get(t as usize) == Some(&corners)
+        };
+        for &(t, corners) in star {
+            if unchanged(state, t, corners) {
+                state.refine(
+                    t,
+                    adapt.min_edge,
+                    self.max_star,
+                    &|corners| self.initial_energy(corners),
+                    &mut refined,
+                );
+            }
+        }
+        let here = (v as usize) < state.mesh.vertices().len() && state.mesh.vertex(v) == at;
+        if here
+            && star
+                .iter()
+                .all(|&(t, corners)| unchanged(state, t, corners))
+        {
+            state.insist(v);
+        }
+        let t_end = self.problem.loaded.config.time.end;
+        let mut book = self.book.lock();
+        book.refinements += refined.vertices.len() as u64;
+        book.initial_energy += refined.initial_energy;
+        for &(_, t) in &refined.vertices {
+            book.milestones.add_vertex(t);
+            book.progress.grow(t_end - t);
+        }
+        let mut touched = refined.touched;
+        if here {
+            touched.push(v);
+            touched.extend(state.mesh.vertex_neighbors(v));
+        }
+        touched.extend(refined.vertices.iter().map(|&(w, _)| w));
+        touched.sort_unstable();
+        touched.dedup();
+        Changed {
+            offer: touched,
+            below_end: refined.vertices.iter().filter(|&&(_, t)| t < t_end).count() as isize,
+        }
+    }
+}
+
+/// Bisects every triangle whose refinement edge is longer than `adapt.max_edge`, on the flat
+/// initial front.
+pub(super) fn refine_to_max_edge(
+    state: &mut Frontier,
+    adapt: &Adapt,
+    max_star: usize,
+) -> Result<(), EngineError> {
+    let mut refined = Refined::default();
+    let mut t: TriangleId = 0;
+    while (t as usize) < state.mesh.triangles().len() {
+        if refinement_edge_length(&state.mesh, t) <= adapt.max_edge {
+            t += 1;
+            continue;
+        }
+        let before = state.mesh.triangles().len();
+        state.refine(t, adapt.min_edge, max_star, &|_| 0.0, &mut refined);
+        if state.mesh.triangles().len() == before {
+            return Err(EngineError::Runtime(format!(
+                "adapt.max_edge = {} m cannot be reached: a vertex star would exceed {max_star} \
+                 triangles",
+                adapt.max_edge
+            )));
+        }
+    }
+    Ok(())
+}

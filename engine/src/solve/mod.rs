@@ -1,0 +1,452 @@
+//! `sdg run`: the SDG solve, tents pitched and solved by the scheduler's workers.
+//!
+//! Each worker owns a [`PatchSolver`] (its scratch memory). A tent pitches on the shared front,
+//! solves its patch and hands a [`PatchReport`] to the bookkeeping ([`Book`]), which sums energy
+//! terms, cuts snapshots and notices when the whole front has passed a milestone time: a
+//! snapshot is then complete, or a history row is due. History rows integrate the energy over the
+//! whole front, so they run as scheduler events over every vertex: with no tent in flight.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use parking_lot::Mutex;
+
+use std::sync::atomic::AtomicU64;
+
+use sdg_mesh::{Front, Pitcher, Tent, TriangleId};
+use sdg_scheduler::{Changed, Events, VertexId, Work};
+use sdg_solver::element::{FrontSolution, Geometry};
+use sdg_solver::norms::{front_energy, initial_energy, slice_errors};
+use sdg_solver::patch::{Initial, PatchReport, PatchSolver};
+use sdg_solver::system::{MAX_FIELDS, State};
+
+use crate::adapt::Adapt;
+use crate::error::EngineError;
+use crate::frontier::{Coarsening, Frontier};
+use crate::output::write_atomic;
+use crate::problem::Problem;
+use crate::progress::Progress;
+use crate::run::{RunOptions, scheduler_error};
+use crate::snapshot::Snapshots;
+
+mod adaptivity;
+mod book;
+mod summary;
+
+use adaptivity::refine_to_max_edge;
+use book::{Book, Milestone, Milestones};
+use summary::state_hash;
+pub use summary::{EnergySummary, ErrorSummary, InterfaceSummary, RunSummary};
+
+/// The read-only context and the bookkeeping of a solve.
+struct Solve<'a> {
+    problem: &'a Problem,
+    adapt: Option<Adapt>,
+    /// Triangles a vertex star may have: the patch solvers' capacity.
+    max_star: usize,
+    /// `Book::energy_max` as bits, read by tents without the book's lock.
+    energy_reference: AtomicU64,
+    initial: Initial<'a>,
+    /// Basis of every element (each worker's solver has the same).
+    basis: sdg_solver::basis::Basis,
+    book: Mutex<Book>,
+}
+
+/// The scaled initial state at `x`.
+fn initial_state(problem: &Problem, initial: Initial, x: [f64; 2]) -> State {
+    match initial {
+        Initial::Wave(w) => problem.system.to_scaled(&w.state(x, 0.0)),
+        Initial::Rest => [0.0; MAX_FIELDS],
+    }
+}
+
+impl Solve<'_> {
+    /// Discrete energy of the initial data on the triangle with `corners` (scaled units).
+    fn initial_energy(&self, corners: [[f64; 2]; 3]) -> f64 {
+        initial_energy(
+            &self.problem.system,
+            self.problem.loaded.config.solver.order,
+            corners,
+            |x| initial_state(self.problem, self.initial, x),
+        )
+    }
+}
+
+/// What one tent hands to the bookkeeping.
+#[derive(Debug)]
+enum Outcome {
+    /// The patch is stored and the vertex advanced.
+    Accepted {
+        t_old: f64,
+        t_new: f64,
+        report: PatchReport,
+    },
+    /// The indicator rejected the patch: nothing advanced; these star triangles (with their
+    /// corners, to notice a change) are to be bisected.
+    Rejected {
+        star: Vec<(TriangleId, [VertexId; 3])>,
+    },
+    /// The tent's vertex is to be removed by the coarsening patch solved in its place.
+    Coarsen {
+        coarsening: Box<Coarsening>,
+        report: PatchReport,
+    },
+}
+
+impl<'a> Work<'a> for Solve<'a> {
+    type State = Frontier;
+    type Scratch = PatchSolver;
+    type Outcome = Outcome;
+    type Error = EngineError;
+
+    fn tent(
+        &self,
+        state: &Frontier,
+        solver: &mut PatchSolver,
+        v: VertexId,
+        _: &Events<'a, Frontier>,
+    ) -> Result<(f64, Outcome), EngineError> {
+        let (mesh, front) = (&state.mesh, &state.front);
+        let star = mesh.vertex_triangles(v);
+        if star.len() > self.max_star {
+            return Err(EngineError::Runtime(format!(
+                "vertex {v} has {} triangles, more than the {} the patch solvers hold",
+                star.len(),
+                self.max_star
+            )));
+        }
+        if let Some(adapt) = &self.adapt {
+            if let Some(outcome) = self.try_coarsening(adapt, state, solver, v) {
+                return Ok((front.time(v), outcome));
+            }
+        }
+        let t_new = state.pitcher.pole_height(mesh, front, v).ok_or_else(|| {
+            EngineError::Runtime(format!("vertex {v} was claimed but cannot be pitched"))
+        })?;
+        let tent = Tent {
+            vertex: v,
+            t_old: front.time(v),
+            t_new,
+        };
+        let solved = solver.solve(
+            mesh,
+            front,
+            &tent,
+            &self.problem.boundary,
+            self.initial,
+            &state.solution,
+        );
+        let report = match solved {
+            Ok(report) => report,
+            Err(failure) => {
+                // Not converged: refine around the vertex when adaptivity can, else stop.
+                let star: Vec<_> = self
+                    .adapt
+                    .iter()
+                    .flat_map(|adapt| {
+                        star.iter()
+                            .filter(|&&t| self.may_refine(adapt, state, t))
+                            .map(|&t| (t, mesh.triangles()[t as usize]))
+                    })
+                    .collect();
+                if star.is_empty() {
+                    let [x, y] = mesh.vertex(v);
+                    return Err(EngineError::Runtime(format!(
+                        "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {failure}",
+                        tent.t_old
+                    )));
+                }
+                return Ok((tent.t_old, Outcome::Rejected { star }));
+            }
+        };
+        if let Some(adapt) = &self.adapt {
+            let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
+            let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
+            if !state.insists(v) && eta > adapt.tol {
+                let star = star
+                    .iter()
+                    .filter(|&&t| self.may_refine(adapt, state, t))
+                    .map(|&t| (t, mesh.triangles()[t as usize]))
+                    .collect::<Vec<_>>();
+                if !star.is_empty() {
+                    return Ok((tent.t_old, Outcome::Rejected { star }));
+                }
+            }
+            for &t in star {
+                state.set_calm(t, eta < adapt.lower);
+            }
+        }
+        solver.commit(&state.solution);
+        front.set_time(v, t_new);
+        let outcome = Outcome::Accepted {
+            t_old: tent.t_old,
+            t_new,
+            report,
+        };
+        Ok((t_new, outcome))
+    }
+
+    fn record(
+        &'a self,
+        state: &Frontier,
+        v: VertexId,
+        o: Outcome,
+        events: &Events<'a, Frontier>,
+    ) -> Result<(), EngineError> {
+        let (t_old, t_new, report) = match o {
+            Outcome::Accepted {
+                t_old,
+                t_new,
+                report,
+            } => (t_old, t_new, report),
+            Outcome::Coarsen { coarsening, report } => {
+                events.push(Box::new(move |state: &mut Frontier| {
+                    self.coarsen(state, &coarsening, &report)
+                }));
+                return Ok(());
+            }
+            Outcome::Rejected { star } => {
+                let mut book = self.book.lock();
+                book.patches += 1;
+                book.rejected += 1;
+                let at = state.mesh.vertex(v);
+                events.push(Box::new(move |state: &mut Frontier| {
+                    self.refine(state, v, at, &star)
+                }));
+                return Ok(());
+            }
+        };
+        let mesh = &state.mesh;
+        let c_max = state.pitcher.c_max();
+        let slope = mesh
+            .vertex_triangles(v)
+            .iter()
+            .map(|&t| c_max * state.front.slope(mesh, t))
+            .fold(0.0, f64::max);
+        let mut guard = self.book.lock();
+        let book = &mut *guard;
+        self.add_patch(book, &report);
+        book.max_slope_ratio = book.max_slope_ratio.max(slope);
+        self.add_to_snapshots(book, &state.solution, mesh.vertex_triangles(v));
+        book.progress.advance(t_new - t_old, book.patches);
+        let mut passed = std::mem::take(&mut book.passed);
+        book.milestones.advance(t_old, t_new, &mut passed);
+        for &(t, _) in passed.iter().filter(|p| p.1 == Milestone::Snapshot) {
+            book.snapshots.flush(t)?;
+        }
+        // One row for however many history milestones passed at once.
+        if passed.iter().any(|p| p.1 == Milestone::History) {
+            events.push(Box::new(move |state: &mut Frontier| {
+                self.history_row(state, &mut self.book.lock());
+                Changed::default()
+            }));
+        }
+        passed.clear();
+        book.passed = passed;
+        Ok(())
+    }
+}
+
+/// `sdg run`: solves the problem to the end time; writes `summary.json`, `history.csv` and the
+/// configured snapshots. Returns the summary and the output folder.
+pub fn solve_job(
+    problem: &Problem,
+    options: &RunOptions,
+) -> Result<(RunSummary, PathBuf), EngineError> {
+    let config = &problem.loaded.config;
+    let mesh = &problem.mesh;
+    let system = &problem.system;
+    let c_max = problem.material.max_wave_speed();
+    let rho = problem.material.density();
+    let t_end = config.time.end;
+    let pitcher = Pitcher::new(mesh, c_max, config.pitch.safety, t_end)
+        .map_err(|e| EngineError::Runtime(e.to_string()))?;
+    let dir = options.output_dir(problem)?;
+    let scheduler = options.scheduler(problem);
+
+    let adapt = Adapt::new(&config.adapt, mesh, c_max);
+    let pitcher = if adapt.is_some() {
+        pitcher.for_refinement(mesh)
+    } else {
+        pitcher
+    };
+    let initial_star = (0..mesh.vertices().len() as u32)
+        .map(|v| mesh.vertex_triangles(v).len())
+        .max()
+        .unwrap_or(0);
+    // Bisection adds triangles to stars; the solvers are sized once, and refinement never
+    // grows a star beyond them.
+    let max_star = if adapt.is_some() {
+        (2 * initial_star).max(12)
+    } else {
+        initial_star
+    };
+    let solvers: Vec<PatchSolver> = (0..scheduler.threads)
+        .map(|_| PatchSolver::new(system.clone(), config.solver.order, max_star))
+        .collect();
+    let (basis, width) = (solvers[0].basis().clone(), solvers[0].width());
+    let initial = problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave);
+    let mut state = Frontier::new(
+        mesh.clone(),
+        Front::flat(mesh.vertices().len(), 0.0),
+        FrontSolution::new(mesh.triangles().len(), basis.len(), width)
+            .with_edges(mesh.edges().len()),
+        pitcher,
+    );
+    if let Some(adapt) = &adapt {
+        // Energies of the initial data are taken on the refined front below.
+        refine_to_max_edge(&mut state, adapt, max_star)?;
+    }
+    let energy0 = front_energy(
+        &state.mesh,
+        &state.front,
+        &state.solution,
+        &basis,
+        system,
+        |x| initial_state(problem, initial, x),
+    );
+    let solve = Solve {
+        problem,
+        adapt,
+        max_star,
+        energy_reference: AtomicU64::new(energy0.total.to_bits()),
+        initial,
+        basis: basis.clone(),
+        book: Mutex::new(Book {
+            totals: PatchReport::default(),
+            patches: 0,
+            rejected: 0,
+            refinements: 0,
+            coarsenings: 0,
+            nonlinear_patches: 0,
+            newton_iterations: 0,
+            newton_max: 0,
+            initial_energy: energy0.total,
+            energy_max: energy0.total,
+            elements: 0,
+            dofs: 0,
+            max_slope_ratio: 0.0,
+            snapshots: Snapshots::new(&config.output.snapshot_times, c_max, dir.clone()),
+            milestones: Milestones::new(
+                state.mesh.vertices().len(),
+                t_end,
+                &config.output.snapshot_times,
+            ),
+            passed: Vec::new(),
+            history: String::from(
+                "time_s,patches,front_energy_j,kinetic_j,strain_j,boundary_work_j,dissipation_j,\
+                 interface_work_j,friction_dissipation_j,balance_residual_j\n",
+            ),
+            progress: Progress::new(options.progress, state.mesh.vertices().len() as f64 * t_end),
+            phi: vec![0.0; basis.len()],
+            values: vec![0.0; width],
+            geometry: Geometry::default(),
+            coefficients: vec![0.0; basis.len() * width],
+        }),
+    };
+    solve.history_row(&state, &mut solve.book.lock());
+    let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
+    tracing::info!(
+        threads = scheduler.threads,
+        deterministic = scheduler.deterministic,
+        order = config.solver.order,
+        vertices = state.mesh.vertices().len(),
+        "solve started"
+    );
+    let start = Instant::now();
+    let stats = match sdg_scheduler::run(&mut state, t_end, &solve, solvers, &scheduler) {
+        Ok(stats) => stats,
+        Err(e) => {
+            // Keep what the run produced so far: the history up to the failure and the
+            // snapshots already complete.
+            let mut book = solve.book.lock();
+            book.progress.finish();
+            solve.history_row(&state, &mut book);
+            write_atomic(&dir, "history.csv", book.history.as_bytes())?;
+            return Err(scheduler_error(e));
+        }
+    };
+    let wall_time_s = start.elapsed().as_secs_f64();
+    let mut book = solve.book.lock();
+    book.progress.finish();
+    solve.history_row(&state, &mut book);
+    book.snapshots.flush(t_end)?;
+    tracing::info!(patches = stats.tents, wall_time_s, "solve finished");
+
+    let Frontier {
+        mesh,
+        front,
+        solution,
+        ..
+    } = &state;
+    let e = front_energy(mesh, front, solution, &basis, system, |x| {
+        initial_state(problem, initial, x)
+    });
+    let initial_j = rho * book.initial_energy;
+    let work = rho * book.totals.boundary_work;
+    let dissipation = rho * book.totals.dissipation;
+    let interface_work = rho * book.totals.interface_work;
+    let final_j = rho * e.total;
+    let energy = EnergySummary {
+        initial: initial_j,
+        final_kinetic: rho * e.kinetic,
+        final_strain: rho * e.strain,
+        r#final: final_j,
+        boundary_work: work,
+        dissipation,
+        interface_work,
+        friction_dissipation: rho * book.totals.friction_dissipation,
+        balance_residual_rel: (initial_j + work - final_j - dissipation - interface_work)
+            / (initial_j + work.abs()).max(f64::MIN_POSITIVE),
+    };
+    let interface = InterfaceSummary {
+        nonlinear_patches: book.nonlinear_patches,
+        newton_iterations_mean: book.newton_iterations as f64
+            / book.nonlinear_patches.max(1) as f64,
+        newton_iterations_max: book.newton_max,
+    };
+    let error = problem.exact.as_ref().map(|w| {
+        let e = slice_errors(mesh, solution, &basis, system, t_end, w);
+        ErrorSummary {
+            velocity_l2_rel: e.velocity,
+            stress_l2_rel: e.stress,
+        }
+    });
+    let (min_edge, max_edge) = mesh.edge_length_range();
+    let summary = RunSummary {
+        command: "run",
+        config_file: problem.loaded.file.clone(),
+        vertices: mesh.vertices().len(),
+        triangles: mesh.triangles().len(),
+        order: config.solver.order,
+        patches: book.patches,
+        elements: book.elements,
+        dofs_per_patch: book.dofs as f64 / book.patches.max(1) as f64,
+        final_time: front.min_time(),
+        max_slope_ratio: book.max_slope_ratio,
+        max_momentum_residual: book.totals.momentum_residual,
+        mode: if scheduler.deterministic {
+            "deterministic"
+        } else {
+            "asynchronous"
+        },
+        state_hash: state_hash(front, solution, basis.len() * width),
+        wall_time_s,
+        patches_per_second: book.patches as f64 / wall_time_s.max(f64::MIN_POSITIVE),
+        threads: scheduler.threads,
+        energy,
+        interface,
+        error,
+        snapshots: book.snapshots.written().to_vec(),
+        refinements: book.refinements,
+        rejected_patches: book.rejected,
+        coarsenings: book.coarsenings,
+        events: stats.events,
+        min_edge,
+        max_edge,
+    };
+    write_atomic(&dir, "history.csv", book.history.as_bytes())?;
+    let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
+    write_atomic(&dir, "summary.json", json.as_bytes())?;
+    Ok((summary, dir))
+}

@@ -1,0 +1,139 @@
+//! `summary.json` of `sdg run` and the state hash in it.
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+use sdg_mesh::Front;
+use sdg_solver::element::{FrontSolution, Geometry};
+
+/// Energy totals of a run, J per metre of thickness.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct EnergySummary {
+    /// Kinetic plus strain energy at t = 0.
+    pub initial: f64,
+    /// Kinetic energy on the final (flat) front.
+    pub final_kinetic: f64,
+    /// Strain energy on the final front.
+    pub final_strain: f64,
+    /// Total energy on the final front.
+    pub r#final: f64,
+    /// Work done on the body through the domain boundary.
+    pub boundary_work: f64,
+    /// Numerical dissipation of all elements (each non-negative).
+    pub dissipation: f64,
+    /// Work absorbed by interfaces (contact, free): the power their targets take out of the
+    /// elements on both sides, integrated.
+    pub interface_work: f64,
+    /// Part of `interface_work` done by tangential tractions on tangential velocity jumps.
+    pub friction_dissipation: f64,
+    /// `(initial + boundary_work - final - dissipation - interface_work) /
+    /// (initial + |boundary_work|)`.
+    pub balance_residual_rel: f64,
+}
+
+/// Nonlinear interface patches of a run.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct InterfaceSummary {
+    /// Patches solved by Newton iterations (with a contact face).
+    pub nonlinear_patches: u64,
+    /// Mean linear solves per nonlinear patch (the first from the bonded solution).
+    pub newton_iterations_mean: f64,
+    /// Most linear solves of one nonlinear patch.
+    pub newton_iterations_max: usize,
+}
+
+/// Relative L2 errors at the end time against the exact solution.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct ErrorSummary {
+    /// `||v - v_exact|| / ||v_exact||` on the final slice.
+    pub velocity_l2_rel: f64,
+    /// `||sigma - sigma_exact|| / ||sigma_exact||` on the final slice.
+    pub stress_l2_rel: f64,
+}
+
+/// `summary.json` of `sdg run`. In deterministic mode every field but `wall_time_s`,
+/// `patches_per_second` and `threads` is the same for any thread count.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunSummary {
+    /// `"run"`.
+    pub command: &'static str,
+    /// The config file.
+    pub config_file: PathBuf,
+    /// Space mesh vertices.
+    pub vertices: usize,
+    /// Space mesh triangles.
+    pub triangles: usize,
+    /// Polynomial order.
+    pub order: usize,
+    /// Tents pitched and patches solved.
+    pub patches: u64,
+    /// Spacetime elements solved.
+    pub elements: u64,
+    /// Mean unknowns per patch linear system.
+    pub dofs_per_patch: f64,
+    /// End time reached, s.
+    pub final_time: f64,
+    /// Maximum `c_max |grad tau|` over all front facets.
+    pub max_slope_ratio: f64,
+    /// Largest relative momentum residual of an element (zero to round-off: every element
+    /// balances linear momentum).
+    pub max_momentum_residual: f64,
+    /// `"deterministic"` or `"asynchronous"`.
+    pub mode: &'static str,
+    /// FNV-1a hash of the final front: vertex times, then every element's geometry and
+    /// coefficients, as hexadecimal. Equal hashes mean bitwise equal final states.
+    pub state_hash: String,
+    /// Wall-clock time of the solve, s.
+    pub wall_time_s: f64,
+    /// Patches per second of wall-clock time.
+    pub patches_per_second: f64,
+    /// Worker threads used.
+    pub threads: usize,
+    /// Energy accounting.
+    pub energy: EnergySummary,
+    /// Newton statistics of patches with contact faces.
+    pub interface: InterfaceSummary,
+    /// Errors against `[exact]`, when configured.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<ErrorSummary>,
+    /// Snapshot files written: `[time s, file]`.
+    pub snapshots: Vec<(f64, String)>,
+    /// Edge bisections (new vertices) made by adaptive refinement.
+    pub refinements: u64,
+    /// Patches (tents or coarsenings) solved and rejected by the error indicator (included in
+    /// `patches`).
+    pub rejected_patches: u64,
+    /// Bisection vertices removed again by coarsening patches (included in `patches`).
+    pub coarsenings: u64,
+    /// Scheduler events run (refinement, coarsening, history rows): each holds the whole
+    /// front, so the other workers wait for it.
+    pub events: u64,
+    /// Shortest edge of the final space mesh, m.
+    pub min_edge: f64,
+    /// Longest edge of the final space mesh, m.
+    pub max_edge: f64,
+}
+
+/// FNV-1a over the bits of the front times and of every element under the front.
+pub(super) fn state_hash(front: &Front, solution: &FrontSolution, size: usize) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut feed = |x: f64| {
+        for byte in x.to_bits().to_le_bytes() {
+            hash ^= u64::from(byte);
+            hash = hash.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for t in front.snapshot() {
+        feed(t);
+    }
+    let mut geometry = Geometry::default();
+    let mut coefficients = vec![0.0; size];
+    for t in 0..solution.len() {
+        if solution.load(t, &mut geometry, &mut coefficients) {
+            geometry.vertices().iter().flatten().for_each(|&x| feed(x));
+            coefficients.iter().for_each(|&x| feed(x));
+        }
+    }
+    format!("{hash:016x}")
+}
