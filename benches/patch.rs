@@ -30,7 +30,7 @@ fn mesh() -> Mesh {
         nx: 12,
         ny: 12,
         diagonal: Diagonal::Right,
-        interface: None,
+        interfaces: Vec::new(),
         perturb: 0.0,
         seed: 0,
     }

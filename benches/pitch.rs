@@ -15,7 +15,7 @@ fn pitch_128(c: &mut Criterion) {
         nx: 128,
         ny: 128,
         diagonal: Diagonal::Alternate,
-        interface: None,
+        interfaces: Vec::new(),
         perturb: 0.1,
         seed: 1,
     }

@@ -48,7 +48,7 @@ fn schedule(c: &mut Criterion) {
         nx: 128,
         ny: 128,
         diagonal: Diagonal::Alternate,
-        interface: None,
+        interfaces: Vec::new(),
         perturb: 0.1,
         seed: 1,
     }

@@ -47,7 +47,7 @@ fn patch_solves_do_not_allocate() {
         nx: 8,
         ny: 8,
         diagonal: Diagonal::Alternate,
-        interface: None,
+        interfaces: Vec::new(),
         perturb: 0.1,
         seed: 5,
     }

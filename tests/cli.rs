@@ -34,6 +34,27 @@ plane = "strain"
 
 [time]
 end = 1e-7
+
+[[boundary]]
+sides = ["left", "right", "bottom", "top"]
+kind = "free"
+"#;
+
+/// `CONFIG` with a 2 mm edge crack at mid-height in frictional contact.
+const CRACKED: &str = r#"
+[[mesh.interface]]
+from = [0.0, 0.001]
+to = [0.002, 0.001]
+tag = "crack"
+
+[[interface]]
+tags = ["crack"]
+law = "contact"
+friction = 0.25
+r_c = -1e-6
+r_s = 0.0
+s_c = 0.0
+s_s = 6e5
 "#;
 
 /// Writes `text` as a config in a fresh folder; returns the folder and the config path.
@@ -107,7 +128,7 @@ fn malformed_config() {
     let (_dir, config) = config_file(&format!("{CONFIG}\n[pitch\nsafety = 0.5\n"));
     expect_input_error(
         &["mesh", &config],
-        &["case.toml", "invalid TOML", "line 18"],
+        &["case.toml", "invalid TOML", "line 22"],
     );
 }
 
@@ -168,6 +189,121 @@ fn invalid_adaptivity_settings() {
         ];
         expect_input_error(&args, &["case.toml", words[0], words[1]]);
     }
+}
+
+#[test]
+fn invalid_interface_settings() {
+    let (_dir, config) = config_file(&format!("{CONFIG}{CRACKED}"));
+    let out = sdg(&["validate", &config]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for (set, words) in [
+        (
+            "interface.0.friction=-0.1",
+            ["interface[0].friction", ">= 0"],
+        ),
+        ("interface.0.r_c=1e-6", ["interface[0].r_c", "must be <= 0"]),
+        (
+            "interface.0.r_s=-2e-6",
+            ["interface[0].r_s", "must be >= r_c"],
+        ),
+        (
+            "interface.0.s_c=7e5",
+            ["interface[0].s_s", "must be >= s_c"],
+        ),
+        (
+            "interface.0.law=glued",
+            ["interface[0].law", "unknown variant `glued`"],
+        ),
+        (
+            "material.plane=antiplane",
+            ["interface[0].law", "anti-plane"],
+        ),
+        (
+            r#"interface.0.tags=["crack", "top"]"#,
+            ["interface[0].tags", "`top` tags boundary edges"],
+        ),
+        (
+            "output.interface_probes=[[0.003, 0.0015]]",
+            [
+                "output.interface_probes[0]",
+                "farther than the longest edge",
+            ],
+        ),
+        (
+            "solver.newton_tol=2.0",
+            ["solver.newton_tol", "must be in (0, 1)"],
+        ),
+        (
+            "solver.newton_max_iter=0",
+            ["solver.newton_max_iter", "at least 1"],
+        ),
+    ] {
+        expect_input_error(
+            &["validate", &config, "--set", set],
+            &["case.toml", words[0], words[1]],
+        );
+    }
+    let bonded = format!("{CONFIG}{CRACKED}").replace("law = \"contact\"", "law = \"bonded\"");
+    let (_dir, config) = config_file(&bonded);
+    expect_input_error(
+        &["validate", &config],
+        &[
+            "case.toml",
+            "interface[0].friction",
+            "only used with law = \"contact\"",
+        ],
+    );
+}
+
+#[test]
+fn every_tag_must_be_named() {
+    let (_dir, config) = config_file(CONFIG);
+    expect_input_error(
+        &[
+            "mesh",
+            &config,
+            "--set",
+            r#"boundary.0.sides=["left", "right", "bottom"]"#,
+        ],
+        &["case.toml", "boundary:", "`top` has no [[boundary]] entry"],
+    );
+    expect_input_error(
+        &[
+            "run",
+            &config,
+            "--set",
+            "output.interface_probes=[[0.001, 0.001]]",
+        ],
+        &[
+            "case.toml",
+            "output.interface_probes[0]",
+            "no interface edge",
+        ],
+    );
+    let uncracked = format!("{CONFIG}{CRACKED}");
+    let uncracked = uncracked.split("[[interface]]").next().unwrap();
+    let (_dir, config) = config_file(uncracked);
+    expect_input_error(
+        &["validate", &config],
+        &[
+            "case.toml",
+            "interface:",
+            "`crack` has no [[interface]] entry",
+        ],
+    );
+    expect_input_error(
+        &[
+            "validate",
+            &config,
+            "--set",
+            r#"boundary.0.sides=["left", "right", "bottom", "top", "crack"]"#,
+        ],
+        &[
+            "case.toml",
+            "boundary[0].sides",
+            "`crack` tags interior edges",
+        ],
+    );
 }
 
 #[test]

@@ -21,7 +21,7 @@ fn square(nx: u32, perturb: f64) -> sdg_mesh::Mesh {
         nx,
         ny: nx,
         diagonal: Diagonal::Alternate,
-        interface: None,
+        interfaces: Vec::new(),
         perturb,
         seed: 3,
     }

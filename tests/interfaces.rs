@@ -30,7 +30,7 @@ fn strip(n: u32, every_edge: bool) -> Mesh {
         nx: 4 * n,
         ny: n,
         diagonal: Diagonal::Right,
-        interface: None,
+        interfaces: Vec::new(),
         perturb: 0.0,
         seed: 0,
     }

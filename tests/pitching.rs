@@ -14,7 +14,7 @@ fn rectangle(nx: u32, diagonal: Diagonal, perturb: f64) -> Mesh {
         nx,
         ny: nx,
         diagonal,
-        interface: None,
+        interfaces: Vec::new(),
         perturb,
         seed: 7,
     }

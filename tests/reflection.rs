@@ -25,7 +25,7 @@ fn strip_mesh() -> sdg_mesh::Mesh {
         nx: 32,
         ny: 8,
         diagonal: Diagonal::Right,
-        interface: None,
+        interfaces: Vec::new(),
         perturb: 0.0,
         seed: 0,
     }

@@ -85,7 +85,7 @@ mod tests {
             nx: n,
             ny: n,
             diagonal: Diagonal::Right,
-            interface: None,
+            interfaces: Vec::new(),
             perturb: 0.0,
             seed: 0,
         }

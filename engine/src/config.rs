@@ -5,8 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
 
+use sdg_solver::interface::{ContactParams, Law};
 use sdg_solver::{Material, Plane};
 
 /// A configuration error: where it came from, which key, and why.
@@ -46,10 +47,14 @@ pub struct Config {
     /// Adaptive refinement of the front.
     #[serde(default)]
     pub adapt: AdaptConfig,
-    /// Boundary conditions, one entry per group of sides (`[[boundary]]`). Sides without an
-    /// entry are traction-free.
+    /// Boundary conditions, one entry per group of sides (`[[boundary]]`). Every boundary tag
+    /// of the mesh must be named by one entry.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub boundary: Vec<BoundaryConfig>,
+    /// Interface laws, one entry per group of interface tags (`[[interface]]`). Every interface
+    /// tag of the mesh must be named by one entry.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub interface: Vec<InterfaceConfig>,
     /// An exact solution: initial data, `exact` boundaries and the error at the end time.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub exact: Option<ExactConfig>,
@@ -109,23 +114,40 @@ impl Default for AdaptConfig {
     }
 }
 
-/// `[solver]`: discretization.
+/// `[solver]`: discretization and the Newton iterations of patches with contact faces.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SolverConfig {
     /// Complete polynomial order on each spacetime tetrahedron, 1 to 4. Default 2.
     #[serde(default = "default_order")]
     pub order: usize,
+    /// Newton converges when the patch residual relative to the right-hand side is at most this,
+    /// in (0, 1) (dimensionless). Default 1e-10.
+    #[serde(default = "default_newton_tol")]
+    pub newton_tol: f64,
+    /// Newton iterations allowed per patch, at least 1. Default 30.
+    #[serde(default = "default_newton_max_iter")]
+    pub newton_max_iter: usize,
 }
 
 fn default_order() -> usize {
     2
 }
 
+fn default_newton_tol() -> f64 {
+    1e-10
+}
+
+fn default_newton_max_iter() -> usize {
+    30
+}
+
 impl Default for SolverConfig {
     fn default() -> Self {
         Self {
             order: default_order(),
+            newton_tol: default_newton_tol(),
+            newton_max_iter: default_newton_max_iter(),
         }
     }
 }
@@ -168,6 +190,82 @@ pub struct BoundaryConfig {
     pub history: Option<HistoryConfig>,
 }
 
+/// The law of an interface.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum LawName {
+    /// Perfectly bonded.
+    Bonded,
+    /// Both faces traction-free.
+    Free,
+    /// Unilateral contact with Coulomb friction (in-plane modes only).
+    Contact,
+}
+
+/// `[[interface]]`: one law on one or more interface tags. The contact parameters (seed 3.2.1,
+/// 3.3.1) are required with `law = "contact"` and rejected otherwise.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InterfaceConfig {
+    /// Interface tags (`[[mesh.interface]]` tags, or Gmsh physical names on interior edges).
+    pub tags: Vec<String>,
+    /// The law.
+    pub law: LawName,
+    /// Coulomb friction coefficient `k`, >= 0 (dimensionless).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
+    /// Separation at and below which the faces are fully in contact, `r_c <= 0`, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub r_c: Option<f64>,
+    /// Separation at and above which the faces are fully separated, `r_s >= r_c`, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub r_s: Option<f64>,
+    /// Normal bonded traction at and below which the faces are fully in contact, `s_c >= 0`, Pa.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub s_c: Option<f64>,
+    /// Normal bonded traction at and above which the faces are fully separated, `s_s >= s_c`,
+    /// Pa.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub s_s: Option<f64>,
+}
+
+impl InterfaceConfig {
+    /// The law, or `(key, reason)` for a missing, extra or invalid contact parameter.
+    pub fn to_law(&self) -> Result<Law, (String, String)> {
+        let params = [
+            ("friction", self.friction),
+            ("r_c", self.r_c),
+            ("r_s", self.r_s),
+            ("s_c", self.s_c),
+            ("s_s", self.s_s),
+        ];
+        if self.law != LawName::Contact {
+            return match params.iter().find(|(_, v)| v.is_some()) {
+                Some((key, _)) => Err((
+                    key.to_string(),
+                    "is only used with law = \"contact\"".into(),
+                )),
+                None if self.law == LawName::Bonded => Ok(Law::Bonded),
+                None => Ok(Law::Free),
+            };
+        }
+        let [friction, r_c, r_s, s_c, s_s] = params.map(|(key, v)| {
+            v.ok_or_else(|| (key.to_string(), "is required with law = \"contact\"".into()))
+        });
+        let params = ContactParams {
+            friction: friction?,
+            r_c: r_c?,
+            r_s: r_s?,
+            s_c: s_c?,
+            s_s: s_s?,
+        };
+        params
+            .validate()
+            .map_err(|e| (e.key.to_string(), e.reason))?;
+        Ok(Law::Contact(params))
+    }
+}
+
 /// Kind of a time history.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -180,6 +278,9 @@ pub enum HistoryKind {
     Smooth,
     /// Piecewise linear through `points`.
     Table,
+    /// Through `points` with a C1 cubic ramp `3 r^2 - 2 r^3` on each piece.
+    #[serde(rename = "smooth_table")]
+    SmoothTable,
 }
 
 /// A time history: `{ kind = "smooth", ramp = 2e-6 }` or `{ kind = "table", points = [[0, 0],
@@ -192,7 +293,7 @@ pub struct HistoryConfig {
     /// Ramp time, s (linear, smooth).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ramp: Option<f64>,
-    /// `[t (s), multiplier]` pairs with increasing `t` (table).
+    /// `[t (s), multiplier]` pairs with increasing `t` (table, smooth_table).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub points: Option<Vec<[f64; 2]>>,
 }
@@ -306,15 +407,20 @@ pub struct MeshConfig {
     /// Seed of the perturbation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
-    /// An interface segment on rectangle grid lines.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub interface: Option<InterfaceConfig>,
+    /// Interface segments on rectangle grid lines: `[[mesh.interface]]`, or one
+    /// `[mesh.interface]` table.
+    #[serde(
+        default,
+        deserialize_with = "one_or_many",
+        skip_serializing_if = "Vec::is_empty"
+    )]
+    pub interface: Vec<SegmentConfig>,
 }
 
-/// `[mesh.interface]`: a straight interior segment on grid lines, tagged as an interface.
+/// `[[mesh.interface]]`: a straight interior segment on grid lines, tagged as an interface.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct InterfaceConfig {
+pub struct SegmentConfig {
     /// One end `[x, y]`, m.
     pub from: [f64; 2],
     /// The other end `[x, y]`, m.
@@ -326,6 +432,31 @@ pub struct InterfaceConfig {
 
 fn default_interface_tag() -> String {
     "interface".into()
+}
+
+/// Reads one `[mesh.interface]` table or an `[[mesh.interface]]` array of tables. Errors keep
+/// the key path (`mesh.interface.from`, `mesh.interface[1].from`).
+fn one_or_many<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<SegmentConfig>, D::Error> {
+    use serde::de::value::{MapAccessDeserializer, SeqAccessDeserializer};
+    use serde::de::{MapAccess, SeqAccess, Visitor};
+
+    struct OneOrMany;
+    impl<'de> Visitor<'de> for OneOrMany {
+        type Value = Vec<SegmentConfig>;
+
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a table or an array of tables")
+        }
+
+        fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+            SegmentConfig::deserialize(MapAccessDeserializer::new(map)).map(|s| vec![s])
+        }
+
+        fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+            Vec::deserialize(SeqAccessDeserializer::new(seq))
+        }
+    }
+    d.deserialize_any(OneOrMany)
 }
 
 /// The 2D mode of elasticity.
@@ -396,6 +527,10 @@ pub struct OutputConfig {
     /// Times (s) of solution snapshots (`snapshot_NNNN.vtu` and `snapshots.pvd`). Default none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub snapshot_times: Vec<f64>,
+    /// Points `[x, y]` (m) near interface edges, each moved to the nearest interface edge
+    /// midpoint of the initial mesh, where the interface is recorded over time. Default none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub interface_probes: Vec<[f64; 2]>,
 }
 
 fn default_output_dir() -> PathBuf {
@@ -408,6 +543,7 @@ impl Default for OutputConfig {
             dir: default_output_dir(),
             spacetime_mesh: false,
             snapshot_times: Vec::new(),
+            interface_probes: Vec::new(),
         }
     }
 }
@@ -449,7 +585,7 @@ impl LoadedConfig {
 impl Config {
     /// Parses TOML `text` (named `source` in errors), applies `overrides` and validates.
     pub fn parse(text: &str, source: &str, overrides: &[String]) -> Result<Self, ConfigError> {
-        let mut table: toml::Table = toml::from_str(text).map_err(|e| ConfigError {
+        let table: toml::Table = toml::from_str(text).map_err(|e| ConfigError {
             file: source.to_string(),
             key: None,
             reason: format!("invalid TOML: {}", e.message())
@@ -457,18 +593,18 @@ impl Config {
                 .to_string()
                 + &line_of(text, e.span()),
         })?;
+        let mut root = toml::Value::Table(table);
         for spec in overrides {
-            apply_override(&mut table, spec)?;
+            apply_override(&mut root, spec)?;
         }
-        let config: Config =
-            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
-                let path = e.path().to_string();
-                ConfigError {
-                    file: source.to_string(),
-                    key: (path != ".").then_some(path),
-                    reason: e.into_inner().message().to_string(),
-                }
-            })?;
+        let config: Config = serde_path_to_error::deserialize(root).map_err(|e| {
+            let path = e.path().to_string();
+            ConfigError {
+                file: source.to_string(),
+                key: (path != ".").then_some(path),
+                reason: e.into_inner().message().to_string(),
+            }
+        })?;
         config.validate().map_err(|(key, reason)| ConfigError {
             file: source.to_string(),
             key: Some(key),
@@ -527,7 +663,7 @@ impl Config {
             ("mesh.diagonal", m.diagonal.is_some()),
             ("mesh.perturb", m.perturb.is_some()),
             ("mesh.seed", m.seed.is_some()),
-            ("mesh.interface", m.interface.is_some()),
+            ("mesh.interface", !m.interface.is_empty()),
         ];
         match m.kind {
             MeshKind::Rectangle => {
@@ -542,7 +678,7 @@ impl Config {
                 self.rectangle()
                     .build()
                     .map(drop)
-                    .or_else(|e| fail(&format!("mesh.{}", e.field), e.reason))?;
+                    .or_else(|e| fail(&rectangle_key(&e), e.reason))?;
             }
             MeshKind::Gmsh => {
                 if m.path.is_none() {
@@ -590,7 +726,8 @@ impl Config {
         Ok(())
     }
 
-    /// Checks `[solver]`, `[[boundary]]`, `[exact]` and `output.snapshot_times`.
+    /// Checks `[solver]`, `[[boundary]]`, `[[interface]]`, `[exact]` and `[output]` times and
+    /// points.
     fn validate_physics(&self) -> Result<(), (String, String)> {
         let order = self.solver.order;
         if !(1..=4).contains(&order) {
@@ -599,6 +736,17 @@ impl Config {
                 format!("must be 1 to 4, got {order}"),
             ));
         }
+        let tol = self.solver.newton_tol;
+        if !(tol > 0.0 && tol < 1.0) {
+            return Err((
+                "solver.newton_tol".into(),
+                format!("must be in (0, 1) (a relative residual), got {tol}"),
+            ));
+        }
+        if self.solver.newton_max_iter == 0 {
+            return Err(("solver.newton_max_iter".into(), "must be at least 1".into()));
+        }
+        self.validate_interfaces()?;
         let antiplane = self.material.plane == PlaneName::Antiplane;
         let components = if antiplane { 1 } else { 2 };
         let mut seen: Vec<&str> = Vec::new();
@@ -691,6 +839,44 @@ impl Config {
                 format!("{t} s is outside [0, time.end]"),
             ));
         }
+        if let Some(i) = self
+            .output
+            .interface_probes
+            .iter()
+            .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err((
+                format!("output.interface_probes[{i}]"),
+                "must be a point [x, y] of finite coordinates in m".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks `[[interface]]`: tags named once, laws and their parameters.
+    fn validate_interfaces(&self) -> Result<(), (String, String)> {
+        let mut seen: Vec<&str> = Vec::new();
+        for (i, entry) in self.interface.iter().enumerate() {
+            let key = |k: &str| format!("interface[{i}].{k}");
+            if entry.tags.is_empty() {
+                return Err((key("tags"), "lists no tag".into()));
+            }
+            for tag in &entry.tags {
+                if seen.contains(&tag.as_str()) {
+                    return Err((key("tags"), format!("tag `{tag}` has a law already")));
+                }
+                seen.push(tag);
+            }
+            if entry.law == LawName::Contact && self.material.plane == PlaneName::Antiplane {
+                return Err((
+                    key("law"),
+                    "\"contact\" needs a normal direction, which anti-plane shear \
+                     (material.plane = \"antiplane\") has not; use \"bonded\" or \"free\""
+                        .into(),
+                ));
+            }
+            entry.to_law().map_err(|(k, r)| (key(&k), r))?;
+        }
         Ok(())
     }
 
@@ -707,15 +893,25 @@ impl Config {
                 DiagonalName::Left => sdg_mesh::Diagonal::Left,
                 DiagonalName::Alternate => sdg_mesh::Diagonal::Alternate,
             },
-            interface: m.interface.as_ref().map(|i| sdg_mesh::GridSegment {
-                from: i.from,
-                to: i.to,
-                tag: i.tag.clone(),
-            }),
+            interfaces: m
+                .interface
+                .iter()
+                .map(|i| sdg_mesh::GridSegment {
+                    from: i.from,
+                    to: i.to,
+                    tag: i.tag.clone(),
+                })
+                .collect(),
             perturb: m.perturb.unwrap_or(0.0),
             seed: m.seed.unwrap_or(0),
         }
     }
+}
+
+/// The config key of a rectangle generator error: `mesh.nx`, or `mesh.interface[k]` for the
+/// k-th interface segment.
+pub(crate) fn rectangle_key(e: &sdg_mesh::RectangleError) -> String {
+    format!("mesh.{}", e.field.replacen("interfaces", "interface", 1))
 }
 
 /// ` (line N)` for a TOML error span, or nothing.
@@ -727,40 +923,55 @@ fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> String {
     .unwrap_or_default()
 }
 
-/// Applies one `key.path=value` override. The value is read as a TOML value (`3`, `1e-6`,
-/// `true`, `"text"`, `[0.0, 1.0]`), or as a string when it is not one; the schema then checks
-/// its type like any other key.
-fn apply_override(table: &mut toml::Table, spec: &str) -> Result<(), ConfigError> {
+/// Applies one `key.path=value` override to the config's `root` table. The value is read as a
+/// TOML value (`3`, `1e-6`, `true`, `"text"`, `[0.0, 1.0]`), or as a string when it is not one;
+/// the schema then checks its type like any other key. A number in the path selects an entry
+/// of an array of tables: `interface.0.r_c`.
+fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), ConfigError> {
     let source = format!("--set {spec}");
-    let err = |key: Option<String>, reason: &str| ConfigError {
+    let err = |key: &[&str], reason: String| ConfigError {
         file: source.clone(),
-        key,
-        reason: reason.to_string(),
+        key: (!key.is_empty()).then(|| key.join(".")),
+        reason,
     };
     let (path, raw) = spec
         .split_once('=')
-        .ok_or_else(|| err(None, "expected KEY=VALUE"))?;
+        .ok_or_else(|| err(&[], "expected KEY=VALUE".into()))?;
     let path = path.trim();
     let keys: Vec<&str> = path.split('.').collect();
     if keys.iter().any(|k| k.is_empty()) {
-        return Err(err(None, "the key path has an empty segment"));
+        return Err(err(&[], "the key path has an empty segment".into()));
     }
     let value = toml::from_str::<toml::Table>(&format!("v = {raw}"))
         .ok()
         .and_then(|mut t| t.remove("v"))
         .unwrap_or_else(|| toml::Value::String(raw.to_string()));
-    let (last, parents) = keys.split_last().expect("split yields at least one key");
-    let mut node = table;
-    for (i, key) in parents.iter().enumerate() {
-        let entry = node
-            .entry(key.to_string())
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-        node = entry
-            .as_table_mut()
-            .ok_or_else(|| err(Some(keys[..=i].join(".")), "is a value, not a table"))?;
+    let mut node = root;
+    for (i, key) in keys.iter().enumerate() {
+        node = entry(node, key).map_err(|reason| err(&keys[..i], reason))?;
     }
-    node.insert(last.to_string(), value);
+    *node = value;
     Ok(())
+}
+
+/// The entry `key` of a table (a new empty table when missing) or of an array (`key` an index
+/// below its length), or why `node` has none.
+fn entry<'a>(node: &'a mut toml::Value, key: &str) -> Result<&'a mut toml::Value, String> {
+    match node {
+        toml::Value::Table(table) => Ok(table
+            .entry(key.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))),
+        toml::Value::Array(array) => {
+            let len = array.len();
+            key.parse::<usize>()
+                .ok()
+                .and_then(|k| array.get_mut(k))
+                .ok_or_else(|| {
+                    format!("is a list of {len} entries; `{key}` is not an index below {len}")
+                })
+        }
+        _ => Err("is a value, not a table".into()),
+    }
 }
 
 impl HistoryConfig {
@@ -775,18 +986,22 @@ impl HistoryConfig {
             HistoryKind::Constant => History::Constant,
             HistoryKind::Linear => History::Linear { ramp: ramp()? },
             HistoryKind::Smooth => History::Smooth { ramp: ramp()? },
-            HistoryKind::Table => {
+            HistoryKind::Table | HistoryKind::SmoothTable => {
                 let points = self
                     .points
                     .as_ref()
                     .ok_or_else(|| ("points".to_string(), "is required for a table".to_string()))?;
-                History::Table(points.iter().map(|p| (p[0], p[1])).collect())
+                let points = points.iter().map(|p| (p[0], p[1])).collect();
+                if self.kind == HistoryKind::Table {
+                    History::Table(points)
+                } else {
+                    History::SmoothTable(points)
+                }
             }
         };
-        let key = if self.kind == HistoryKind::Table {
-            "points"
-        } else {
-            "ramp"
+        let key = match self.kind {
+            HistoryKind::Table | HistoryKind::SmoothTable => "points",
+            _ => "ramp",
         };
         history.validate().map_err(|r| (key.to_string(), r))?;
         Ok(history)
@@ -851,7 +1066,142 @@ end = 1e-6
             ],
         )
         .unwrap();
-        assert_eq!(c.mesh.interface.unwrap().tag, "interface");
+        assert_eq!(c.mesh.interface.len(), 1);
+        assert_eq!(c.mesh.interface[0].tag, "interface");
+        assert_eq!(c.solver.newton_tol, 1e-10);
+        assert_eq!(c.solver.newton_max_iter, 30);
+        assert!(c.interface.is_empty() && c.output.interface_probes.is_empty());
+    }
+
+    /// Two interface segments and a contact law on one of them.
+    const INTERFACES: &str = r#"
+[[mesh.interface]]
+from = [0.0, 0.005]
+to = [0.004, 0.005]
+tag = "crack"
+
+[[mesh.interface]]
+from = [0.008, 0.0]
+to = [0.008, 0.004]
+tag = "joint"
+
+[[interface]]
+tags = ["crack"]
+law = "contact"
+friction = 0.25
+r_c = -1e-6
+r_s = 0.0
+s_c = 0.0
+s_s = 6e5
+
+[[interface]]
+tags = ["joint"]
+law = "free"
+"#;
+
+    #[test]
+    fn interfaces_and_their_laws() {
+        let text = format!("{BASE}{INTERFACES}");
+        let c = parse(&text, &["output.interface_probes=[[0.001, 0.005]]"]).unwrap();
+        assert_eq!(c.mesh.interface.len(), 2);
+        assert_eq!(c.rectangle().interfaces[1].tag, "joint");
+        assert_eq!(
+            c.interface[0].to_law().unwrap(),
+            Law::Contact(ContactParams {
+                friction: 0.25,
+                r_c: -1e-6,
+                r_s: 0.0,
+                s_c: 0.0,
+                s_s: 6e5,
+            })
+        );
+        assert_eq!(c.interface[1].to_law().unwrap(), Law::Free);
+        assert_eq!(c.output.interface_probes, vec![[0.001, 0.005]]);
+        // Array entries are addressed by index in overrides.
+        let c = parse(
+            &text,
+            &["interface.0.r_c=-1e-7", "mesh.interface.1.tag=other"],
+        )
+        .unwrap();
+        assert_eq!(c.interface[0].r_c, Some(-1e-7));
+        assert_eq!(c.mesh.interface[1].tag, "other");
+        let e = parse(&text, &["interface.2.law=free"]).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("interface"));
+        assert!(e.reason.contains("not an index below 2"), "{e}");
+    }
+
+    #[test]
+    fn bad_interface_settings_name_the_key() {
+        let text = format!("{BASE}{INTERFACES}");
+        let error = |overrides: &[&str]| {
+            let e = parse(&text, overrides).unwrap_err();
+            (e.key.unwrap_or_default(), e.reason)
+        };
+        for (set, key, words) in [
+            ("interface.0.friction=-0.1", "interface[0].friction", ">= 0"),
+            ("interface.0.r_c=1e-6", "interface[0].r_c", "<= 0"),
+            ("interface.0.r_s=-2e-6", "interface[0].r_s", ">= r_c"),
+            ("interface.0.s_c=7e5", "interface[0].s_s", ">= s_c"),
+            (
+                "interface.0.law=glued",
+                "interface[0].law",
+                "unknown variant `glued`",
+            ),
+            (
+                "interface.1.r_c=0.0",
+                "interface[1].r_c",
+                "only used with law = \"contact\"",
+            ),
+            (
+                "interface.1.tags=[\"crack\"]",
+                "interface[1].tags",
+                "has a law already",
+            ),
+            ("interface.1.tags=[]", "interface[1].tags", "lists no tag"),
+            ("material.plane=antiplane", "interface[0].law", "anti-plane"),
+            ("solver.newton_tol=0.0", "solver.newton_tol", "(0, 1)"),
+            ("solver.newton_tol=1.5", "solver.newton_tol", "(0, 1)"),
+            (
+                "solver.newton_max_iter=0",
+                "solver.newton_max_iter",
+                "at least 1",
+            ),
+            (
+                "output.interface_probes=[[nan, 0.0]]",
+                "output.interface_probes[0]",
+                "finite",
+            ),
+            (
+                "mesh.interface.1.from=[0.008, 0.0001]",
+                "mesh.interface[1]",
+                "grid node",
+            ),
+        ] {
+            let (k, reason) = error(&[set]);
+            assert_eq!(k, key, "{set}");
+            assert!(reason.contains(words), "{set}: {reason}");
+        }
+        let missing = parse(&text.replace("s_s = 6e5\n", ""), &[]).unwrap_err();
+        assert_eq!(missing.key.as_deref(), Some("interface[0].s_s"));
+        assert!(missing.reason.contains("required with law = \"contact\""));
+        let typo = parse(&text.replace("to = [0.008", "too = [0.008"), &[]).unwrap_err();
+        assert_eq!(typo.key.as_deref(), Some("mesh.interface[1].too"));
+    }
+
+    #[test]
+    fn smooth_table_history() {
+        let text = format!(
+            "{BASE}[[boundary]]\nsides = [\"top\"]\nkind = \"traction\"\nvalue = [0.0, -1e6]\n\
+             history = {{ kind = \"smooth_table\", points = [[0.0, 0.0], [1e-7, 1.0]] }}\n"
+        );
+        let c = parse(&text, &[]).unwrap();
+        let history = c.boundary[0]
+            .history
+            .as_ref()
+            .unwrap()
+            .to_history()
+            .unwrap();
+        assert_eq!(history.value(0.5e-7), 0.5);
     }
 
     #[test]

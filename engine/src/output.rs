@@ -19,6 +19,8 @@ pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, Eng
 /// VTK cell types used here.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CellType {
+    /// 2-node line (VTK 3).
+    Line,
     /// 3-node triangle (VTK 5).
     Triangle,
     /// 4-node tetrahedron (VTK 10).
@@ -28,6 +30,7 @@ pub enum CellType {
 impl CellType {
     fn vtk_id(self) -> u8 {
         match self {
+            Self::Line => 3,
             Self::Triangle => 5,
             Self::Tetra => 10,
         }
@@ -35,6 +38,7 @@ impl CellType {
 
     fn nodes(self) -> usize {
         match self {
+            Self::Line => 2,
             Self::Triangle => 3,
             Self::Tetra => 4,
         }

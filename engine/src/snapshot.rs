@@ -1,6 +1,8 @@
 //! Snapshots: the solution on planes `t = const`, cut from the spacetime elements as they are
 //! solved and written as VTK triangle grids (`snapshot_NNNN.vtu`) with a ParaView collection
-//! (`snapshots.pvd`).
+//! (`snapshots.pvd`). Contact interfaces are cut the same way: their vertical faces give segments
+//! on the plane, written as `interface_NNNN.vtu` (lines) beside the triangles and listed in the
+//! collection as its part 1.
 //!
 //! # Slicing rule
 //! A snapshot at `t_s` is the plane `tau = tau_s = c_ref t_s`. Each element vertex is classified
@@ -44,6 +46,28 @@ pub struct PointValues {
     pub strain_energy_density: f64,
 }
 
+/// Values on a contact interface at a point of a slice, physical SI units.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct InterfaceValues {
+    /// Normal separation, m.
+    pub delta: f64,
+    /// Tangential slip, m.
+    pub slip: f64,
+    /// Target traction (normal, tangential), Pa.
+    pub traction: [f64; 2],
+    /// Contact area fraction.
+    pub eta: f64,
+    /// Mode with the largest area fraction: 0 stick, 1 slip, 2 separation.
+    pub mode: f64,
+}
+
+/// A slice segment of an interface: ends `(x, y)`, metres, and the values there.
+#[derive(Clone, Copy, Debug)]
+struct Segment {
+    xy: [[f64; 2]; 2],
+    values: [InterfaceValues; 2],
+}
+
 /// A slice triangle: corners `(x, y)` counter-clockwise, metres, and the fields there.
 #[derive(Clone, Copy, Debug)]
 struct Triangle {
@@ -72,6 +96,8 @@ struct Pending {
     triangles: Vec<Triangle>,
     /// Bottom faces in the plane (rule 2), kept while `triangles` is empty.
     fallback: Vec<Triangle>,
+    /// Interface segments (rule 1 on the interfaces' vertical faces).
+    segments: Vec<Segment>,
 }
 
 /// Collects the t = const slices of spacetime elements as they are solved and writes each snapshot
@@ -85,6 +111,8 @@ pub struct Snapshots {
     snapshots: Vec<Pending>,
     next: usize,
     written: Vec<(f64, String)>,
+    /// Interface files written: (time in s, file name).
+    interface_files: Vec<(f64, String)>,
 }
 
 impl std::fmt::Debug for Snapshots {
@@ -134,6 +162,7 @@ impl Snapshots {
                     tol: 8.0 * f64::EPSILON * tau.abs(),
                     triangles: Vec::new(),
                     fallback: Vec::new(),
+                    segments: Vec::new(),
                 }
             })
             .collect();
@@ -143,6 +172,32 @@ impl Snapshots {
             snapshots,
             next: 0,
             written: Vec::new(),
+            interface_files: Vec::new(),
+        }
+    }
+
+    /// The pending snapshot times (s) whose plane cuts a face spanning `tau` from `lo` to `hi`
+    /// (m) by rule 1 (`lo < tau_s <= hi`), for [`Self::add_interface_segment`].
+    pub fn crossing(&self, lo: f64, hi: f64) -> impl Iterator<Item = f64> + '_ {
+        self.snapshots[self.next..]
+            .iter()
+            .filter(move |s| lo < s.tau - s.tol && s.tau - s.tol <= hi)
+            .map(|s| s.time)
+    }
+
+    /// Records the segment `xy` (m) with `values` at its ends, the cut of an interface face by
+    /// the plane of the pending snapshot at `time` (s, one of [`Self::crossing`]'s).
+    pub fn add_interface_segment(
+        &mut self,
+        time: f64,
+        xy: [[f64; 2]; 2],
+        values: [InterfaceValues; 2],
+    ) {
+        if let Some(snap) = self.snapshots[self.next..]
+            .iter_mut()
+            .find(|s| s.time == time)
+        {
+            snap.segments.push(Segment { xy, values });
         }
     }
 
@@ -232,6 +287,16 @@ impl Snapshots {
                 triangles_grid(&triangles).to_vtu().as_bytes(),
             )?;
             self.written.push((snap.time, name));
+            if !snap.segments.is_empty() {
+                let segments = std::mem::take(&mut snap.segments);
+                let name = format!("interface_{:04}.vtu", snap.index);
+                write_atomic(
+                    &self.dir,
+                    &name,
+                    segments_grid(&segments).to_vtu().as_bytes(),
+                )?;
+                self.interface_files.push((snap.time, name));
+            }
             self.next += 1;
             count += 1;
         }
@@ -252,11 +317,16 @@ impl Snapshots {
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" \
              byte_order=\"LittleEndian\">\n<Collection>\n",
         );
-        for (time, name) in &self.written {
-            let _ = writeln!(
-                s,
-                "<DataSet timestep=\"{time}\" part=\"0\" file=\"{name}\"/>"
-            );
+        for (part, files) in [&self.written, &self.interface_files]
+            .into_iter()
+            .enumerate()
+        {
+            for (time, name) in files {
+                let _ = writeln!(
+                    s,
+                    "<DataSet timestep=\"{time}\" part=\"{part}\" file=\"{name}\"/>"
+                );
+            }
         }
         s.push_str("</Collection>\n</VTKFile>\n");
         s
@@ -395,6 +465,61 @@ fn triangles_grid(triangles: &[Triangle]) -> UnstructuredGrid {
             triangles.iter().map(Triangle::area).collect(),
         )],
     }
+}
+
+/// The interface segments as an unstructured grid of lines with points `[x, y, 0]` (two per
+/// segment) and point fields `delta`, `slip`, `traction` (normal, tangential, 0), `eta`, `mode`.
+fn segments_grid(segments: &[Segment]) -> UnstructuredGrid {
+    let values = || segments.iter().flat_map(|s| s.values.iter());
+    let scalar = |name: &str, get: fn(&InterfaceValues) -> f64| {
+        Field::scalar(name, values().map(get).collect())
+    };
+    UnstructuredGrid {
+        cell_type: CellType::Line,
+        points: segments
+            .iter()
+            .flat_map(|s| s.xy.iter().map(|p| [p[0], p[1], 0.0]))
+            .collect(),
+        connectivity: (0..2 * segments.len() as u32).collect(),
+        point_data: vec![
+            scalar("delta", |v| v.delta),
+            scalar("slip", |v| v.slip),
+            Field {
+                name: "traction".into(),
+                components: 3,
+                values: values()
+                    .flat_map(|v| [v.traction[0], v.traction[1], 0.0])
+                    .collect(),
+            },
+            scalar("eta", |v| v.eta),
+            scalar("mode", |v| v.mode),
+        ],
+        cell_data: Vec::new(),
+    }
+}
+
+/// The cut of the triangle `corners` (scaled spacetime, a vertical interface face) by the plane
+/// `tau = tau_s`: its two ends, or `None` when the plane misses the triangle or touches it in a
+/// point.
+pub fn cut_face(corners: [[f64; 3]; 3], tau_s: f64) -> Option<[[f64; 3]; 2]> {
+    let mut ends = [[0.0; 3]; 2];
+    let mut count = 0;
+    for i in 0..3 {
+        let (p, q) = (corners[i], corners[(i + 1) % 3]);
+        let on = p[2] == tau_s;
+        let crosses = (p[2] - tau_s) * (q[2] - tau_s) < 0.0;
+        for point in [on.then_some(p), crosses.then(|| cut(p, q, tau_s))]
+            .into_iter()
+            .flatten()
+        {
+            if count < 2 {
+                ends[count] = point;
+                count += 1;
+            }
+        }
+    }
+    let length = (ends[1][0] - ends[0][0]).hypot(ends[1][1] - ends[0][1]);
+    (count == 2 && length > 0.0).then_some(ends)
 }
 
 #[cfg(test)]

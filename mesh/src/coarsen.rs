@@ -444,7 +444,11 @@ mod tests {
                 removed_edges: merge.removed_edges.clone(),
             }
         );
-        assert_eq!(merge.removed_edges.len(), 3, "both edges zm and one half of ab");
+        assert_eq!(
+            merge.removed_edges.len(),
+            3,
+            "both edges zm and one half of ab"
+        );
         assert!(canonical(&m) == original);
     }
 
@@ -477,11 +481,11 @@ mod tests {
     #[test]
     fn undoing_random_refinement_in_reverse_restores_the_mesh() {
         let mut r = square(4, Diagonal::Alternate, 0.2);
-        r.interface = Some(GridSegment {
+        r.interfaces = vec![GridSegment {
             from: [0.0, 0.5],
             to: [0.75, 0.5],
             tag: "crack".into(),
-        });
+        }];
         let mut m = r.build().unwrap();
         let original = canonical(&m);
         let mut rng = XorShift(2024);
@@ -693,11 +697,11 @@ mod tests {
     #[test]
     fn random_refinement_coarsens_back_to_the_initial_mesh() {
         let mut cracked = square(4, Diagonal::Alternate, 0.2);
-        cracked.interface = Some(GridSegment {
+        cracked.interfaces = vec![GridSegment {
             from: [0.0, 0.5],
             to: [0.75, 0.5],
             tag: "crack".into(),
-        });
+        }];
         refine_and_coarsen_back(&square(3, Diagonal::Right, 0.0), 0x9E37_79B9_7F4A_7C15);
         refine_and_coarsen_back(&cracked, 12345);
     }

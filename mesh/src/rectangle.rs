@@ -1,5 +1,7 @@
 //! Structured triangulations of a rectangle `[0, width] x [0, height]`.
 
+use std::collections::HashMap;
+
 use crate::geometry::{self, Point};
 use crate::mesh::{Mesh, MeshError, TagId, VertexId};
 
@@ -39,10 +41,11 @@ pub struct Rectangle {
     pub ny: u32,
     /// Cell split pattern.
     pub diagonal: Diagonal,
-    /// Optional interface segment on grid lines.
-    pub interface: Option<GridSegment>,
+    /// Interface segments on grid lines; segments may share a tag, and may overlap only where
+    /// they share it.
+    pub interfaces: Vec<GridSegment>,
     /// Random displacement of interior vertices as a fraction of the cell size in each
-    /// direction, in `[0, 0.25)`. Vertices on the boundary or the interface do not move.
+    /// direction, in `[0, 0.25)`. Vertices on the boundary or an interface do not move.
     pub perturb: f64,
     /// Seed of the perturbation; each vertex's draw depends only on the seed and its id.
     pub seed: u64,
@@ -52,15 +55,15 @@ pub struct Rectangle {
 #[derive(Debug, thiserror::Error)]
 #[error("{field}: {reason}")]
 pub struct RectangleError {
-    /// Parameter name (`width`, `nx`, `interface`, ...).
-    pub field: &'static str,
+    /// Parameter name (`width`, `nx`, `interfaces[k]` for the k-th segment, ...).
+    pub field: String,
     /// What is wrong with it.
     pub reason: String,
 }
 
-fn invalid(field: &'static str, reason: impl Into<String>) -> RectangleError {
+fn invalid(field: impl Into<String>, reason: impl Into<String>) -> RectangleError {
     RectangleError {
-        field,
+        field: field.into(),
         reason: reason.into(),
     }
 }
@@ -69,8 +72,9 @@ fn invalid(field: &'static str, reason: impl Into<String>) -> RectangleError {
 pub const SIDES: [&str; 4] = ["left", "right", "bottom", "top"];
 
 impl Rectangle {
-    /// Generates the triangulation. Boundary edges are tagged `left`, `right`, `bottom`, `top`;
-    /// interface edges get the segment's tag.
+    /// Generates the triangulation. Boundary edges are tagged `left`, `right`, `bottom`, `top`
+    /// (tag ids 0 to 3); interface edges get their segment's tag, with ids from 4 in order of
+    /// first appearance.
     pub fn build(&self) -> Result<Mesh, RectangleError> {
         for (field, value) in [("width", self.width), ("height", self.height)] {
             if !(value.is_finite() && value > 0.0) {
@@ -133,12 +137,12 @@ impl Rectangle {
         }
         let mut tag_names: Vec<String> = SIDES.iter().map(|s| s.to_string()).collect();
         let mut pinned = vec![false; vertices.len()];
-        if let Some(seg) = &self.interface {
+        // The tag of each interface edge so far, by its end vertices in increasing order.
+        let mut segment_edges: HashMap<[VertexId; 2], TagId> = HashMap::new();
+        for (k, seg) in self.interfaces.iter().enumerate() {
+            let field = format!("interfaces[{k}]");
             if SIDES.contains(&seg.tag.as_str()) {
-                return Err(invalid(
-                    "interface",
-                    format!("tag `{}` is a side name", seg.tag),
-                ));
+                return Err(invalid(field, format!("tag `{}` is a side name", seg.tag)));
             }
             let node = |p: Point| -> Result<(u32, u32), RectangleError> {
                 let (fi, fj) = (p[0] / dx, p[1] / dy);
@@ -146,7 +150,7 @@ impl Rectangle {
                 let on_grid = (fi - i).abs() < 1e-9 && (fj - j).abs() < 1e-9;
                 if !on_grid || i < 0.0 || j < 0.0 || i > nx as f64 || j > ny as f64 {
                     return Err(invalid(
-                        "interface",
+                        field.clone(),
                         format!("end point {p:?} is not a grid node of the rectangle"),
                     ));
                 }
@@ -154,27 +158,45 @@ impl Rectangle {
             };
             let (a, b) = (node(seg.from)?, node(seg.to)?);
             let steps: Vec<(u32, u32)> = if a == b {
-                return Err(invalid("interface", "the segment has zero length"));
+                return Err(invalid(field, "the segment has zero length"));
             } else if a.1 == b.1 {
                 if a.1 == 0 || a.1 == ny {
-                    return Err(invalid("interface", "the segment lies on the boundary"));
+                    return Err(invalid(field, "the segment lies on the boundary"));
                 }
                 (a.0.min(b.0)..=a.0.max(b.0)).map(|i| (i, a.1)).collect()
             } else if a.0 == b.0 {
                 if a.0 == 0 || a.0 == nx {
-                    return Err(invalid("interface", "the segment lies on the boundary"));
+                    return Err(invalid(field, "the segment lies on the boundary"));
                 }
                 (a.1.min(b.1)..=a.1.max(b.1)).map(|j| (a.0, j)).collect()
             } else {
-                return Err(invalid(
-                    "interface",
-                    "the segment must be horizontal or vertical",
-                ));
+                return Err(invalid(field, "the segment must be horizontal or vertical"));
             };
-            let tag = tag_names.len() as TagId;
-            tag_names.push(seg.tag.clone());
+            let tag = match tag_names.iter().position(|n| *n == seg.tag) {
+                Some(t) => t as TagId,
+                None => {
+                    tag_names.push(seg.tag.clone());
+                    (tag_names.len() - 1) as TagId
+                }
+            };
             for w in steps.windows(2) {
-                tagged.push(([id(w[0].0, w[0].1), id(w[1].0, w[1].1)], tag));
+                let ends = [id(w[0].0, w[0].1), id(w[1].0, w[1].1)];
+                match segment_edges.get(&ends) {
+                    Some(&other) if other != tag => {
+                        return Err(invalid(
+                            field,
+                            format!(
+                                "overlaps an earlier segment tagged `{}`",
+                                tag_names[other as usize]
+                            ),
+                        ));
+                    }
+                    Some(_) => {}
+                    None => {
+                        segment_edges.insert(ends, tag);
+                        tagged.push((ends, tag));
+                    }
+                }
             }
             for &(i, j) in &steps {
                 pinned[id(i, j) as usize] = true;
@@ -231,7 +253,7 @@ mod tests {
             nx: 4,
             ny: 3,
             diagonal,
-            interface: None,
+            interfaces: Vec::new(),
             perturb: 0.0,
             seed: 1,
         }
@@ -262,11 +284,11 @@ mod tests {
     #[test]
     fn interface_segment_tags_interior_edges() {
         let mut r = rect(Diagonal::Alternate);
-        r.interface = Some(GridSegment {
+        r.interfaces = vec![GridSegment {
             from: [0.0, 2.0 / 3.0],
             to: [1.0, 2.0 / 3.0],
             tag: "crack".into(),
-        });
+        }];
         r.perturb = 0.2;
         let m = r.build().unwrap();
         let crack = m.tag_id("crack").unwrap();
@@ -278,6 +300,44 @@ mod tests {
                 assert!((m.vertex(v)[1] - 2.0 / 3.0).abs() < 1e-12);
             }
         }
+    }
+
+    #[test]
+    fn several_segments_share_or_add_tags() {
+        let seg = |from, to, tag: &str| GridSegment {
+            from,
+            to,
+            tag: tag.into(),
+        };
+        let mut r = rect(Diagonal::Alternate);
+        r.interfaces = vec![
+            seg([0.0, 1.0 / 3.0], [1.0, 1.0 / 3.0], "crack"),
+            seg([1.5, 0.0], [1.5, 1.0], "joint"),
+            // Shares its tag and one edge with the first segment.
+            seg([0.5, 1.0 / 3.0], [2.0, 1.0 / 3.0], "crack"),
+        ];
+        let m = r.build().unwrap();
+        assert_eq!(
+            m.tag_names(),
+            ["left", "right", "bottom", "top", "crack", "joint"]
+        );
+        let count = |tag: TagId| m.edges().iter().filter(|e| e.tag == Some(tag)).count();
+        assert_eq!(
+            count(4),
+            4,
+            "the union of both crack segments: one grid line"
+        );
+        assert_eq!(count(5), 3);
+        assert!(
+            m.edges()
+                .iter()
+                .all(|e| e.tag.unwrap_or(0) < 4 || e.is_interface())
+        );
+
+        r.interfaces[2].tag = "other".into();
+        let e = r.build().unwrap_err();
+        assert_eq!(e.field, "interfaces[2]");
+        assert!(e.reason.contains("`crack`"), "{e}");
     }
 
     #[test]
@@ -305,16 +365,30 @@ mod tests {
             "perturb"
         );
         let seg = |from, to| Rectangle {
-            interface: Some(GridSegment {
-                from,
-                to,
-                tag: "c".into(),
-            }),
+            interfaces: vec![
+                GridSegment {
+                    from: [0.0, 1.0 / 3.0],
+                    to: [0.5, 1.0 / 3.0],
+                    tag: "c".into(),
+                },
+                GridSegment {
+                    from,
+                    to,
+                    tag: "c".into(),
+                },
+            ],
             ..rect(Diagonal::Right)
         };
-        assert_eq!(field(seg([0.0, 0.1], [1.0, 0.1])), "interface");
-        assert_eq!(field(seg([0.0, 0.0], [1.0, 0.0])), "interface");
-        assert_eq!(field(seg([0.0, 1.0 / 3.0], [1.0, 2.0 / 3.0])), "interface");
+        assert_eq!(field(seg([0.0, 0.1], [1.0, 0.1])), "interfaces[1]");
+        assert_eq!(field(seg([0.0, 0.0], [1.0, 0.0])), "interfaces[1]");
+        assert_eq!(
+            field(seg([0.0, 1.0 / 3.0], [1.0, 2.0 / 3.0])),
+            "interfaces[1]"
+        );
+        assert_eq!(field(seg([0.5, 0.0], [0.5, 0.0])), "interfaces[1]");
+        let mut side = seg([1.0, 0.0], [1.0, 1.0]);
+        side.interfaces[1].tag = "top".into();
+        assert_eq!(field(side), "interfaces[1]");
     }
 
     #[test]

@@ -452,11 +452,11 @@ mod tests {
     #[test]
     fn random_refinement_of_a_perturbed_mesh_keeps_angles_bounded() {
         let mut r = square(4, Diagonal::Alternate, 0.2);
-        r.interface = Some(GridSegment {
+        r.interfaces = vec![GridSegment {
             from: [0.0, 0.5],
             to: [0.75, 0.5],
             tag: "crack".into(),
-        });
+        }];
         let mut m = r.build().unwrap();
         let initial = min_angle(&m);
         // Every triangle NVB creates lies in the bisection tree of an initial triangle, whose

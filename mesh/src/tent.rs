@@ -258,7 +258,7 @@ mod tests {
             nx: 2,
             ny: 2,
             diagonal: Diagonal::Right,
-            interface: None,
+            interfaces: Vec::new(),
             perturb: 0.0,
             seed: 0,
         }

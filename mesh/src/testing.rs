@@ -12,7 +12,7 @@ pub(crate) fn square(n: u32, diagonal: Diagonal, perturb: f64) -> Rectangle {
         nx: n,
         ny: n,
         diagonal,
-        interface: None,
+        interfaces: Vec::new(),
         perturb,
         seed: 7,
     }

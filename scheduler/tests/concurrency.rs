@@ -21,7 +21,7 @@ fn perturbed(n: u32) -> Mesh {
         nx: n,
         ny: n,
         diagonal: Diagonal::Alternate,
-        interface: None,
+        interfaces: Vec::new(),
         perturb: 0.2,
         seed: 11,
     }

@@ -8,7 +8,7 @@ use std::sync::atomic::Ordering;
 use sdg_mesh::TriangleId;
 use sdg_solver::element::{FrontSolution, Geometry, evaluate};
 use sdg_solver::norms::front_energy;
-use sdg_solver::patch::PatchReport;
+use sdg_solver::patch::{InterfaceSample, PatchReport};
 use sdg_solver::system::MAX_FIELDS;
 use sdg_solver::{Material, Plane};
 
@@ -98,6 +98,8 @@ pub(super) struct Book {
     pub(super) rejected: u64,
     pub(super) refinements: u64,
     pub(super) coarsenings: u64,
+    /// Interface probe samples: `(probe index, sample)`.
+    pub(super) samples: Vec<(usize, InterfaceSample)>,
     pub(super) nonlinear_patches: u64,
     pub(super) newton_iterations: u64,
     pub(super) newton_max: usize,

@@ -17,7 +17,7 @@ use sdg_mesh::{Front, Pitcher, Tent, TriangleId};
 use sdg_scheduler::{Changed, Events, VertexId, Work};
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::norms::{front_energy, initial_energy, slice_errors};
-use sdg_solver::patch::{Initial, PatchReport, PatchSolver};
+use sdg_solver::patch::{Initial, InterfaceSample, Newton, PatchReport, PatchSolver};
 use sdg_solver::system::{MAX_FIELDS, State};
 
 use crate::adapt::Adapt;
@@ -31,6 +31,7 @@ use crate::snapshot::Snapshots;
 
 mod adaptivity;
 mod book;
+mod interface_output;
 mod summary;
 
 use adaptivity::refine_to_max_edge;
@@ -61,6 +62,16 @@ fn initial_state(problem: &Problem, initial: Initial, x: [f64; 2]) -> State {
 }
 
 impl Solve<'_> {
+    /// Writes `interface.csv` when probes are configured.
+    fn write_probes(&self, dir: &std::path::Path, book: &mut Book) -> Result<(), EngineError> {
+        let probes = &self.problem.probes;
+        if !probes.is_empty() {
+            let text = interface_output::csv(probes, &mut book.samples);
+            write_atomic(dir, "interface.csv", text.as_bytes())?;
+        }
+        Ok(())
+    }
+
     /// Discrete energy of the initial data on the triangle with `corners` (scaled units).
     fn initial_energy(&self, corners: [[f64; 2]; 3]) -> f64 {
         initial_energy(
@@ -75,11 +86,13 @@ impl Solve<'_> {
 /// What one tent hands to the bookkeeping.
 #[derive(Debug)]
 enum Outcome {
-    /// The patch is stored and the vertex advanced.
+    /// The patch is stored and the vertex advanced; `samples` are the interface probes on it.
     Accepted {
         t_old: f64,
         t_new: f64,
         report: PatchReport,
+        samples: Vec<(usize, InterfaceSample)>,
+        cuts: Vec<interface_output::Cut>,
     },
     /// The indicator rejected the patch: nothing advanced; these star triangles (with their
     /// corners, to notice a change) are to be bisected.
@@ -182,6 +195,12 @@ impl<'a> Work<'a> for Solve<'a> {
             t_old: tent.t_old,
             t_new,
             report,
+            samples: interface_output::sample(&self.problem.probes, mesh, solver),
+            cuts: interface_output::snapshot_cuts(
+                &self.problem.loaded.config.output.snapshot_times,
+                self.problem.system.c_ref(),
+                solver,
+            ),
         };
         Ok((t_new, outcome))
     }
@@ -198,7 +217,18 @@ impl<'a> Work<'a> for Solve<'a> {
                 t_old,
                 t_new,
                 report,
-            } => (t_old, t_new, report),
+                samples,
+                cuts,
+            } => {
+                if !samples.is_empty() || !cuts.is_empty() {
+                    let mut book = self.book.lock();
+                    book.samples.extend(samples);
+                    for (time, xy, values) in cuts {
+                        book.snapshots.add_interface_segment(time, xy, values);
+                    }
+                }
+                (t_old, t_new, report)
+            }
             Outcome::Coarsen { coarsening, report } => {
                 events.push(Box::new(move |state: &mut Frontier| {
                     self.coarsen(state, &coarsening, &report)
@@ -282,7 +312,15 @@ pub fn solve_job(
         initial_star
     };
     let solvers: Vec<PatchSolver> = (0..scheduler.threads)
-        .map(|_| PatchSolver::new(system.clone(), config.solver.order, max_star))
+        .map(|_| {
+            PatchSolver::new(system.clone(), config.solver.order, max_star).with_interfaces(
+                problem.interfaces.clone(),
+                Newton {
+                    tol: config.solver.newton_tol,
+                    max_iter: config.solver.newton_max_iter,
+                },
+            )
+        })
         .collect();
     let (basis, width) = (solvers[0].basis().clone(), solvers[0].width());
     let initial = problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave);
@@ -318,6 +356,7 @@ pub fn solve_job(
             rejected: 0,
             refinements: 0,
             coarsenings: 0,
+            samples: Vec::new(),
             nonlinear_patches: 0,
             newton_iterations: 0,
             newton_max: 0,
@@ -363,6 +402,7 @@ pub fn solve_job(
             book.progress.finish();
             solve.history_row(&state, &mut book);
             write_atomic(&dir, "history.csv", book.history.as_bytes())?;
+            solve.write_probes(&dir, &mut book)?;
             return Err(scheduler_error(e));
         }
     };
@@ -446,6 +486,7 @@ pub fn solve_job(
         max_edge,
     };
     write_atomic(&dir, "history.csv", book.history.as_bytes())?;
+    solve.write_probes(&dir, &mut book)?;
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;
     Ok((summary, dir))

@@ -82,7 +82,8 @@ pub struct RunSummary {
     /// `"deterministic"` or `"asynchronous"`.
     pub mode: &'static str,
     /// FNV-1a hash of the final front: vertex times, then every element's geometry and
-    /// coefficients, as hexadecimal. Equal hashes mean bitwise equal final states.
+    /// coefficients, then every interface face's corners and coefficients, as hexadecimal.
+    /// Equal hashes mean bitwise equal final states.
     pub state_hash: String,
     /// Wall-clock time of the solve, s.
     pub wall_time_s: f64,
@@ -115,7 +116,8 @@ pub struct RunSummary {
     pub max_edge: f64,
 }
 
-/// FNV-1a over the bits of the front times and of every element under the front.
+/// FNV-1a over the bits of the front times, of every element under the front and of every
+/// interface face on it.
 pub(super) fn state_hash(front: &Front, solution: &FrontSolution, size: usize) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     let mut feed = |x: f64| {
@@ -133,6 +135,16 @@ pub(super) fn state_hash(front: &Front, solution: &FrontSolution, size: usize) -
         if solution.load(t, &mut geometry, &mut coefficients) {
             geometry.vertices().iter().flatten().for_each(|&x| feed(x));
             coefficients.iter().for_each(|&x| feed(x));
+        }
+    }
+    for e in 0..solution.edges() {
+        if let Some(face) = solution.face(e) {
+            face.geometry
+                .corners()
+                .iter()
+                .flatten()
+                .for_each(|&x| feed(x));
+            face.delta.iter().chain(&face.slip).for_each(|&x| feed(x));
         }
     }
     format!("{hash:016x}")

@@ -815,7 +815,18 @@ impl PatchSolver {
         if top - bottom <= 1e-9 * (p2[2] - p0[2]) {
             return None;
         }
-        let point = [x[0], x[1], 0.5 * (bottom + top)];
+        self.interface_sample_at(edge, [x[0], x[1], 0.5 * (bottom + top)])
+    }
+
+    /// The interface of the last patch at the point `point` (scaled spacetime) of the contact
+    /// face over edge `edge`; `None` when the patch has no contact face over `edge`.
+    pub fn interface_sample_at(
+        &mut self,
+        edge: EdgeId,
+        point: SpacePoint,
+    ) -> Option<InterfaceSample> {
+        let f = self.contact.faces().iter().position(|f| f.edge == edge)?;
+        let face = &self.contact.faces()[f];
         let (law, normal, sides) = (face.law, face.normal, [face.a, face.b]);
         let (n, width, fields) = (self.basis.len(), self.width(), self.system.fields());
         let [qa, qb] = sides.map(|i| {

@@ -1,0 +1,139 @@
+//! Outputs of contact interfaces: probes at configured points over time (`interface.csv`) and
+//! the interfaces' cuts by the snapshot planes.
+//!
+//! After each accepted tent, every probe that lies on the edge of one of the patch's contact
+//! faces is sampled halfway up that face (where the face has height: a probe at the face's far
+//! end is sampled by the tent on the other side). Rows are sorted by probe and time, so the file
+//! does not depend on the order in which tents were solved.
+
+use std::fmt::Write as _;
+
+use sdg_mesh::Mesh;
+use sdg_solver::interface::Mode;
+use sdg_solver::patch::{InterfaceSample, PatchSolver};
+
+use crate::problem::Probe;
+use crate::snapshot::{InterfaceValues, cut_face};
+
+/// One interface face's cut by a snapshot plane: time (s), ends (m) and values there.
+pub(super) type Cut = (f64, [[f64; 2]; 2], [InterfaceValues; 2]);
+
+/// Cuts the last patch's contact faces by the planes of the snapshot `times` (s) they cross.
+pub(super) fn snapshot_cuts(times: &[f64], c_ref: f64, solver: &mut PatchSolver) -> Vec<Cut> {
+    let mut cuts = Vec::new();
+    for k in 0..solver.interface_faces().len() {
+        let (edge, face) = solver.interface_faces()[k];
+        let corners = face.geometry.corners();
+        let lo = corners.iter().map(|c| c[2]).fold(f64::INFINITY, f64::min);
+        let hi = corners
+            .iter()
+            .map(|c| c[2])
+            .fold(f64::NEG_INFINITY, f64::max);
+        for &time in times {
+            let tau = c_ref * time;
+            if !(lo < tau && tau <= hi) {
+                continue;
+            }
+            let Some(ends) = cut_face(corners, tau) else {
+                continue;
+            };
+            let values = ends.map(|x| {
+                solver
+                    .interface_sample_at(edge, x)
+                    .map_or_else(InterfaceValues::default, |s| InterfaceValues {
+                        delta: s.delta,
+                        slip: s.slip,
+                        traction: s.traction,
+                        eta: s.eta,
+                        mode: match s.mode {
+                            Mode::Bonded | Mode::Stick => 0.0,
+                            Mode::Slip => 1.0,
+                            Mode::Separation => 2.0,
+                        },
+                    })
+            });
+            cuts.push((time, ends.map(|x| [x[0], x[1]]), values));
+        }
+    }
+    cuts
+}
+
+/// Samples the last patch of `solver` at each of `probes` that lies on one of its contact
+/// faces' edges: `(probe index, sample)`.
+pub(super) fn sample(
+    probes: &[Probe],
+    mesh: &Mesh,
+    solver: &mut PatchSolver,
+) -> Vec<(usize, InterfaceSample)> {
+    let mut samples = Vec::new();
+    for (i, probe) in probes.iter().enumerate() {
+        for k in 0..solver.interface_faces().len() {
+            let e = solver.interface_faces()[k].0;
+            let [a, b] = mesh.edges()[e as usize].vertices.map(|v| mesh.vertex(v));
+            if !on_segment(probe.at, a, b) {
+                continue;
+            }
+            if let Some(s) = solver.interface_sample(e, probe.at) {
+                samples.push((i, s));
+                break;
+            }
+        }
+    }
+    samples
+}
+
+/// True when `x` lies on the segment `ab` (to a relative tolerance of 1e-9).
+fn on_segment(x: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let length2 = d[0] * d[0] + d[1] * d[1];
+    let r = [x[0] - a[0], x[1] - a[1]];
+    let along = (r[0] * d[0] + r[1] * d[1]) / length2;
+    let across = (r[0] * d[1] - r[1] * d[0]).abs() / length2.sqrt();
+    (-1e-9..=1.0 + 1e-9).contains(&along) && across <= 1e-9 * length2.sqrt()
+}
+
+/// `interface.csv`: one row per sample, sorted by probe and time.
+pub(super) fn csv(probes: &[Probe], samples: &mut [(usize, InterfaceSample)]) -> String {
+    samples.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.time.total_cmp(&b.1.time)));
+    let mut out = String::from(
+        "t_s,x_m,y_m,tag,s_n_pa,s_t_pa,sI_n_pa,sI_t_pa,delta_m,slip_m,jump_vn_m_s,jump_vt_m_s,\
+         eta,gamma,mode\n",
+    );
+    for (i, s) in samples.iter() {
+        let probe = &probes[*i];
+        let _ = writeln!(
+            out,
+            "{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{}",
+            s.time,
+            probe.at[0],
+            probe.at[1],
+            probe.tag,
+            s.traction[0],
+            s.traction[1],
+            s.bonded_traction[0],
+            s.bonded_traction[1],
+            s.delta,
+            s.slip,
+            s.velocity_jump[0],
+            s.velocity_jump[1],
+            s.eta,
+            s.gamma,
+            s.mode.name()
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_on_segments() {
+        let (a, b) = ([0.0, 0.0], [2.0, 0.0]);
+        assert!(on_segment([1.0, 0.0], a, b));
+        assert!(on_segment([0.0, 0.0], a, b) && on_segment([2.0, 0.0], a, b));
+        assert!(!on_segment([2.1, 0.0], a, b));
+        assert!(!on_segment([1.0, 1e-6], a, b));
+    }
+}
