@@ -83,6 +83,42 @@ pub(super) struct ContactFace {
     pub(super) targets_b: Vec<Targets>,
 }
 
+impl ContactFace {
+    /// `-G(d) = inflow - M0 d + int psi rate(delta) / c` of the face's separation system at the
+    /// coefficients `d` into `g`, and with `jacobian` its derivative `M0 - int psi psi
+    /// (d rate / d delta) / c` (row-major); returns `|G|`.
+    fn separation_residual(
+        &self,
+        c: f64,
+        d: &[f64; MAX_FACE_BASIS],
+        g: &mut [f64],
+        mut jacobian: Option<&mut [f64]>,
+    ) -> f64 {
+        let nf = g.len();
+        for (k, gk) in g.iter_mut().enumerate() {
+            *gk = self.inflow_delta[k] - (0..nf).map(|l| self.m0[k * nf + l] * d[l]).sum::<f64>();
+        }
+        if let Some(jac) = jacobian.as_deref_mut() {
+            jac.copy_from_slice(&self.m0[..nf * nf]);
+        }
+        for p in 0..self.weights.len() {
+            let psi = &self.psi[p * nf..(p + 1) * nf];
+            let delta: f64 = psi.iter().zip(d).map(|(a, b)| a * b).sum();
+            let t = self.law.targets(self.w_a[p], self.w_b[p], delta);
+            let w = self.weights[p] / c;
+            for k in 0..nf {
+                g[k] += w * psi[k] * t.rate;
+                if let Some(jac) = jacobian.as_deref_mut() {
+                    for l in 0..nf {
+                        jac[k * nf + l] -= w * psi[k] * psi[l] * t.rate_delta;
+                    }
+                }
+            }
+        }
+        g.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+}
+
 /// The contact faces of the patch being solved and their scratch memory.
 #[derive(Debug)]
 pub(super) struct ContactFaces {
@@ -389,48 +425,45 @@ impl ContactFaces {
             face.w_a[p] = w_a;
             face.w_b[p] = w_b;
         }
-        // Inner Newton on the face: M0 d - inflow - int psi rate(delta) / c = 0.
+        // Inner Newton on the face, G(d) = M0 d - inflow - int psi rate(delta) / c = 0, with a
+        // backtracking line search on |G|: the area fractions saturate (flat rate beyond r_c and
+        // r_s), where plain Newton steps can cycle.
         let scale = face.law.r[0].abs().max(face.law.r[1].abs());
+        let (g, rest) = self.columns.split_at_mut(nf);
+        let trial_g = &mut rest[..nf];
+        let jac = &mut self.jacobian[..nf * nf];
+        let mut norm = face.separation_residual(c, &face.delta, g, Some(jac));
         let mut converged = false;
+        let mut previous = f64::INFINITY;
         for _ in 0..60 {
-            let jac = &mut self.jacobian[..nf * nf];
-            jac.copy_from_slice(&face.m0[..nf * nf]);
-            let g = &mut self.columns[..nf];
-            for (k, gk) in g.iter_mut().enumerate() {
-                *gk = face.inflow_delta[k]
-                    - (0..nf)
-                        .map(|l| face.m0[k * nf + l] * face.delta[l])
-                        .sum::<f64>();
-            }
-            for p in 0..points {
-                let psi = &face.psi[p * nf..(p + 1) * nf];
-                let delta: f64 = psi.iter().zip(&face.delta).map(|(a, b)| a * b).sum();
-                let t = face.law.targets(face.w_a[p], face.w_b[p], delta);
-                let w = face.weights[p] / c;
-                for k in 0..nf {
-                    g[k] += w * psi[k] * t.rate;
-                    for l in 0..nf {
-                        jac[k * nf + l] -= w * psi[k] * psi[l] * t.rate_delta;
-                    }
-                }
-            }
             if !solve_dense(jac, nf, g, 1) {
                 return false;
             }
-            let mut step = 0.0f64;
-            let mut size = scale;
-            for (d, s) in face.delta.iter_mut().zip(g.iter()) {
-                *d += s;
-                step = step.max(s.abs());
-                size = size.max(d.abs());
+            let mut alpha = 1.0;
+            let mut trial = face.delta;
+            loop {
+                for ((t, d), s) in trial.iter_mut().zip(&face.delta).zip(g.iter()) {
+                    *t = d + alpha * s;
+                }
+                let trial_norm = face.separation_residual(c, &trial, trial_g, None);
+                if trial_norm <= (1.0 - 1e-4 * alpha) * norm || alpha < 1e-6 {
+                    break;
+                }
+                alpha *= 0.5;
             }
+            let step = alpha * g.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+            face.delta = trial;
+            let size = face.delta.iter().fold(scale, |m, d| m.max(d.abs()));
             if !step.is_finite() {
                 return false;
             }
-            if step <= 1e-13 * size || step == 0.0 {
+            norm = face.separation_residual(c, &face.delta, g, Some(jac));
+            // Converged, or stalled at round-off (the step no longer halves).
+            if step <= 1e-12 * size || (step <= 1e-9 * size && step >= 0.5 * previous) {
                 converged = true;
                 break;
             }
+            previous = step;
         }
         for p in 0..points {
             let psi = &face.psi[p * nf..(p + 1) * nf];

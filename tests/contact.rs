@@ -1,0 +1,209 @@
+//! The seed's contact examples (3.4) through the shipped configs: histories on the interface
+//! against an independent 1D reference, energy balance with friction.
+
+mod common;
+
+use std::path::Path;
+
+/// PMMA of the shipped contact configs.
+const E: f64 = 3.24e9;
+const NU: f64 = 0.35;
+const RHO: f64 = 1190.0;
+
+/// `c_d` and `Z = rho c_d` in plane strain.
+fn p_wave() -> (f64, f64) {
+    let lambda = E * NU / ((1.0 + NU) * (1.0 - 2.0 * NU));
+    let mu = E / (2.0 * (1.0 + NU));
+    let c = ((lambda + 2.0 * mu) / RHO).sqrt();
+    (c, RHO * c)
+}
+
+/// The C1 cubic step `3 r^2 - 2 r^3` of `r` clamped to [0, 1].
+fn smoothstep(r: f64) -> f64 {
+    let r = r.clamp(0.0, 1.0);
+    r * r * (3.0 - 2.0 * r)
+}
+
+/// The load multiplier of `contact_separation.toml` at `t` (s): 0, then -1 (compression) for
+/// three quarters of each 2 us period and +1 for the last quarter, ramps of 0.2 us.
+fn load(t: f64) -> f64 {
+    let us = t * 1e6;
+    if us < 0.2 {
+        return -smoothstep(us / 0.2);
+    }
+    // Within a period from the first ramp's end: up at 1.5 us, down at 2.0 us.
+    let phase = (us - 1.4).rem_euclid(2.0);
+    if us < 1.4 {
+        -1.0
+    } else if phase < 0.2 {
+        -1.0 + 2.0 * smoothstep(phase / 0.2)
+    } else if phase < 0.5 {
+        1.0
+    } else if phase < 0.7 {
+        1.0 - 2.0 * smoothstep((phase - 0.5) / 0.2)
+    } else {
+        -1.0
+    }
+}
+
+/// The cubic smoothstep area fraction of `x` between `lo` (1) and `hi` (0).
+fn fraction(x: f64, lo: f64, hi: f64) -> f64 {
+    if x <= lo {
+        1.0
+    } else if x >= hi {
+        0.0
+    } else {
+        smoothstep((hi - x) / (hi - lo))
+    }
+}
+
+/// One point of the 1D reference: time (s), separation (m), normal target traction (Pa).
+type Reference = Vec<(f64, f64, f64)>;
+
+/// The 1D reference of seed 3.4.1: both faces receive `w(t - t0)`, `w = 2 sigma`, so the
+/// bonded normal traction is `sI = w(t - t0)` and `d delta / dt = (2 / Z) (1 - eta) sI` with
+/// `eta = eta_delta(delta) eta_s(sI)`; the target traction is `eta sI`. RK4 in steps of 1e-11 s.
+fn reference(amplitude: f64, r: [f64; 2], s: [f64; 2], t_end: f64) -> Reference {
+    let (c, z) = p_wave();
+    let t0 = 0.002 / c;
+    let si = |t: f64| amplitude * if t > t0 { load(t - t0) } else { 0.0 };
+    let rate = |t: f64, delta: f64| {
+        let eta = fraction(delta, r[0], r[1]) * fraction(si(t), s[0], s[1]);
+        2.0 / z * (1.0 - eta) * si(t)
+    };
+    let dt = 1e-11;
+    let (mut t, mut delta) = (0.0, 0.0);
+    let mut out = Vec::new();
+    while t < t_end {
+        let k1 = rate(t, delta);
+        let k2 = rate(t + 0.5 * dt, delta + 0.5 * dt * k1);
+        let k3 = rate(t + 0.5 * dt, delta + 0.5 * dt * k2);
+        let k4 = rate(t + dt, delta + dt * k3);
+        delta += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        t += dt;
+        let eta = fraction(delta, r[0], r[1]) * fraction(si(t), s[0], s[1]);
+        out.push((t, delta, eta * si(t)));
+    }
+    out
+}
+
+/// Rows of `interface.csv`: (t, s_n, delta, mode).
+fn interface_rows(dir: &Path) -> Vec<(f64, f64, f64, String)> {
+    let text = std::fs::read_to_string(dir.join("interface.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (t, s, d, m) = (col("t_s"), col("s_n_pa"), col("delta_m"), col("mode"));
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (
+                f[t].parse().unwrap(),
+                f[s].parse().unwrap(),
+                f[d].parse().unwrap(),
+                f[m].to_string(),
+            )
+        })
+        .collect()
+}
+
+/// Where the 1D reference's contact area fraction changes most: the load's ramp ends (where the
+/// C1 ramps' curvature jumps) reach the interface at `t0 + k` (k in us), and the interface
+/// closes again (the seed's shock) when the reference traction first drops below half its peak
+/// after the first separation.
+fn rough_times(reference: &Reference, t0: f64) -> Vec<f64> {
+    let mut times: Vec<f64> = [0.0, 0.2, 1.4, 1.6, 1.9, 2.1, 3.4, 3.6, 3.9, 4.1]
+        .iter()
+        .map(|k| t0 + k * 1e-6)
+        .collect();
+    let opened = reference
+        .iter()
+        .position(|p| p.0 > t0 + 1.5e-6 && p.2 == 0.0)
+        .expect("the interface opens");
+    if let Some(p) = reference[opened..].iter().find(|p| p.2 < -1e8) {
+        times.push(p.0);
+    }
+    times
+}
+
+#[test]
+fn contact_separation_follows_the_1d_reference() {
+    let (c, _) = p_wave();
+    let t0 = 0.002 / c;
+    let t_end = 4.5e-6;
+    // The seed's two regularization sets (3.4.1): r_c (m) and s_s (Pa).
+    for (r_c, s_s) in [(-1e-6, 6e5), (-1e-7, 6e4)] {
+        let problem = common::shipped(
+            "contact_separation.toml",
+            &[
+                &format!("time.end={t_end}"),
+                &format!("interface.0.r_c={r_c}"),
+                &format!("interface.0.s_s={s_s}"),
+            ],
+        );
+        let (summary, dir) = common::solve(&problem, 2, true);
+        let rows = interface_rows(dir.path());
+        let reference = reference(2e8, [r_c, 0.0], [0.0, s_s], t_end);
+        let at = |t: f64| {
+            let i = reference
+                .partition_point(|p| p.0 < t)
+                .min(reference.len() - 1);
+            reference[i]
+        };
+        let peak = |get: fn(&(f64, f64, f64)) -> f64| {
+            reference.iter().map(|p| get(p).abs()).fold(0.0, f64::max)
+        };
+        let (delta_peak, s_peak) = (peak(|p| p.1), peak(|p| p.2));
+        let rough = rough_times(&reference, t0);
+        let smooth = |t: f64| rough.iter().all(|r| (t - r).abs() > 0.05e-6);
+        let (mut delta_err, mut s_err, mut s_err_smooth) = (0.0f64, 0.0f64, 0.0f64);
+        for &(t, s, delta, _) in &rows {
+            let (_, d_ref, s_ref) = at(t);
+            delta_err = delta_err.max((delta - d_ref).abs() / delta_peak);
+            let e = (s - s_ref).abs() / s_peak;
+            s_err = s_err.max(e);
+            if smooth(t) {
+                s_err_smooth = s_err_smooth.max(e);
+            }
+        }
+        // Mode changes: separation starts when the tensile load arrives (t0 + 1.5 us, the
+        // seed's 2.46 us), ends when the faces meet again (the seed's t0 + 5T/4 = 3.46 us) and
+        // starts again a period after the first (the seed's 4.46 us).
+        let changes: Vec<(f64, bool)> = rows
+            .windows(2)
+            .filter(|w| (w[0].3 == "separation") != (w[1].3 == "separation"))
+            .map(|w| (0.5 * (w[0].0 + w[1].0), w[1].3 == "separation"))
+            .filter(|&(t, _)| t > t0 + 0.5e-6)
+            .collect();
+        eprintln!(
+            "r_c {r_c} m, s_s {s_s} Pa: {} rows, {} patches ({} nonlinear, {:.2} solves each, at \
+             most {}); largest errors over the peaks: delta {delta_err:.2e} (peak {delta_peak:.3e} \
+             m), s_n {s_err:.2e} ({s_err_smooth:.2e} away from the load's ramp ends and the \
+             closing shock; peak {s_peak:.3e} Pa); separation from/to at {changes:?}; energy \
+             balance {:.1e}",
+            rows.len(),
+            summary.patches,
+            summary.interface.nonlinear_patches,
+            summary.interface.newton_iterations_mean,
+            summary.interface.newton_iterations_max,
+            summary.energy.balance_residual_rel
+        );
+        assert!(rows.len() > 100);
+        assert!(delta_err < 0.01, "{delta_err}");
+        assert!(
+            s_err_smooth < 0.01 && s_err < 0.02,
+            "{s_err_smooth} {s_err}"
+        );
+        let opened = [
+            (t0 + 1.5e-6, true),
+            (t0 + 2.5e-6, false),
+            (t0 + 3.5e-6, true),
+        ];
+        assert_eq!(changes.len(), opened.len(), "{changes:?}");
+        for ((t, open), (expected, want)) in changes.iter().zip(opened) {
+            assert_eq!(*open, want);
+            assert!((t - expected).abs() < 0.05e-6, "{t} against {expected}");
+        }
+        assert!(summary.energy.balance_residual_rel.abs() < 1e-10);
+    }
+}
