@@ -207,3 +207,42 @@ fn contact_separation_follows_the_1d_reference() {
         assert!(summary.energy.balance_residual_rel.abs() < 1e-10);
     }
 }
+
+#[test]
+fn stick_slip_balances_energy_with_friction() {
+    // The shipped run is to 12 us at p = 3 (docs/verification.md); here p = 2 to 8 us, past the
+    // first slip events.
+    let problem = common::shipped(
+        "stick_slip.toml",
+        &[
+            "time.end=8e-6",
+            "solver.order=2",
+            "output.snapshot_times=[]",
+        ],
+    );
+    let (summary, dir) = common::solve(&problem, 2, true);
+    let e = summary.energy;
+    let rows = interface_rows(dir.path());
+    let slipping = rows.iter().filter(|r| r.3 == "slip").count();
+    eprintln!(
+        "stick-slip to 8 us: inflow {:.4e} J/m, friction {:.4e} J/m ({:.3}%), interface work \
+         {:.4e} J/m, numerical dissipation {:.3}% of the inflow, balance {:.1e}; {} patches ({} \
+         nonlinear, {:.2} solves each, at most {}); {slipping} of {} probe rows in slip",
+        e.boundary_work,
+        e.friction_dissipation,
+        100.0 * e.friction_dissipation / e.boundary_work,
+        e.interface_work,
+        100.0 * e.dissipation / e.boundary_work,
+        e.balance_residual_rel,
+        summary.patches,
+        summary.interface.nonlinear_patches,
+        summary.interface.newton_iterations_mean,
+        summary.interface.newton_iterations_max,
+        rows.len()
+    );
+    assert!(e.balance_residual_rel.abs() < 1e-8);
+    assert!(e.friction_dissipation > 1e-3 * e.boundary_work);
+    assert!(e.interface_work >= e.friction_dissipation);
+    assert!(e.dissipation < 2e-3 * e.boundary_work);
+    assert!(slipping > 0 && slipping < rows.len());
+}

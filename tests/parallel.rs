@@ -61,3 +61,47 @@ fn asynchronous_mode_is_as_accurate_as_a_serial_run() {
     }
     assert!(parallel.energy.balance_residual_rel.abs() < 1e-10);
 }
+
+#[test]
+fn deterministic_mode_is_bitwise_identical_with_contact_and_adaptivity() {
+    let problem = common::shipped(
+        "stick_slip.toml",
+        &[
+            "mesh.nx=8",
+            "mesh.ny=8",
+            "time.end=1e-6",
+            "adapt.enabled=true",
+            "adapt.tol=1e-2",
+            "adapt.min_edge=1.25e-4",
+            "output.snapshot_times=[5e-7, 1e-6]",
+            "output.interface_probes=[[0.00075, 0.002]]",
+        ],
+    );
+    let (reference, dir) = solve(&problem, 1, true);
+    let expected = outputs(dir.path());
+    eprintln!(
+        "{} patches, {} refinements, {} coarsenings, {} nonlinear patches, files {:?}",
+        reference.patches,
+        reference.refinements,
+        reference.coarsenings,
+        reference.interface.nonlinear_patches,
+        expected.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    assert!(reference.refinements > 0 && reference.interface.nonlinear_patches > 0);
+    assert_eq!(
+        expected.len(),
+        8,
+        "summary, history, interface.csv, pvd, two snapshots and their interface cuts"
+    );
+    for threads in [2, 4] {
+        let (summary, dir) = solve(&problem, threads, true);
+        assert_eq!(
+            summary.state_hash, reference.state_hash,
+            "{threads} threads"
+        );
+        for ((name, a), (other, b)) in expected.iter().zip(&outputs(dir.path())) {
+            assert_eq!(name, other);
+            assert!(a == b, "{name} differs with {threads} threads");
+        }
+    }
+}
