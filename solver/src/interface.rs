@@ -549,6 +549,64 @@ mod tests {
     }
 
     #[test]
+    fn blended_modes_are_area_weighted_averages() {
+        // Independent computation of (3.36)-(3.39), (3.43)-(3.44): eta from the smoothsteps,
+        // targets as eta (stick or slip) + (1 - eta) separation, from the traces.
+        let sys = system();
+        let z = sys.impedance();
+        // The traction band in scaled units (the law takes Pa).
+        let (r, s) = ([-1e-6, 1e-6], [0.0, 0.2]);
+        let c = law(&sys, 0.25, r, s.map(|x| x * sys.z_ref()));
+        let smooth = |x: f64, lo: f64, hi: f64| {
+            let xi = ((hi - x) / (hi - lo)).clamp(0.0, 1.0);
+            3.0 * xi * xi - 2.0 * xi.powi(3)
+        };
+        for (a, b, delta, contact) in [
+            // Compressive stick, delta inside the regularization band.
+            (
+                FrameTrace {
+                    v: [0.1, 0.0],
+                    s: [-0.3, 0.01],
+                },
+                FrameTrace {
+                    v: [-0.05, 0.0],
+                    s: [-0.2, 0.02],
+                },
+                3e-7,
+                Mode::Stick,
+            ),
+            // Slight tension inside the traction band, slip.
+            (
+                FrameTrace {
+                    v: [0.02, 0.3],
+                    s: [0.05, 0.2],
+                },
+                FrameTrace {
+                    v: [0.01, -0.2],
+                    s: [0.02, 0.25],
+                },
+                -2e-6,
+                Mode::Slip,
+            ),
+        ] {
+            let (w_a, w_b) = characteristics(z, &a, &b);
+            let si_n = 0.5 * (a.s[0] + b.s[0]) + 0.5 * z[0] * (b.v[0] - a.v[0]);
+            let eta = smooth(delta, r[0], r[1]) * smooth(si_n, s[0], s[1]);
+            assert!(eta > 0.0 && eta < 1.0, "a blend: eta {eta}");
+            let on = expected(z, &a, &b, contact, c.k);
+            let off = expected(z, &a, &b, Mode::Separation, c.k);
+            let got = c.targets(w_a, w_b, delta);
+            assert!((got.eta - eta).abs() < 1e-14);
+            for j in 0..2 {
+                let v = eta * on.v[j] + (1.0 - eta) * off.v[j];
+                let t = eta * on.s[j] + (1.0 - eta) * off.s[j];
+                assert!((got.star.v[j] - v).abs() < 1e-14, "{contact:?} v{j}");
+                assert!((got.star.s[j] - t).abs() < 1e-14, "{contact:?} s{j}");
+            }
+        }
+    }
+
+    #[test]
     fn derivatives_match_finite_differences() {
         let sys = system();
         let c = law(&sys, 0.25, [-1e-6, 1e-6], [0.0, 0.3]);
