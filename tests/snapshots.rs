@@ -107,3 +107,45 @@ fn snapshots_open_in_meshio() {
     let pvd = std::fs::read_to_string(dir.path().join("snapshots.pvd")).unwrap();
     assert!(pvd.contains("snapshot_0000.vtu"));
 }
+
+#[test]
+fn interface_cuts_open_in_meshio() {
+    if !common::meshio_available() {
+        return;
+    }
+    // Contact and separation to just after the wave closes the interface; p = 1 for speed.
+    let problem = common::shipped(
+        "contact_separation.toml",
+        &[
+            "time.end=1.2e-6",
+            "solver.order=1",
+            "output.snapshot_times=[1.2e-6]",
+        ],
+    );
+    let (_, dir) = common::solve(&problem, 2, true);
+    let file = dir.path().join("interface_0000.vtu");
+    let script = "import sys, meshio\n\
+                  m = meshio.read(sys.argv[1])\n\
+                  print(m.cells_dict['line'].shape[0], m.point_data['traction'].shape[1], \
+                  m.point_data['delta'].ndim, int(m.point_data['mode'].max()))";
+    let out = Command::new("python3")
+        .args(["-c", script])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let fields: Vec<usize> = String::from_utf8(out.stdout)
+        .unwrap()
+        .split_whitespace()
+        .map(|w| w.parse().unwrap())
+        .collect();
+    // The four interface edges of the 4 mm line, cut once each; tractions as 3-vectors; the
+    // faces are in contact (frictionless: slip, mode 1) by then.
+    assert_eq!(fields, [4, 3, 1, 1]);
+    let pvd = std::fs::read_to_string(dir.path().join("snapshots.pvd")).unwrap();
+    assert!(pvd.contains("part=\"1\" file=\"interface_0000.vtu\""));
+}
