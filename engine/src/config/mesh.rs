@@ -1,0 +1,147 @@
+//! `[mesh]`: the space triangulation, and the interface segments on a rectangle's grid lines.
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Deserializer, Serialize};
+
+use super::Config;
+
+/// Where the space mesh comes from.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshKind {
+    /// A structured rectangle mesh (`width`, `height`, `nx`, `ny`, ...).
+    Rectangle,
+    /// A Gmsh MSH 4.1 ASCII file (`path`).
+    Gmsh,
+}
+
+/// Cell split pattern of a rectangle mesh.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum DiagonalName {
+    /// Every cell split along `/`.
+    Right,
+    /// Every cell split along `\`.
+    Left,
+    /// Alternating `/` and `\`.
+    #[default]
+    Alternate,
+}
+
+/// `[mesh]`: the space triangulation. Rectangle keys and `path` are exclusive by `kind`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MeshConfig {
+    /// `"rectangle"` or `"gmsh"`.
+    pub kind: MeshKind,
+    /// Gmsh file, relative to the config file's folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathBuf>,
+    /// Rectangle extent in x, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
+    /// Rectangle extent in y, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
+    /// Rectangle cells along x.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nx: Option<u32>,
+    /// Rectangle cells along y.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ny: Option<u32>,
+    /// Rectangle cell split pattern (default `"alternate"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diagonal: Option<DiagonalName>,
+    /// Random displacement of interior rectangle vertices, fraction of a cell, in [0, 0.25).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perturb: Option<f64>,
+    /// Seed of the perturbation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// Interface segments on rectangle grid lines: `[[mesh.interface]]`, or one
+    /// `[mesh.interface]` table.
+    #[serde(
+        default,
+        deserialize_with = "one_or_many",
+        skip_serializing_if = "Vec::is_empty"
+    )]
+    pub interface: Vec<SegmentConfig>,
+}
+
+/// `[[mesh.interface]]`: a straight interior segment on grid lines, tagged as an interface.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentConfig {
+    /// One end `[x, y]`, m.
+    pub from: [f64; 2],
+    /// The other end `[x, y]`, m.
+    pub to: [f64; 2],
+    /// Tag name (default `"interface"`).
+    #[serde(default = "default_interface_tag")]
+    pub tag: String,
+}
+
+fn default_interface_tag() -> String {
+    "interface".into()
+}
+
+/// Reads one `[mesh.interface]` table or an `[[mesh.interface]]` array of tables. Errors keep
+/// the key path (`mesh.interface.from`, `mesh.interface[1].from`).
+fn one_or_many<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<SegmentConfig>, D::Error> {
+    use serde::de::value::{MapAccessDeserializer, SeqAccessDeserializer};
+    use serde::de::{MapAccess, SeqAccess, Visitor};
+
+    struct OneOrMany;
+    impl<'de> Visitor<'de> for OneOrMany {
+        type Value = Vec<SegmentConfig>;
+
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a table or an array of tables")
+        }
+
+        fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+            SegmentConfig::deserialize(MapAccessDeserializer::new(map)).map(|s| vec![s])
+        }
+
+        fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+            Vec::deserialize(SeqAccessDeserializer::new(seq))
+        }
+    }
+    d.deserialize_any(OneOrMany)
+}
+
+impl Config {
+    /// The rectangle generator's parameters; missing keys read as zero (validation rejects them).
+    pub fn rectangle(&self) -> sdg_mesh::Rectangle {
+        let m = &self.mesh;
+        sdg_mesh::Rectangle {
+            width: m.width.unwrap_or(0.0),
+            height: m.height.unwrap_or(0.0),
+            nx: m.nx.unwrap_or(0),
+            ny: m.ny.unwrap_or(0),
+            diagonal: match m.diagonal.unwrap_or_default() {
+                DiagonalName::Right => sdg_mesh::Diagonal::Right,
+                DiagonalName::Left => sdg_mesh::Diagonal::Left,
+                DiagonalName::Alternate => sdg_mesh::Diagonal::Alternate,
+            },
+            interfaces: m
+                .interface
+                .iter()
+                .map(|i| sdg_mesh::GridSegment {
+                    from: i.from,
+                    to: i.to,
+                    tag: i.tag.clone(),
+                })
+                .collect(),
+            perturb: m.perturb.unwrap_or(0.0),
+            seed: m.seed.unwrap_or(0),
+        }
+    }
+}
+
+/// The config key of a rectangle generator error: `mesh.nx`, or `mesh.interface[k]` for the
+/// k-th interface segment.
+pub(crate) fn rectangle_key(e: &sdg_mesh::RectangleError) -> String {
+    format!("mesh.{}", e.field.replacen("interfaces", "interface", 1))
+}

@@ -1,0 +1,160 @@
+//! The run settings: time span, tent pitching, outputs, patch solver, scheduler and adaptivity.
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+/// `[time]`: the simulated span, starting at 0.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TimeConfig {
+    /// End time, s.
+    pub end: f64,
+}
+
+/// `[pitch]`: tent pitching.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PitchConfig {
+    /// Every front facet keeps `c_max |grad tau| < safety`, in (0, 1). Default 0.9.
+    #[serde(default = "default_safety")]
+    pub safety: f64,
+}
+
+fn default_safety() -> f64 {
+    0.9
+}
+
+impl Default for PitchConfig {
+    fn default() -> Self {
+        Self {
+            safety: default_safety(),
+        }
+    }
+}
+
+/// `[output]`: what is written where.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OutputConfig {
+    /// Output folder, relative to the working directory. Default `out`.
+    #[serde(default = "default_output_dir")]
+    pub dir: PathBuf,
+    /// Write the spacetime mesh as `spacetime.vtu` (small runs only). Default false.
+    #[serde(default)]
+    pub spacetime_mesh: bool,
+    /// Times (s) of solution snapshots (`snapshot_NNNN.vtu` and `snapshots.pvd`). Default none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub snapshot_times: Vec<f64>,
+    /// Points `[x, y]` (m) near interface edges, each moved to the nearest interface edge
+    /// midpoint of the initial mesh, where the interface is recorded over time. Default none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub interface_probes: Vec<[f64; 2]>,
+}
+
+fn default_output_dir() -> PathBuf {
+    PathBuf::from("out")
+}
+
+impl Default for OutputConfig {
+    fn default() -> Self {
+        Self {
+            dir: default_output_dir(),
+            spacetime_mesh: false,
+            snapshot_times: Vec::new(),
+            interface_probes: Vec::new(),
+        }
+    }
+}
+
+/// `[solver]`: discretization and the Newton iterations of patches with contact faces.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SolverConfig {
+    /// Complete polynomial order on each spacetime tetrahedron, 1 to 4. Default 2.
+    #[serde(default = "default_order")]
+    pub order: usize,
+    /// Newton converges when the patch residual relative to the right-hand side is at most this,
+    /// in (0, 1) (dimensionless). Default 1e-10.
+    #[serde(default = "default_newton_tol")]
+    pub newton_tol: f64,
+    /// Newton iterations allowed per patch, at least 1. Default 30.
+    #[serde(default = "default_newton_max_iter")]
+    pub newton_max_iter: usize,
+}
+
+fn default_order() -> usize {
+    2
+}
+
+fn default_newton_tol() -> f64 {
+    1e-10
+}
+
+fn default_newton_max_iter() -> usize {
+    30
+}
+
+impl Default for SolverConfig {
+    fn default() -> Self {
+        Self {
+            order: default_order(),
+            newton_tol: default_newton_tol(),
+            newton_max_iter: default_newton_max_iter(),
+        }
+    }
+}
+
+/// `[scheduler]`: parallel execution.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SchedulerConfig {
+    /// Results depend only on the config, never on thread count or timing (rounds of independent
+    /// tents instead of asynchronous claiming). Default false.
+    #[serde(default)]
+    pub deterministic: bool,
+}
+
+/// `[adapt]`: error-driven refinement of the front (see `docs/method.md`, "Adaptivity").
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptConfig {
+    /// Refine where patches are too dissipative. Default false.
+    #[serde(default)]
+    pub enabled: bool,
+    /// Upper tolerance of the dissipation indicator: a patch above it is rejected and the front
+    /// around its vertex refined. Dimensionless, see `docs/method.md`. Default 1e-3.
+    #[serde(default = "default_tol")]
+    pub tol: f64,
+    /// Lower tolerance = `tol / coarsen_ratio`: elements accepted below it may be coarsened
+    /// again. Must exceed 1. Default 16.
+    #[serde(default = "default_coarsen_ratio")]
+    pub coarsen_ratio: f64,
+    /// No edge is split into halves shorter than this, m. Default: no limit below 1/1000 of the
+    /// initial shortest edge.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_edge: Option<f64>,
+    /// Edges longer than this, m, are split before the first tent. Default: no limit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_edge: Option<f64>,
+}
+
+fn default_tol() -> f64 {
+    1e-3
+}
+
+fn default_coarsen_ratio() -> f64 {
+    16.0
+}
+
+impl Default for AdaptConfig {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            tol: default_tol(),
+            coarsen_ratio: default_coarsen_ratio(),
+            min_edge: None,
+            max_edge: None,
+        }
+    }
+}

@@ -1,0 +1,371 @@
+//! Load-time validation: the checks of values that the schema's types cannot express.
+
+use super::{BoundaryKind, Config, LawName, MeshKind, PlaneName, WaveName, rectangle_key};
+
+impl Config {
+    /// Checks values that the schema's types cannot: returns `(key, reason)`.
+    pub(super) fn validate(&self) -> Result<(), (String, String)> {
+        let fail = |key: &str, reason: String| Err((key.to_string(), reason));
+        self.material()
+            .map_err(|e| (e.key.unwrap_or_default(), e.reason))?;
+        let end = self.time.end;
+        if !(end.is_finite() && end > 0.0) {
+            return fail(
+                "time.end",
+                format!("must be a positive time in s, got {end}"),
+            );
+        }
+        let safety = self.pitch.safety;
+        if !(safety > 0.0 && safety < 1.0) {
+            return fail(
+                "pitch.safety",
+                format!(
+                    "must be in (0, 1): a front facet at or above 1 is not causal, got {safety}"
+                ),
+            );
+        }
+        self.validate_physics()?;
+        self.validate_adapt()?;
+        let m = &self.mesh;
+        let rectangle_keys = [
+            ("mesh.width", m.width.is_some()),
+            ("mesh.height", m.height.is_some()),
+            ("mesh.nx", m.nx.is_some()),
+            ("mesh.ny", m.ny.is_some()),
+            ("mesh.diagonal", m.diagonal.is_some()),
+            ("mesh.perturb", m.perturb.is_some()),
+            ("mesh.seed", m.seed.is_some()),
+            ("mesh.interface", !m.interface.is_empty()),
+        ];
+        match m.kind {
+            MeshKind::Rectangle => {
+                if m.path.is_some() {
+                    return fail("mesh.path", "is only used with mesh.kind = \"gmsh\"".into());
+                }
+                for key in ["mesh.width", "mesh.height", "mesh.nx", "mesh.ny"] {
+                    if !rectangle_keys.iter().any(|&(k, set)| k == key && set) {
+                        return fail(key, "is required with mesh.kind = \"rectangle\"".into());
+                    }
+                }
+                self.rectangle()
+                    .build()
+                    .map(drop)
+                    .or_else(|e| fail(&rectangle_key(&e), e.reason))?;
+            }
+            MeshKind::Gmsh => {
+                if m.path.is_none() {
+                    return fail("mesh.path", "is required with mesh.kind = \"gmsh\"".into());
+                }
+                if let Some((key, _)) = rectangle_keys.iter().find(|(_, set)| *set) {
+                    return fail(key, "is only used with mesh.kind = \"rectangle\"".into());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks `[adapt]`.
+    fn validate_adapt(&self) -> Result<(), (String, String)> {
+        let a = &self.adapt;
+        let fail = |key: &str, reason: String| Err((format!("adapt.{key}"), reason));
+        if !(a.tol.is_finite() && a.tol > 0.0) {
+            return fail("tol", format!("must be a positive number, got {}", a.tol));
+        }
+        if !(a.coarsen_ratio.is_finite() && a.coarsen_ratio > 1.0) {
+            return fail(
+                "coarsen_ratio",
+                format!(
+                    "must be a finite number above 1 (the lower tolerance is tol / ratio), got {}",
+                    a.coarsen_ratio
+                ),
+            );
+        }
+        for (key, value) in [("min_edge", a.min_edge), ("max_edge", a.max_edge)] {
+            if let Some(v) = value {
+                if !(v.is_finite() && v > 0.0) {
+                    return fail(key, format!("must be a positive length in m, got {v}"));
+                }
+            }
+        }
+        if let (Some(lo), Some(hi)) = (a.min_edge, a.max_edge) {
+            if 2.0 * lo > hi {
+                return fail(
+                    "max_edge",
+                    format!("must be at least twice adapt.min_edge ({lo} m), got {hi} m"),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks `[solver]`, `[[boundary]]`, `[[interface]]`, `[exact]` and `[output]` times and
+    /// points.
+    fn validate_physics(&self) -> Result<(), (String, String)> {
+        let order = self.solver.order;
+        if !(1..=4).contains(&order) {
+            return Err((
+                "solver.order".into(),
+                format!("must be 1 to 4, got {order}"),
+            ));
+        }
+        let tol = self.solver.newton_tol;
+        if !(tol > 0.0 && tol < 1.0) {
+            return Err((
+                "solver.newton_tol".into(),
+                format!("must be in (0, 1) (a relative residual), got {tol}"),
+            ));
+        }
+        if self.solver.newton_max_iter == 0 {
+            return Err(("solver.newton_max_iter".into(), "must be at least 1".into()));
+        }
+        self.validate_interfaces()?;
+        let antiplane = self.material.plane == PlaneName::Antiplane;
+        let components = if antiplane { 1 } else { 2 };
+        let mut seen: Vec<&str> = Vec::new();
+        for (i, b) in self.boundary.iter().enumerate() {
+            let key = |k: &str| format!("boundary[{i}].{k}");
+            if b.sides.is_empty() {
+                return Err((key("sides"), "lists no side".into()));
+            }
+            for side in &b.sides {
+                if seen.contains(&side.as_str()) {
+                    return Err((
+                        key("sides"),
+                        format!("side `{side}` has a condition already"),
+                    ));
+                }
+                seen.push(side);
+            }
+            let needs_value = matches!(b.kind, BoundaryKind::Traction | BoundaryKind::Velocity);
+            let takes_history = needs_value || b.kind == BoundaryKind::Transmitting;
+            match (&b.value, needs_value) {
+                (None, true) => return Err((key("value"), "is required for this kind".into())),
+                (Some(_), false) => {
+                    return Err((key("value"), "is only used by traction and velocity".into()));
+                }
+                _ => {}
+            }
+            if b.incoming.is_some() && b.kind != BoundaryKind::Transmitting {
+                return Err((key("incoming"), "is only used by transmitting".into()));
+            }
+            for (name, v) in [("value", &b.value), ("incoming", &b.incoming)] {
+                if let Some(v) = v {
+                    if v.len() != components || v.iter().any(|x| !x.is_finite()) {
+                        let want = if antiplane {
+                            "[z] in anti-plane"
+                        } else {
+                            "[x, y] (or [normal, tangential])"
+                        };
+                        return Err((
+                            key(name),
+                            format!("must be {components} finite numbers: {want}"),
+                        ));
+                    }
+                }
+            }
+            if let Some(h) = &b.history {
+                if !takes_history {
+                    return Err((
+                        key("history"),
+                        "is only used by traction, velocity and transmitting".into(),
+                    ));
+                }
+                h.to_history()
+                    .map_err(|(k, r)| (key(&format!("history.{k}")), r))?;
+            }
+            if b.kind == BoundaryKind::Exact && self.exact.is_none() {
+                return Err((key("kind"), "\"exact\" needs an [exact] section".into()));
+            }
+        }
+        if let Some(e) = &self.exact {
+            if e.wave == WaveName::P && antiplane {
+                return Err((
+                    "exact.wave".into(),
+                    "anti-plane shear carries S waves only".into(),
+                ));
+            }
+            if !(e.wavelength > 0.0 && e.wavelength.is_finite()) {
+                return Err((
+                    "exact.wavelength".into(),
+                    format!("must be a positive length in m, got {}", e.wavelength),
+                ));
+            }
+            for (k, v) in [
+                ("angle_deg", e.angle_deg),
+                ("amplitude", e.amplitude),
+                ("center", e.center),
+            ] {
+                if !v.is_finite() {
+                    return Err((format!("exact.{k}"), "must be finite".into()));
+                }
+            }
+        }
+        if let Some(t) = self
+            .output
+            .snapshot_times
+            .iter()
+            .find(|t| !(0.0..=self.time.end).contains(*t))
+        {
+            return Err((
+                "output.snapshot_times".into(),
+                format!("{t} s is outside [0, time.end]"),
+            ));
+        }
+        if let Some(i) = self
+            .output
+            .interface_probes
+            .iter()
+            .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err((
+                format!("output.interface_probes[{i}]"),
+                "must be a point [x, y] of finite coordinates in m".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks `[[interface]]`: tags named once, laws and their parameters.
+    fn validate_interfaces(&self) -> Result<(), (String, String)> {
+        let mut seen: Vec<&str> = Vec::new();
+        for (i, entry) in self.interface.iter().enumerate() {
+            let key = |k: &str| format!("interface[{i}].{k}");
+            if entry.tags.is_empty() {
+                return Err((key("tags"), "lists no tag".into()));
+            }
+            for tag in &entry.tags {
+                if seen.contains(&tag.as_str()) {
+                    return Err((key("tags"), format!("tag `{tag}` has a law already")));
+                }
+                seen.push(tag);
+            }
+            if entry.law == LawName::Contact && self.material.plane == PlaneName::Antiplane {
+                return Err((
+                    key("law"),
+                    "\"contact\" needs a normal direction, which anti-plane shear \
+                     (material.plane = \"antiplane\") has not; use \"bonded\" or \"free\""
+                        .into(),
+                ));
+            }
+            entry.to_law().map_err(|(k, r)| (key(&k), r))?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::config::tests::{BASE, INTERFACES, parse};
+
+    fn key_of(text: &str, overrides: &[&str]) -> Option<String> {
+        parse(text, overrides).unwrap_err().key
+    }
+
+    #[test]
+    fn bad_interface_settings_name_the_key() {
+        let text = format!("{BASE}{INTERFACES}");
+        let error = |overrides: &[&str]| {
+            let e = parse(&text, overrides).unwrap_err();
+            (e.key.unwrap_or_default(), e.reason)
+        };
+        for (set, key, words) in [
+            ("interface.0.friction=-0.1", "interface[0].friction", ">= 0"),
+            ("interface.0.r_c=1e-6", "interface[0].r_c", "<= 0"),
+            ("interface.0.r_s=-2e-6", "interface[0].r_s", ">= r_c"),
+            ("interface.0.s_c=7e5", "interface[0].s_s", ">= s_c"),
+            (
+                "interface.0.law=glued",
+                "interface[0].law",
+                "unknown variant `glued`",
+            ),
+            (
+                "interface.1.r_c=0.0",
+                "interface[1].r_c",
+                "only used with law = \"contact\"",
+            ),
+            (
+                "interface.1.tags=[\"crack\"]",
+                "interface[1].tags",
+                "has a law already",
+            ),
+            ("interface.1.tags=[]", "interface[1].tags", "lists no tag"),
+            ("material.plane=antiplane", "interface[0].law", "anti-plane"),
+            ("solver.newton_tol=0.0", "solver.newton_tol", "(0, 1)"),
+            ("solver.newton_tol=1.5", "solver.newton_tol", "(0, 1)"),
+            (
+                "solver.newton_max_iter=0",
+                "solver.newton_max_iter",
+                "at least 1",
+            ),
+            (
+                "output.interface_probes=[[nan, 0.0]]",
+                "output.interface_probes[0]",
+                "finite",
+            ),
+            (
+                "mesh.interface.1.from=[0.008, 0.0001]",
+                "mesh.interface[1]",
+                "grid node",
+            ),
+        ] {
+            let (k, reason) = error(&[set]);
+            assert_eq!(k, key, "{set}");
+            assert!(reason.contains(words), "{set}: {reason}");
+        }
+        let missing = parse(&text.replace("s_s = 6e5\n", ""), &[]).unwrap_err();
+        assert_eq!(missing.key.as_deref(), Some("interface[0].s_s"));
+        assert!(missing.reason.contains("required with law = \"contact\""));
+        let typo = parse(&text.replace("to = [0.008", "too = [0.008"), &[]).unwrap_err();
+        assert_eq!(typo.key.as_deref(), Some("mesh.interface[1].too"));
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        assert_eq!(key_of(BASE, &["mesh.nx=abc"]).as_deref(), Some("mesh.nx"));
+        assert_eq!(key_of(BASE, &["mesh.nx=1.5"]).as_deref(), Some("mesh.nx"));
+        assert_eq!(
+            key_of(BASE, &["material.density=-1"]).as_deref(),
+            Some("material.density")
+        );
+        assert_eq!(
+            key_of(BASE, &["material.poisson=0.5"]).as_deref(),
+            Some("material.poisson")
+        );
+        assert_eq!(
+            key_of(BASE, &["pitch.safety=1.0"]).as_deref(),
+            Some("pitch.safety")
+        );
+        assert_eq!(key_of(BASE, &["time.end=0"]).as_deref(), Some("time.end"));
+        assert_eq!(
+            key_of(BASE, &["mesh.path=a.msh"]).as_deref(),
+            Some("mesh.path")
+        );
+        assert_eq!(
+            key_of(BASE, &["mesh.kind=gmsh", "mesh.path=a.msh"]).as_deref(),
+            Some("mesh.width")
+        );
+        assert_eq!(
+            key_of(BASE, &["mesh.perturb=0.3"]).as_deref(),
+            Some("mesh.perturb")
+        );
+        assert_eq!(
+            key_of(BASE, &["mesh.kind=tetra"]).as_deref(),
+            Some("mesh.kind")
+        );
+        let unknown = parse(BASE, &["material.colour=1"]).unwrap_err();
+        assert!(unknown.reason.contains("colour"), "{unknown}");
+        let missing = parse(&BASE.replace("nx = 16\n", ""), &[]).unwrap_err();
+        assert_eq!(missing.key.as_deref(), Some("mesh.nx"));
+        let e = parse(BASE, &["mesh.nx.deep=1"]).unwrap_err();
+        assert_eq!(
+            (e.file.as_str(), e.key.as_deref()),
+            ("--set mesh.nx.deep=1", Some("mesh.nx"))
+        );
+        assert!(
+            parse(BASE, &["novalue"])
+                .unwrap_err()
+                .reason
+                .contains("KEY=VALUE")
+        );
+    }
+}
