@@ -1,7 +1,7 @@
 //! `sdg run`: the SDG solve, tents pitched and solved by the scheduler's workers.
 //!
 //! Each worker owns a [`PatchSolver`] (its scratch memory). A tent pitches on the shared front,
-//! solves its patch and hands a [`PatchReport`] to the bookkeeping ([`Book`]), which sums energy
+//! solves its patch and hands a [`PatchReport`] to the bookkeeping (`Book`), which sums energy
 //! terms, cuts snapshots and notices when the whole front has passed a milestone time: a
 //! snapshot is then complete, or a history row is due. History rows integrate the energy over the
 //! whole front, so they run as scheduler events over every vertex: with no tent in flight.
