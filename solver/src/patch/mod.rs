@@ -319,17 +319,11 @@ impl PatchSolver {
             used: 0,
             interfaces: Interfaces::default(),
             newton: Newton::default(),
-            contact: ContactFaces::new(
-                max_star,
-                order,
-                quadrature::triangle(2 * order + 2).points.len(),
-                n,
-                n * fields,
-            ),
-            iterate: vec![0.0; max_star * n * fields],
-            nonlinear: vec![0.0; max_star * n * fields],
-            residual: vec![0.0; max_star * n * fields],
-            faces: Vec::with_capacity(max_star),
+            contact: ContactFaces::new(0, order, 0, n, 0),
+            iterate: Vec::new(),
+            nonlinear: Vec::new(),
+            residual: Vec::new(),
+            faces: Vec::new(),
             system,
             basis,
         }
@@ -339,6 +333,18 @@ impl PatchSolver {
     /// the Newton settings for patches with nonlinear faces. Contact laws need an in-plane
     /// system.
     pub fn with_interfaces(mut self, interfaces: Interfaces, newton: Newton) -> Self {
+        if interfaces.any_nonlinear() {
+            // Scratch of Newton patches, only for runs that have them.
+            let (max_star, n) = (self.slots.len(), self.basis.len());
+            let size = max_star * n * self.system.fields();
+            let points = self.face_rule.points.len();
+            let order = self.basis.degree();
+            self.contact = ContactFaces::new(max_star, order, points, n, size / max_star);
+            self.iterate = vec![0.0; size];
+            self.nonlinear = vec![0.0; size];
+            self.residual = vec![0.0; size];
+            self.faces = Vec::with_capacity(max_star);
+        }
         self.interfaces = interfaces;
         self.newton = newton;
         self
