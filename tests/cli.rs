@@ -250,7 +250,7 @@ fn invalid_interface_settings() {
         &[
             "case.toml",
             "interface[0].friction",
-            "only used with law = \"contact\"",
+            "not a parameter of law = \"bonded\"",
         ],
     );
 }

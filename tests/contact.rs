@@ -5,17 +5,9 @@ mod common;
 
 use std::path::Path;
 
-/// PMMA of the shipped contact configs.
-const E: f64 = 3.24e9;
-const NU: f64 = 0.35;
-const RHO: f64 = 1190.0;
-
 /// `c_d` and `Z = rho c_d` in plane strain.
 fn p_wave() -> (f64, f64) {
-    let lambda = E * NU / ((1.0 + NU) * (1.0 - 2.0 * NU));
-    let mu = E / (2.0 * (1.0 + NU));
-    let c = ((lambda + 2.0 * mu) / RHO).sqrt();
-    (c, RHO * c)
+    common::pmma_p_wave()
 }
 
 /// The C1 cubic step `3 r^2 - 2 r^3` of `r` clamped to [0, 1].

@@ -17,10 +17,10 @@
 
 use sdg_mesh::Mesh;
 
-use crate::config::AdaptConfig;
+use crate::config::{AdaptConfig, ZoneConfig};
 
 /// Refinement settings of a run.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct Adapt {
     /// Upper tolerance of `eta`.
     pub(crate) tol: f64,
@@ -30,6 +30,8 @@ pub(crate) struct Adapt {
     pub(crate) min_edge: f64,
     /// Longest edge allowed before the first tent, m.
     pub(crate) max_edge: f64,
+    /// Zones with a finer longest edge.
+    zones: Vec<ZoneConfig>,
     /// `A L / c`, m^2 s: the spacetime volume of one crossing of the domain.
     crossing: f64,
 }
@@ -58,8 +60,18 @@ impl Adapt {
             lower: config.tol / config.coarsen_ratio,
             min_edge: config.min_edge.unwrap_or(1e-3 * mesh.edge_length_range().0),
             max_edge: config.max_edge.unwrap_or(f64::INFINITY),
+            zones: config.zone.clone(),
             crossing: area * diameter / c_max,
         })
+    }
+
+    /// The longest edge allowed at `x` (m): the finest zone containing it, else `max_edge`.
+    pub(crate) fn max_edge_at(&self, x: [f64; 2]) -> f64 {
+        self.zones
+            .iter()
+            .filter(|z| distance_to_segment(x, z.from, z.to) <= z.radius)
+            .map(|z| z.max_edge)
+            .fold(self.max_edge, f64::min)
     }
 
     /// `eta` of a patch that dissipated `dissipation` (J/m) over spacetime volume `volume`
@@ -73,10 +85,55 @@ impl Adapt {
     }
 }
 
+/// Distance from `x` to the segment `a`-`b`, m.
+fn distance_to_segment(x: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let length2 = d[0] * d[0] + d[1] * d[1];
+    let along = if length2 > 0.0 {
+        (((x[0] - a[0]) * d[0] + (x[1] - a[1]) * d[1]) / length2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (x[0] - a[0] - along * d[0]).hypot(x[1] - a[1] - along * d[1])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use sdg_mesh::{Diagonal, Rectangle};
+
+    #[test]
+    fn zones_set_a_finer_longest_edge() {
+        let config = AdaptConfig {
+            enabled: true,
+            max_edge: Some(0.5),
+            zone: vec![
+                ZoneConfig {
+                    from: [0.0, 0.5],
+                    to: [1.0, 0.5],
+                    radius: 0.1,
+                    max_edge: 0.05,
+                },
+                ZoneConfig {
+                    from: [1.0, 0.5],
+                    to: [1.0, 0.5],
+                    radius: 0.2,
+                    max_edge: 0.01,
+                },
+            ],
+            ..AdaptConfig::default()
+        };
+        let a = Adapt::new(&config, &unit(4), 1.0).unwrap();
+        assert_eq!(a.max_edge_at([0.5, 0.59]), 0.05);
+        assert_eq!(a.max_edge_at([0.5, 0.61]), 0.5);
+        assert_eq!(
+            a.max_edge_at([-0.05, 0.5]),
+            0.05,
+            "beyond the end, within the radius"
+        );
+        assert_eq!(a.max_edge_at([1.1, 0.6]), 0.01, "the finest zone wins");
+        assert_eq!(a.max_edge_at([1.5, 0.5]), 0.5);
+    }
 
     fn unit(n: u32) -> Mesh {
         Rectangle {

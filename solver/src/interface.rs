@@ -21,6 +21,13 @@
 //!   smoothsteps (3.36)-(3.39); `gamma = 1` when `|sI_t| <= k <-sI_n>_+` (3.25); slip traction
 //!   `k <-sI_n>_+` in the direction of the stick traction (3.32). Nonlinear: patches with a
 //!   contact face are solved by Newton iterations.
+//! - [`Law::XuNeedleman`]: cohesive fracture (seed 2.2.5, 2.5.2): the contact law whose
+//!   separated part carries the Xu-Needleman traction of the separation and slip (2.69) instead
+//!   of zero; in compression the faces are in contact. Nonlinear, like contact.
+//!
+//! The separation `[[u]]` (normal `delta`, tangential slip; m) evolves by `d[[u]]/dt = [[v*]]`
+//! (3.40), which every law gives as `rate = (w_a + w_b - 2 s*) / Z` per frame direction (both
+//! sides keep their outgoing characteristic).
 
 use sdg_mesh::TagId;
 
@@ -95,6 +102,113 @@ impl ContactParams {
     }
 }
 
+/// Parameters of a Xu-Needleman cohesive interface (seed (2.69)-(2.70)), physical units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CohesiveParams {
+    /// Cohesive strength `sigma_c` (Pa, > 0): the largest normal traction, at `delta = delta_c`.
+    pub strength: f64,
+    /// Critical separation `delta_c` (m, > 0), equal for the normal and tangential directions.
+    pub critical_separation: f64,
+    /// Contact of the faces in compression (and friction once they touch).
+    pub contact: ContactParams,
+}
+
+impl CohesiveParams {
+    /// Work of separation `phi = e sigma_c delta_c` (2.70), J/m^2.
+    pub fn work_of_separation(&self) -> f64 {
+        std::f64::consts::E * self.strength * self.critical_separation
+    }
+
+    /// The contact regularization used when a config gives none: full contact at a separation
+    /// of `-delta_c / 100` or less (interpenetration is resisted first by the law's own
+    /// stiffness `e sigma_c / delta_c`), separated at any opening; full contact at compressive
+    /// bonded tractions, separated above `sigma_c / 100` of tension; no friction.
+    pub fn default_contact(strength: f64, critical_separation: f64) -> ContactParams {
+        ContactParams {
+            friction: 0.0,
+            r_c: -0.01 * critical_separation,
+            r_s: 0.0,
+            s_c: 0.0,
+            s_s: 0.01 * strength,
+        }
+    }
+
+    /// Checks `strength > 0`, `critical_separation > 0` (finite) and the contact parameters.
+    pub fn validate(&self) -> Result<(), LawError> {
+        for (key, value) in [
+            ("strength", self.strength),
+            ("critical_separation", self.critical_separation),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(LawError {
+                    key,
+                    reason: "must be a finite number > 0".into(),
+                });
+            }
+        }
+        self.contact.validate()
+    }
+
+    /// The Xu-Needleman traction (normal, tangential; Pa) at the separation `sep` (normal,
+    /// tangential; m).
+    pub fn traction(&self, sep: [f64; 2]) -> [f64; 2] {
+        XuNeedleman {
+            strength: self.strength,
+            delta_c: self.critical_separation,
+        }
+        .traction(sep)
+        .0
+    }
+}
+
+/// The Xu-Needleman law (2.69) with equal normal and tangential critical separations: with
+/// `D1 = delta / delta_c`, `D2 = slip / delta_c`, `T_n = sigma_c D1 exp(1 - D1 - D2^2)` and
+/// `T_t = 2 sigma_c D2 (1 + D1) exp(1 - D1 - D2^2)`. For `D1 < 0` (interpenetration, which the
+/// contact part of the law takes over) its linear continuation `exp(1 - D2^2)` replaces the
+/// exponential and `1 + D1` is 1: continuous with continuous derivatives at `D1 = 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct XuNeedleman {
+    /// `sigma_c`, in the units of the tractions returned.
+    pub strength: f64,
+    /// `delta_c`, m.
+    pub delta_c: f64,
+}
+
+impl XuNeedleman {
+    /// The trailing-edge separation `delta_T > delta_c` of the process zone (seed 2.4.2), m:
+    /// where the normal traction has fallen to 1% of the strength (`D e^(1 - D) = 0.01`,
+    /// `D = delta_T / delta_c ~ 7.64`).
+    pub fn trailing_separation(&self) -> f64 {
+        // Newton on ln D + 1 - D = ln 0.01, from beyond the root (the function is concave).
+        let mut d: f64 = 10.0;
+        for _ in 0..50 {
+            let step = (d.ln() + 1.0 - d - 0.01f64.ln()) / (1.0 / d - 1.0);
+            d -= step;
+            if step.abs() < 1e-15 * d {
+                break;
+            }
+        }
+        d * self.delta_c
+    }
+
+    /// The traction (normal, tangential) at `sep` (m) and its derivatives `d T_k / d sep_j`.
+    pub fn traction(&self, sep: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
+        let (d1, d2) = (sep[0] / self.delta_c, sep[1] / self.delta_c);
+        let open = d1.max(0.0);
+        let e = (1.0 - open - d2 * d2).exp();
+        let sigma = self.strength;
+        let scale = sigma / self.delta_c;
+        let tn = sigma * d1 * e;
+        let tt = 2.0 * sigma * d2 * (1.0 + open) * e;
+        let dtn = [scale * e * (1.0 - open), scale * d1 * e * (-2.0 * d2)];
+        let dtt = [
+            -2.0 * scale * d2 * open * e,
+            2.0 * scale * (1.0 + open) * e * (1.0 - 2.0 * d2 * d2),
+        ];
+        ([tn, tt], [dtn, dtt])
+    }
+}
+
 /// The law of an interface.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Law {
@@ -104,12 +218,19 @@ pub enum Law {
     Free,
     /// Unilateral contact with Coulomb friction.
     Contact(ContactParams),
+    /// Xu-Needleman cohesive law, in contact under compression.
+    XuNeedleman(CohesiveParams),
 }
 
 impl Law {
     /// True when the targets depend nonlinearly on the traces (a Newton patch).
     pub fn is_nonlinear(&self) -> bool {
-        matches!(self, Law::Contact(_))
+        matches!(self, Law::Contact(_) | Law::XuNeedleman(_))
+    }
+
+    /// True for a cohesive law, whose interface work is fracture energy.
+    pub fn is_cohesive(&self) -> bool {
+        matches!(self, Law::XuNeedleman(_))
     }
 }
 
@@ -138,7 +259,8 @@ impl Mode {
     }
 }
 
-/// A contact law in scaled units: tractions over `Z_ref`, impedances over `rho c_ref`.
+/// A contact law in scaled units: tractions over `Z_ref`, impedances over `rho c_ref`. The
+/// separated part of the face carries the cohesive traction when there is one, else none.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Contact {
     /// Scaled impedances per frame direction (normal, tangential).
@@ -149,6 +271,8 @@ pub struct Contact {
     pub r: [f64; 2],
     /// `s_c`, `s_s` scaled.
     pub s: [f64; 2],
+    /// The cohesive law of the separated part (scaled strength).
+    pub cohesive: Option<XuNeedleman>,
 }
 
 /// Side a's targets of a contact face and their derivatives.
@@ -160,16 +284,17 @@ pub struct Targets {
     pub d_wa: [[f64; 2]; 4],
     /// `d star / d w_b[j]`.
     pub d_wb: [[f64; 2]; 4],
-    /// `d star / d delta` (per m).
-    pub d_delta: [f64; 4],
-    /// Separation rate `[[v*_n]] = v*_b,n - v*_a,n` (m/s), the same from both sides.
-    pub rate: f64,
-    /// `d rate / d w_a[j]`, `d rate / d w_b[j]`, `d rate / d delta`.
-    pub rate_wa: [f64; 2],
-    /// See [`Self::rate_wa`].
-    pub rate_wb: [f64; 2],
-    /// See [`Self::rate_wa`].
-    pub rate_delta: f64,
+    /// `d star / d sep[j]` (per m) for the separation `sep` = (normal, slip).
+    pub d_sep: [[f64; 2]; 4],
+    /// Separation rate `[[v*]] = v*_b - v*_a` (normal, tangential; m/s), the same from both
+    /// sides.
+    pub rate: [f64; 2],
+    /// `d rate[k] / d w_a[j]`.
+    pub rate_wa: [[f64; 2]; 2],
+    /// `d rate[k] / d w_b[j]`.
+    pub rate_wb: [[f64; 2]; 2],
+    /// `d rate[k] / d sep[j]`.
+    pub rate_sep: [[f64; 2]; 2],
     /// Bonded Riemann tractions `sI` (normal, tangential; scaled).
     pub bonded_traction: [f64; 2],
     /// Contact area fraction `eta`.
@@ -209,27 +334,53 @@ fn fraction(x: f64, lo: f64, hi: f64) -> (f64, f64) {
 }
 
 impl Contact {
-    /// The scaled law of `params` for `system` (in-plane modes only).
-    pub fn new(system: &System, params: &ContactParams) -> Self {
+    /// The scaled law of `params` for `system` (in-plane modes only), with the cohesive law
+    /// `cohesive` on the separated part.
+    pub fn new(system: &System, params: &ContactParams, cohesive: Option<&CohesiveParams>) -> Self {
         let z_ref = system.z_ref();
         Self {
             z: system.impedance(),
             k: params.friction,
             r: [params.r_c, params.r_s],
             s: [params.s_c / z_ref, params.s_s / z_ref],
+            cohesive: cohesive.map(|c| XuNeedleman {
+                strength: c.strength / z_ref,
+                delta_c: c.critical_separation,
+            }),
         }
     }
 
+    /// The scaled law of a nonlinear interface law; `None` for a linear one.
+    pub fn of(system: &System, law: &Law) -> Option<Self> {
+        match law {
+            Law::Contact(params) => Some(Self::new(system, params, None)),
+            Law::XuNeedleman(c) => Some(Self::new(system, &c.contact, Some(c))),
+            Law::Bonded | Law::Free => None,
+        }
+    }
+
+    /// Separations (m) of the order of the law's scales: its regularization band and the
+    /// cohesive critical separation.
+    pub fn separation_scale(&self) -> f64 {
+        let c = self.cohesive.map_or(0.0, |x| x.delta_c);
+        self.r[0].abs().max(self.r[1].abs()).max(c)
+    }
+
     /// Side a's targets from the arriving characteristics `w_a`, `w_b` (normal, tangential) and
-    /// the normal separation `delta` (m).
-    pub fn targets(&self, w_a: [f64; 2], w_b: [f64; 2], delta: f64) -> Targets {
+    /// the separation `sep` (normal `delta`, tangential slip; m).
+    pub fn targets(&self, w_a: [f64; 2], w_b: [f64; 2], sep: [f64; 2]) -> Targets {
+        let delta = sep[0];
         let [z0, z1] = self.z;
         let si = [0.5 * (w_a[0] + w_b[0]), 0.5 * (w_a[1] + w_b[1])];
         let vi = [
             (w_b[0] - w_a[0]) / (2.0 * z0),
             (w_b[1] - w_a[1]) / (2.0 * z1),
         ];
-        let v3 = [-w_a[0] / z0, -w_a[1] / z1];
+        // Separated part: the cohesive traction tc (or none), side a's outgoing characteristic.
+        let (tc, dtc) = self
+            .cohesive
+            .map_or(([0.0; 2], [[0.0; 2]; 2]), |x| x.traction(sep));
+        let v3 = [(tc[0] - w_a[0]) / z0, (tc[1] - w_a[1]) / z1];
         let (eta_d, deta_d) = fraction(delta, self.r[0], self.r[1]);
         let (eta_s, deta_s) = fraction(si[0], self.s[0], self.s[1]);
         let eta = eta_d * eta_s;
@@ -267,7 +418,10 @@ impl Contact {
                 eta * vi[0] + (1.0 - eta) * v3[0],
                 eta * v + (1.0 - eta) * v3[1],
             ],
-            s: [eta * si[0], eta * t],
+            s: [
+                eta * si[0] + (1.0 - eta) * tc[0],
+                eta * t + (1.0 - eta) * tc[1],
+            ],
         };
         // Rows: v0, v1, s0, s1; columns: normal, tangential characteristic.
         let dv0 = eta_w * (vi[0] - v3[0]);
@@ -276,25 +430,31 @@ impl Contact {
         let dv1 = eta_w * (v - v3[1]) + eta * v_w0;
         out.d_wa[1] = [dv1, eta * v_wa1 - (1.0 - eta) / z1];
         out.d_wb[1] = [dv1, eta * v_wb1];
-        let ds0 = eta_w * si[0] + 0.5 * eta;
+        let ds0 = eta_w * (si[0] - tc[0]) + 0.5 * eta;
         out.d_wa[2] = [ds0, 0.0];
         out.d_wb[2] = [ds0, 0.0];
-        let ds1 = eta_w * t + eta * t_w0;
+        let ds1 = eta_w * (t - tc[1]) + eta * t_w0;
         out.d_wa[3] = [ds1, eta * t_wa1];
         out.d_wb[3] = [ds1, eta * t_wb1];
-        out.d_delta = [
-            eta_delta * (vi[0] - v3[0]),
-            eta_delta * (v - v3[1]),
-            eta_delta * si[0],
-            eta_delta * t,
-        ];
+        // d eta / d sep[j]: only the normal separation moves the contact fraction.
+        for (j, e) in [eta_delta, 0.0].into_iter().enumerate() {
+            out.d_sep[0][j] = e * (vi[0] - v3[0]) + (1.0 - eta) * dtc[0][j] / z0;
+            out.d_sep[1][j] = e * (v - v3[1]) + (1.0 - eta) * dtc[1][j] / z1;
+            out.d_sep[2][j] = e * (si[0] - tc[0]) + (1.0 - eta) * dtc[0][j];
+            out.d_sep[3][j] = e * (t - tc[1]) + (1.0 - eta) * dtc[1][j];
+        }
 
-        let open = (w_a[0] + w_b[0]) / z0;
-        out.rate = (1.0 - eta) * open;
-        let rate_w = -eta_w * open + (1.0 - eta) / z0;
-        out.rate_wa = [rate_w, 0.0];
-        out.rate_wb = [rate_w, 0.0];
-        out.rate_delta = -eta_delta * open;
+        // [[v*]] = v*_b - v*_a = (w_b - s*) / Z - (s* - w_a) / Z per direction.
+        for k in 0..2 {
+            let zk = self.z[k];
+            out.rate[k] = (w_a[k] + w_b[k] - 2.0 * out.star.s[k]) / zk;
+            for j in 0..2 {
+                let unit = if j == k { 1.0 } else { 0.0 };
+                out.rate_wa[k][j] = (unit - 2.0 * out.d_wa[2 + k][j]) / zk;
+                out.rate_wb[k][j] = (unit - 2.0 * out.d_wb[2 + k][j]) / zk;
+                out.rate_sep[k][j] = -2.0 * out.d_sep[2 + k][j] / zk;
+            }
+        }
         out
     }
 }
@@ -329,6 +489,11 @@ impl Interfaces {
     pub fn any_nonlinear(&self) -> bool {
         self.by_tag.iter().flatten().any(Law::is_nonlinear)
     }
+
+    /// True when some tag has a cohesive law.
+    pub fn any_cohesive(&self) -> bool {
+        self.by_tag.iter().flatten().any(Law::is_cohesive)
+    }
 }
 
 #[cfg(test)]
@@ -351,6 +516,7 @@ mod tests {
                 s_c: s[0],
                 s_s: s[1],
             },
+            None,
         )
     }
 
@@ -474,7 +640,7 @@ mod tests {
             let rate = -from_b.star.v[0] - got.star.v[0];
             if (from_b.star.s[0] - got.star.s[0]).abs() > 1e-14
                 || (from_b.star.s[1] - got.star.s[1]).abs() > 1e-14
-                || (rate - got.rate).abs() > 1e-14
+                || (rate - got.rate[0]).abs() > 1e-14
             {
                 return Err(format!("{mode:?}: sides disagree"));
             }
@@ -484,14 +650,14 @@ mod tests {
 
     #[test]
     fn every_mode_matches_the_characteristic_solution() {
-        check_modes(Contact::targets).unwrap();
+        check_modes(|c, w_a, w_b, delta| c.targets(w_a, w_b, [delta, 0.0])).unwrap();
     }
 
     #[test]
     fn a_sign_flip_in_the_solution_is_caught() {
         // The same check on a law whose slip traction points against the stick traction.
         let flipped = |c: &Contact, w_a: [f64; 2], w_b: [f64; 2], delta: f64| {
-            let mut t = c.targets(w_a, w_b, delta);
+            let mut t = c.targets(w_a, w_b, [delta, 0.0]);
             if t.mode() == Mode::Slip {
                 t.star.s[1] = -t.star.s[1];
             }
@@ -500,7 +666,7 @@ mod tests {
         assert!(check_modes(flipped).is_err());
         // And one whose separation velocity takes the wrong characteristic sign.
         let wrong = |c: &Contact, w_a: [f64; 2], w_b: [f64; 2], delta: f64| {
-            c.targets([-w_a[0], w_a[1]], w_b, delta)
+            c.targets([-w_a[0], w_a[1]], w_b, [delta, 0.0])
         };
         assert!(check_modes(wrong).is_err());
     }
@@ -518,14 +684,14 @@ mod tests {
             s: [-0.7, 0.12],
         };
         let (w_a, w_b) = characteristics(sys.impedance(), &a, &b);
-        let t = c.targets(w_a, w_b, -2e-6);
+        let t = c.targets(w_a, w_b, [-2e-6, 0.0]);
         let bonded = riemann::bonded(&sys, &a, &b);
         assert_eq!(t.mode(), Mode::Stick);
         for j in 0..2 {
             assert!((t.star.v[j] - bonded.v[j]).abs() < 1e-15);
             assert!((t.star.s[j] - bonded.s[j]).abs() < 1e-15);
         }
-        assert_eq!(t.rate, 0.0);
+        assert_eq!(t.rate, [0.0, 0.0]);
     }
 
     #[test]
@@ -536,7 +702,7 @@ mod tests {
         for (i, delta) in [-5e-7, 0.0, 3e-7].into_iter().enumerate() {
             let w_a = [0.1 - 0.2 * i as f64, 0.3];
             let w_b = [-0.2, 0.1 + 0.1 * i as f64];
-            let t = c.targets(w_a, w_b, delta);
+            let t = c.targets(w_a, w_b, [delta, 0.0]);
             assert!(
                 t.eta > 0.0 && t.eta < 1.0,
                 "blend at {delta}: eta {}",
@@ -595,7 +761,7 @@ mod tests {
             assert!(eta > 0.0 && eta < 1.0, "a blend: eta {eta}");
             let on = expected(z, &a, &b, contact, c.k);
             let off = expected(z, &a, &b, Mode::Separation, c.k);
-            let got = c.targets(w_a, w_b, delta);
+            let got = c.targets(w_a, w_b, [delta, 0.0]);
             assert!((got.eta - eta).abs() < 1e-14);
             for j in 0..2 {
                 let v = eta * on.v[j] + (1.0 - eta) * off.v[j];
@@ -606,68 +772,175 @@ mod tests {
         }
     }
 
+    /// Checks every analytic derivative of `c.targets` against central differences at
+    /// `(w_a, w_b, sep)`.
+    fn check_derivatives(c: &Contact, w_a: [f64; 2], w_b: [f64; 2], sep: [f64; 2]) {
+        let values = |t: &Targets| {
+            [
+                t.star.v[0],
+                t.star.v[1],
+                t.star.s[0],
+                t.star.s[1],
+                t.rate[0],
+                t.rate[1],
+            ]
+        };
+        let t = c.targets(w_a, w_b, sep);
+        let analytic = |r: usize, wrt: usize, j: usize| match (r, wrt) {
+            (0..4, 0) => t.d_wa[r][j],
+            (0..4, 1) => t.d_wb[r][j],
+            (0..4, _) => t.d_sep[r][j],
+            (_, 0) => t.rate_wa[r - 4][j],
+            (_, 1) => t.rate_wb[r - 4][j],
+            (_, _) => t.rate_sep[r - 4][j],
+        };
+        for wrt in 0..3 {
+            for j in 0..2 {
+                // Steps well inside the narrowest band of the law.
+                let band = c
+                    .cohesive
+                    .map_or(f64::INFINITY, |x| x.delta_c)
+                    .min(c.r[1] - c.r[0]);
+                let h = if wrt == 2 { 1e-4 * band } else { 1e-7 };
+                let shifted = |sign: f64| {
+                    let (mut a, mut b, mut d) = (w_a, w_b, sep);
+                    [&mut a, &mut b, &mut d][wrt][j] += sign * h;
+                    values(&c.targets(a, b, d))
+                };
+                let (f, g) = (shifted(1.0), shifted(-1.0));
+                for r in 0..6 {
+                    let fd = (f[r] - g[r]) / (2.0 * h);
+                    let tol = if wrt == 2 { 1e-4 } else { 1e-6 };
+                    let scale = if wrt == 2 {
+                        1.0 / c.separation_scale()
+                    } else {
+                        1.0
+                    };
+                    assert!(
+                        (analytic(r, wrt, j) - fd).abs() < tol * (scale + fd.abs()),
+                        "row {r}, argument {wrt}[{j}] at {sep:?}: {} vs {fd}",
+                        analytic(r, wrt, j)
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn derivatives_match_finite_differences() {
         let sys = system();
-        let c = law(&sys, 0.25, [-1e-6, 1e-6], [0.0, 0.3]);
-        let values = |t: &Targets| [t.star.v[0], t.star.v[1], t.star.s[0], t.star.s[1], t.rate];
-        let h = 1e-7;
+        let c = law(&sys, 0.25, [-1e-6, 1e-6], [0.0, 0.3 * sys.z_ref()]);
         // Blended contact, slip and stick points away from kinks.
         for (w_a, w_b, delta) in [
             ([-0.1, 0.3], [-0.15, 0.1], -2e-7),
             ([-0.1, 0.01], [-0.15, 0.02], 4e-7),
             ([0.05, 0.01], [0.1, 0.02], 1e-7),
         ] {
-            let t = c.targets(w_a, w_b, delta);
-            let mut d_wa = [[0.0; 2]; 5];
-            let mut d_wb = [[0.0; 2]; 5];
-            for j in 0..2 {
-                let (mut pa, mut ma, mut pb, mut mb) = (w_a, w_a, w_b, w_b);
-                pa[j] += h;
-                ma[j] -= h;
-                pb[j] += h;
-                mb[j] -= h;
-                let fa = values(&c.targets(pa, w_b, delta));
-                let ga = values(&c.targets(ma, w_b, delta));
-                let fb = values(&c.targets(w_a, pb, delta));
-                let gb = values(&c.targets(w_a, mb, delta));
-                for r in 0..5 {
-                    d_wa[r][j] = (fa[r] - ga[r]) / (2.0 * h);
-                    d_wb[r][j] = (fb[r] - gb[r]) / (2.0 * h);
-                }
-            }
-            let hd = 1e-10;
-            let fd = values(&c.targets(w_a, w_b, delta + hd));
-            let gd = values(&c.targets(w_a, w_b, delta - hd));
-            let analytic_wa = [t.d_wa[0], t.d_wa[1], t.d_wa[2], t.d_wa[3], t.rate_wa];
-            let analytic_wb = [t.d_wb[0], t.d_wb[1], t.d_wb[2], t.d_wb[3], t.rate_wb];
-            let analytic_d = [
-                t.d_delta[0],
-                t.d_delta[1],
-                t.d_delta[2],
-                t.d_delta[3],
-                t.rate_delta,
-            ];
-            for r in 0..5 {
-                for j in 0..2 {
-                    assert!(
-                        (analytic_wa[r][j] - d_wa[r][j]).abs() < 1e-6 * (1.0 + d_wa[r][j].abs()),
-                        "row {r} w_a[{j}]: {} vs {}",
-                        analytic_wa[r][j],
-                        d_wa[r][j]
-                    );
-                    assert!(
-                        (analytic_wb[r][j] - d_wb[r][j]).abs() < 1e-6 * (1.0 + d_wb[r][j].abs()),
-                        "row {r} w_b[{j}]"
-                    );
-                }
-                let fd_delta = (fd[r] - gd[r]) / (2.0 * hd);
-                assert!(
-                    (analytic_d[r] - fd_delta).abs() < 1e-5 * (1.0 + fd_delta.abs()),
-                    "row {r} delta: {} vs {fd_delta}",
-                    analytic_d[r]
-                );
-            }
+            check_derivatives(&c, w_a, w_b, [delta, 3e-7]);
+        }
+        // Cohesive: opening, slip and both, in tension and in compression.
+        let x = cohesive(&sys);
+        let dc = 4e-7;
+        for (w_a, w_b, sep) in [
+            ([0.2, 0.01], [0.25, 0.02], [0.5 * dc, 0.0]),
+            ([0.2, 0.01], [0.25, -0.05], [2.5 * dc, 0.7 * dc]),
+            ([-0.3, 0.01], [-0.2, 0.02], [-0.004 * dc, 0.1 * dc]),
+            ([0.1, 0.3], [0.05, 0.2], [0.3 * dc, -1.3 * dc]),
+        ] {
+            check_derivatives(&x, w_a, w_b, sep);
+        }
+    }
+
+    /// The seed's PMMA cohesive law (2.5.2) with its default contact part.
+    fn cohesive(sys: &System) -> Contact {
+        let (strength, delta_c) = (324e6, 4e-7);
+        let params = CohesiveParams {
+            strength,
+            critical_separation: delta_c,
+            contact: CohesiveParams::default_contact(strength, delta_c),
+        };
+        Contact::of(sys, &Law::XuNeedleman(params)).unwrap()
+    }
+
+    #[test]
+    fn xu_needleman_traction_peaks_at_the_strength() {
+        let (strength, dc) = (324e6, 4e-7);
+        let p = CohesiveParams {
+            strength,
+            critical_separation: dc,
+            contact: CohesiveParams::default_contact(strength, dc),
+        };
+        // (2.69) written out: peak sigma_c at delta_c, 1% of it near 7.6 delta_c.
+        let tn = |d: f64| strength * d / dc * (1.0 - d / dc).exp();
+        for d in [0.1, 1.0, 3.0, 7.6] {
+            let t = p.traction([d * dc, 0.0]);
+            assert!((t[0] - tn(d * dc)).abs() < 1e-6 * strength && t[1] == 0.0);
+        }
+        assert!((p.traction([dc, 0.0])[0] - strength).abs() < 1e-6);
+        let law = XuNeedleman {
+            strength,
+            delta_c: dc,
+        };
+        let trailing = law.traction([law.trailing_separation(), 0.0]).0[0];
+        assert!((trailing / strength - 0.01).abs() < 1e-12);
+        assert!(law.trailing_separation() > 7.0 * dc && law.trailing_separation() < 8.0 * dc);
+        let tt = |d1: f64, d2: f64| 2.0 * strength * d2 * (1.0 + d1) * (1.0 - d1 - d2 * d2).exp();
+        let t = p.traction([0.5 * dc, 0.3 * dc]);
+        assert!((t[1] - tt(0.5, 0.3)).abs() < 1e-6 * strength);
+        // Work of separation: the integral of T_n over the opening (2.70).
+        let n = 200_000;
+        let h = 60.0 * dc / n as f64;
+        let work: f64 = (0..n)
+            .map(|i| h * p.traction([(i as f64 + 0.5) * h, 0.0])[0])
+            .sum();
+        assert!((work / p.work_of_separation() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn cohesive_faces_carry_the_law_when_open_and_bonded_targets_in_compression() {
+        let sys = system();
+        let z = sys.impedance();
+        let x = cohesive(&sys);
+        let law = x.cohesive.unwrap();
+        // Opening under tension: separation with the cohesive traction, each side's velocity
+        // from its own characteristic.
+        let (a, b) = (
+            FrameTrace {
+                v: [0.1, 0.02],
+                s: [0.5, 0.05],
+            },
+            FrameTrace {
+                v: [0.3, 0.01],
+                s: [0.4, 0.04],
+            },
+        );
+        let sep = [1.5e-7, 0.2e-7];
+        let (w_a, w_b) = characteristics(z, &a, &b);
+        let t = x.targets(w_a, w_b, sep);
+        let (tc, _) = law.traction(sep);
+        assert_eq!(t.eta, 0.0);
+        for j in 0..2 {
+            assert!((t.star.s[j] - tc[j]).abs() < 1e-15);
+            assert!((t.star.v[j] - (a.v[j] + (tc[j] - a.s[j]) / z[j])).abs() < 1e-15);
+        }
+        // In compression and closed: the bonded solution (friction 0 with zero shear).
+        let (a, b) = (
+            FrameTrace {
+                v: [0.2, 0.0],
+                s: [-0.8, 0.0],
+            },
+            FrameTrace {
+                v: [-0.1, 0.0],
+                s: [-0.7, 0.0],
+            },
+        );
+        let (w_a, w_b) = characteristics(z, &a, &b);
+        let t = x.targets(w_a, w_b, [-1e-8, 0.0]);
+        let bonded = riemann::bonded(&sys, &a, &b);
+        assert_eq!(t.eta, 1.0);
+        for j in 0..2 {
+            assert!((t.star.v[j] - bonded.v[j]).abs() < 1e-15);
+            assert!((t.star.s[j] - bonded.s[j]).abs() < 1e-15);
         }
     }
 
@@ -700,5 +973,36 @@ mod tests {
         );
         assert_eq!(key(ContactParams { s_c: 7e5, ..ok }), "s_s");
         assert_eq!(key(ContactParams { s_c: -1.0, ..ok }), "s_c");
+        let cohesive = CohesiveParams {
+            strength: 324e6,
+            critical_separation: 4e-7,
+            contact: ok,
+        };
+        assert!(cohesive.validate().is_ok());
+        for (p, want) in [
+            (
+                CohesiveParams {
+                    strength: 0.0,
+                    ..cohesive
+                },
+                "strength",
+            ),
+            (
+                CohesiveParams {
+                    critical_separation: -4e-7,
+                    ..cohesive
+                },
+                "critical_separation",
+            ),
+            (
+                CohesiveParams {
+                    strength: f64::NAN,
+                    ..cohesive
+                },
+                "strength",
+            ),
+        ] {
+            assert_eq!(p.validate().unwrap_err().key, want);
+        }
     }
 }

@@ -6,6 +6,7 @@
 
 pub mod basis;
 pub mod boundary;
+pub mod crack;
 pub mod element;
 pub mod exact;
 pub mod face;

@@ -83,6 +83,16 @@ pub fn shipped(name: &str, overrides: &[&str]) -> Problem {
     .expect("valid problem")
 }
 
+/// `c_d` (m/s) and `Z = rho c_d` of the shipped configs' PMMA (E = 3.24 GPa, nu = 0.35,
+/// rho = 1190 kg/m^3) in plane strain, written out.
+pub fn pmma_p_wave() -> (f64, f64) {
+    let (e, nu, rho): (f64, f64, f64) = (3.24e9, 0.35, 1190.0);
+    let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    let mu = e / (2.0 * (1.0 + nu));
+    let c = ((lambda + 2.0 * mu) / rho).sqrt();
+    (c, rho * c)
+}
+
 /// `key=value` overrides from pairs.
 pub fn set(pairs: &[(&str, String)]) -> Vec<String> {
     pairs.iter().map(|(k, v)| format!("{k}={v}")).collect()

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use sdg_solver::interface::{ContactParams, Law};
+use sdg_solver::interface::{CohesiveParams, ContactParams, Law};
 
 /// Kind of a boundary condition.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
@@ -45,7 +45,7 @@ pub struct BoundaryConfig {
 
 /// The law of an interface.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "snake_case")]
 pub enum LawName {
     /// Perfectly bonded.
     Bonded,
@@ -53,10 +53,21 @@ pub enum LawName {
     Free,
     /// Unilateral contact with Coulomb friction (in-plane modes only).
     Contact,
+    /// Xu-Needleman cohesive law, in contact under compression (in-plane modes only).
+    XuNeedleman,
+}
+
+impl LawName {
+    /// True for laws that need a normal direction (not anti-plane shear).
+    pub fn is_in_plane_only(self) -> bool {
+        matches!(self, LawName::Contact | LawName::XuNeedleman)
+    }
 }
 
 /// `[[interface]]`: one law on one or more interface tags. The contact parameters (seed 3.2.1,
-/// 3.3.1) are required with `law = "contact"` and rejected otherwise.
+/// 3.3.1) are required with `law = "contact"`; with `law = "xu_needleman"` `strength` and
+/// `critical_separation` are required and the contact parameters optional (defaults:
+/// [`CohesiveParams::default_contact`]). Parameters a law does not use are rejected.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct InterfaceConfig {
@@ -80,42 +91,92 @@ pub struct InterfaceConfig {
     /// Pa.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub s_s: Option<f64>,
+    /// Cohesive strength `sigma_c`, Pa (> 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strength: Option<f64>,
+    /// Critical separation `delta_c`, m (> 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub critical_separation: Option<f64>,
 }
 
 impl InterfaceConfig {
-    /// The law, or `(key, reason)` for a missing, extra or invalid contact parameter.
+    /// The law, or `(key, reason)` for a missing, extra or invalid parameter.
     pub fn to_law(&self) -> Result<Law, (String, String)> {
-        let params = [
+        let contact = [
             ("friction", self.friction),
             ("r_c", self.r_c),
             ("r_s", self.r_s),
             ("s_c", self.s_c),
             ("s_s", self.s_s),
         ];
-        if self.law != LawName::Contact {
-            return match params.iter().find(|(_, v)| v.is_some()) {
-                Some((key, _)) => Err((
-                    key.to_string(),
-                    "is only used with law = \"contact\"".into(),
-                )),
-                None if self.law == LawName::Bonded => Ok(Law::Bonded),
-                None => Ok(Law::Free),
-            };
-        }
-        let [friction, r_c, r_s, s_c, s_s] = params.map(|(key, v)| {
-            v.ok_or_else(|| (key.to_string(), "is required with law = \"contact\"".into()))
-        });
-        let params = ContactParams {
-            friction: friction?,
-            r_c: r_c?,
-            r_s: r_s?,
-            s_c: s_c?,
-            s_s: s_s?,
+        let cohesive = [
+            ("strength", self.strength),
+            ("critical_separation", self.critical_separation),
+        ];
+        let name = match self.law {
+            LawName::Bonded => "bonded",
+            LawName::Free => "free",
+            LawName::Contact => "contact",
+            LawName::XuNeedleman => "xu_needleman",
         };
-        params
-            .validate()
-            .map_err(|e| (e.key.to_string(), e.reason))?;
-        Ok(Law::Contact(params))
+        let unused = |keys: &[(&str, Option<f64>)]| match keys.iter().find(|(_, v)| v.is_some()) {
+            Some((key, _)) => Err((
+                key.to_string(),
+                format!("is not a parameter of law = \"{name}\""),
+            )),
+            None => Ok(()),
+        };
+        let required = |(key, v): (&str, Option<f64>)| {
+            v.ok_or_else(|| {
+                (
+                    key.to_string(),
+                    format!("is required with law = \"{name}\""),
+                )
+            })
+        };
+        let invalid = |e: sdg_solver::interface::LawError| (e.key.to_string(), e.reason);
+        match self.law {
+            LawName::Bonded | LawName::Free => {
+                unused(&contact)?;
+                unused(&cohesive)?;
+                Ok(if self.law == LawName::Bonded {
+                    Law::Bonded
+                } else {
+                    Law::Free
+                })
+            }
+            LawName::Contact => {
+                unused(&cohesive)?;
+                let [friction, r_c, r_s, s_c, s_s] = contact.map(required);
+                let params = ContactParams {
+                    friction: friction?,
+                    r_c: r_c?,
+                    r_s: r_s?,
+                    s_c: s_c?,
+                    s_s: s_s?,
+                };
+                params.validate().map_err(invalid)?;
+                Ok(Law::Contact(params))
+            }
+            LawName::XuNeedleman => {
+                let [strength, critical_separation] = cohesive.map(required);
+                let (strength, critical_separation) = (strength?, critical_separation?);
+                let default = CohesiveParams::default_contact(strength, critical_separation);
+                let params = CohesiveParams {
+                    strength,
+                    critical_separation,
+                    contact: ContactParams {
+                        friction: self.friction.unwrap_or(default.friction),
+                        r_c: self.r_c.unwrap_or(default.r_c),
+                        r_s: self.r_s.unwrap_or(default.r_s),
+                        s_c: self.s_c.unwrap_or(default.s_c),
+                        s_s: self.s_s.unwrap_or(default.s_s),
+                    },
+                };
+                params.validate().map_err(invalid)?;
+                Ok(Law::XuNeedleman(params))
+            }
+        }
     }
 }
 

@@ -22,7 +22,7 @@ pub use material::{MaterialConfig, PlaneName};
 pub(crate) use mesh::rectangle_key;
 pub use mesh::{DiagonalName, MeshConfig, MeshKind, SegmentConfig};
 pub use settings::{
-    AdaptConfig, OutputConfig, PitchConfig, SchedulerConfig, SolverConfig, TimeConfig,
+    AdaptConfig, OutputConfig, PitchConfig, SchedulerConfig, SolverConfig, TimeConfig, ZoneConfig,
 };
 
 use overrides::apply_override;

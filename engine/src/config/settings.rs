@@ -137,6 +137,25 @@ pub struct AdaptConfig {
     /// Edges longer than this, m, are split before the first tent. Default: no limit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_edge: Option<f64>,
+    /// Zones with a finer `max_edge` (`[[adapt.zone]]`): refined before the first tent and
+    /// never coarsened beyond it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub zone: Vec<ZoneConfig>,
+}
+
+/// `[[adapt.zone]]`: the points within `radius` of the segment `from`-`to` keep edges no longer
+/// than `max_edge`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ZoneConfig {
+    /// One end of the segment `[x, y]`, m.
+    pub from: [f64; 2],
+    /// The other end `[x, y]`, m (may equal `from`: a disc).
+    pub to: [f64; 2],
+    /// Distance from the segment, m (>= 0).
+    pub radius: f64,
+    /// Longest edge in the zone, m (> 0).
+    pub max_edge: f64,
 }
 
 fn default_tol() -> f64 {
@@ -155,6 +174,7 @@ impl Default for AdaptConfig {
             coarsen_ratio: default_coarsen_ratio(),
             min_edge: None,
             max_edge: None,
+            zone: Vec::new(),
         }
     }
 }

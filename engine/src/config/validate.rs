@@ -1,6 +1,6 @@
 //! Load-time validation: the checks of values that the schema's types cannot express.
 
-use super::{BoundaryKind, Config, LawName, MeshKind, PlaneName, WaveName, rectangle_key};
+use super::{BoundaryKind, Config, MeshKind, PlaneName, WaveName, rectangle_key};
 
 impl Config {
     /// Checks values that the schema's types cannot: returns `(key, reason)`.
@@ -92,6 +92,33 @@ impl Config {
                 return fail(
                     "max_edge",
                     format!("must be at least twice adapt.min_edge ({lo} m), got {hi} m"),
+                );
+            }
+        }
+        for (i, z) in a.zone.iter().enumerate() {
+            let key = |k: &str| format!("zone[{i}].{k}");
+            if !z.from.iter().chain(&z.to).all(|x| x.is_finite()) {
+                return fail(&key("from"), "the segment's ends must be finite".into());
+            }
+            if !(z.radius.is_finite() && z.radius >= 0.0) {
+                return fail(
+                    &key("radius"),
+                    format!("must be a length >= 0 m, got {}", z.radius),
+                );
+            }
+            if !(z.max_edge.is_finite() && z.max_edge > 0.0) {
+                return fail(
+                    &key("max_edge"),
+                    format!("must be a positive length in m, got {}", z.max_edge),
+                );
+            }
+            if let Some(lo) = a.min_edge.filter(|&lo| 2.0 * lo > z.max_edge) {
+                return fail(
+                    &key("max_edge"),
+                    format!(
+                        "must be at least twice adapt.min_edge ({lo} m), got {} m",
+                        z.max_edge
+                    ),
                 );
             }
         }
@@ -239,10 +266,10 @@ impl Config {
                 }
                 seen.push(tag);
             }
-            if entry.law == LawName::Contact && self.material.plane == PlaneName::Antiplane {
+            if entry.law.is_in_plane_only() && self.material.plane == PlaneName::Antiplane {
                 return Err((
                     key("law"),
-                    "\"contact\" needs a normal direction, which anti-plane shear \
+                    "contact and cohesive laws need a normal direction, which anti-plane shear \
                      (material.plane = \"antiplane\") has not; use \"bonded\" or \"free\""
                         .into(),
                 ));
@@ -281,7 +308,7 @@ mod tests {
             (
                 "interface.1.r_c=0.0",
                 "interface[1].r_c",
-                "only used with law = \"contact\"",
+                "not a parameter of law = \"free\"",
             ),
             (
                 "interface.1.tags=[\"crack\"]",
@@ -315,6 +342,34 @@ mod tests {
         let missing = parse(&text.replace("s_s = 6e5\n", ""), &[]).unwrap_err();
         assert_eq!(missing.key.as_deref(), Some("interface[0].s_s"));
         assert!(missing.reason.contains("required with law = \"contact\""));
+        // Cohesive parameters: required, positive, and only on the cohesive law.
+        let cohesive = text.replacen(
+            "law = \"contact\"\nfriction = 0.25\nr_c = -1e-6\nr_s = 0.0\ns_c = 0.0\ns_s = 6e5\n",
+            "law = \"xu_needleman\"\nstrength = 324e6\ncritical_separation = 4e-7\n",
+            1,
+        );
+        assert!(parse(&cohesive, &[]).is_ok(), "{cohesive}");
+        for (set, key, words) in [
+            ("interface.0.strength=0.0", "interface[0].strength", "> 0"),
+            (
+                "interface.0.critical_separation=-4e-7",
+                "interface[0].critical_separation",
+                "> 0",
+            ),
+            ("interface.0.r_c=1e-9", "interface[0].r_c", "<= 0"),
+            (
+                "interface.1.strength=1e6",
+                "interface[1].strength",
+                "not a parameter of law = \"free\"",
+            ),
+        ] {
+            let e = parse(&cohesive, &[set]).unwrap_err();
+            assert_eq!(e.key.as_deref(), Some(key), "{set}");
+            assert!(e.reason.contains(words), "{set}: {}", e.reason);
+        }
+        let e = parse(&cohesive.replace("strength = 324e6\n", ""), &[]).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("interface[0].strength"));
+        assert!(e.reason.contains("required with law = \"xu_needleman\""));
         let typo = parse(&text.replace("to = [0.008", "too = [0.008"), &[]).unwrap_err();
         assert_eq!(typo.key.as_deref(), Some("mesh.interface[1].too"));
     }

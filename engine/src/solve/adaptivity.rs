@@ -43,7 +43,7 @@ impl Solve<'_> {
             .map(|&t| state.pitcher.budget(t))
             .fold(f64::INFINITY, f64::min);
         (t_mid - t_m >= 0.25 * budget
-            && long <= adapt.max_edge
+            && long <= adapt.max_edge_at(midpoint(mesh.vertex(ends[0]), mesh.vertex(ends[1])))
             && state.calm_around(m)
             && state.pitcher.may_coarsen(mesh, front, m, ends))
         .then_some((ends, t_m, t_mid))
@@ -168,7 +168,10 @@ impl Solve<'_> {
         at: [f64; 2],
         star: &[(TriangleId, [VertexId; 3])],
     ) -> Changed {
-        let adapt = self.adapt.expect("refinement only runs with adaptivity on");
+        let adapt = self
+            .adapt
+            .as_ref()
+            .expect("refinement only runs with adaptivity on");
         let mut refined = Refined::default();
         let unchanged = |state: &Frontier, t: TriangleId, corners: [VertexId; 3]| {
             state.mesh.triangles().get(t as usize) == Some(&corners)
@@ -215,8 +218,13 @@ impl Solve<'_> {
     }
 }
 
-/// Bisects every triangle whose refinement edge is longer than `adapt.max_edge`, on the flat
-/// initial front.
+/// The midpoint of `a` and `b`.
+fn midpoint(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
+}
+
+/// Bisects every triangle whose refinement edge is longer than `adapt.max_edge` (or a zone's at
+/// the edge's midpoint), on the flat initial front.
 pub(super) fn refine_to_max_edge(
     state: &mut Frontier,
     adapt: &Adapt,
@@ -225,7 +233,11 @@ pub(super) fn refine_to_max_edge(
     let mut refined = Refined::default();
     let mut t: TriangleId = 0;
     while (t as usize) < state.mesh.triangles().len() {
-        if refinement_edge_length(&state.mesh, t) <= adapt.max_edge {
+        let mesh = &state.mesh;
+        let e = mesh.triangle_edges(t)[mesh.refinement_edge(t)];
+        let [a, b] = mesh.edges()[e as usize].vertices.map(|v| mesh.vertex(v));
+        let limit = adapt.max_edge_at(midpoint(a, b));
+        if refinement_edge_length(mesh, t) <= limit {
             t += 1;
             continue;
         }
@@ -233,9 +245,9 @@ pub(super) fn refine_to_max_edge(
         state.refine(t, adapt.min_edge, max_star, &|_| 0.0, &mut refined);
         if state.mesh.triangles().len() == before {
             return Err(EngineError::Runtime(format!(
-                "adapt.max_edge = {} m cannot be reached: a vertex star would exceed {max_star} \
-                 triangles",
-                adapt.max_edge
+                "an edge of {limit} m (adapt.max_edge or a zone's) cannot be reached at \
+                 ({:e}, {:e}) m: a vertex star would exceed {max_star} triangles",
+                a[0], a[1]
             )));
         }
     }

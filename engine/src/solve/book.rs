@@ -5,7 +5,8 @@ use std::fmt::Write as _;
 
 use std::sync::atomic::Ordering;
 
-use sdg_mesh::TriangleId;
+use sdg_mesh::{TagId, TriangleId};
+use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, Geometry, evaluate};
 use sdg_solver::norms::front_energy;
 use sdg_solver::patch::{InterfaceSample, PatchReport};
@@ -100,6 +101,8 @@ pub(super) struct Book {
     pub(super) coarsenings: u64,
     /// Interface probe samples: `(probe index, sample)`.
     pub(super) samples: Vec<(usize, InterfaceSample)>,
+    /// Crack-tracking crossings of cohesive faces with the tag of their edge.
+    pub(super) crossings: Vec<(Option<TagId>, Crossing)>,
     pub(super) nonlinear_patches: u64,
     pub(super) newton_iterations: u64,
     pub(super) newton_max: usize,
@@ -135,6 +138,7 @@ impl Solve<'_> {
         book.totals.boundary_work += report.boundary_work;
         book.totals.interface_work += report.interface_work;
         book.totals.friction_dissipation += report.friction_dissipation;
+        book.totals.fracture_work += report.fracture_work;
         book.totals.dissipation += report.dissipation;
         if report.newton_iterations > 0 {
             book.nonlinear_patches += 1;
@@ -198,7 +202,7 @@ impl Solve<'_> {
             - totals.interface_work;
         let _ = writeln!(
             book.history,
-            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
             state.front.min_time(),
             book.patches,
             rho * e.total,
@@ -208,6 +212,7 @@ impl Solve<'_> {
             rho * totals.dissipation,
             rho * totals.interface_work,
             rho * totals.friction_dissipation,
+            rho * totals.fracture_work,
             rho * balance
         );
     }

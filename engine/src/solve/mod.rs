@@ -13,8 +13,9 @@ use parking_lot::Mutex;
 
 use std::sync::atomic::AtomicU64;
 
-use sdg_mesh::{Front, Pitcher, Tent, TriangleId};
+use sdg_mesh::{Front, Pitcher, TagId, Tent, TriangleId};
 use sdg_scheduler::{Changed, Events, VertexId, Work};
+use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::norms::{front_energy, initial_energy, slice_errors};
 use sdg_solver::patch::{Initial, InterfaceSample, Newton, PatchReport, PatchSolver};
@@ -31,11 +32,13 @@ use crate::snapshot::Snapshots;
 
 mod adaptivity;
 mod book;
+mod crack_output;
 mod interface_output;
 mod summary;
 
 use adaptivity::refine_to_max_edge;
 use book::{Book, Milestone, Milestones};
+pub use crack_output::CrackSummary;
 use summary::state_hash;
 pub use summary::{EnergySummary, ErrorSummary, InterfaceSummary, RunSummary};
 
@@ -86,13 +89,15 @@ impl Solve<'_> {
 /// What one tent hands to the bookkeeping.
 #[derive(Debug)]
 enum Outcome {
-    /// The patch is stored and the vertex advanced; `samples` are the interface probes on it.
+    /// The patch is stored and the vertex advanced; `samples` are the interface probes on it,
+    /// `crossings` its cohesive faces' crack-tracking crossings with their edge's tag.
     Accepted {
         t_old: f64,
         t_new: f64,
         report: PatchReport,
         samples: Vec<(usize, InterfaceSample)>,
         cuts: Vec<interface_output::Cut>,
+        crossings: Vec<(Option<TagId>, Crossing)>,
     },
     /// The indicator rejected the patch: nothing advanced; these star triangles (with their
     /// corners, to notice a change) are to be bisected.
@@ -201,6 +206,11 @@ impl<'a> Work<'a> for Solve<'a> {
                 self.problem.system.c_ref(),
                 solver,
             ),
+            crossings: solver
+                .crack_crossings()
+                .iter()
+                .map(|c| (mesh.edges()[c.edge as usize].tag, *c))
+                .collect(),
         };
         Ok((t_new, outcome))
     }
@@ -219,10 +229,12 @@ impl<'a> Work<'a> for Solve<'a> {
                 report,
                 samples,
                 cuts,
+                crossings,
             } => {
-                if !samples.is_empty() || !cuts.is_empty() {
+                if !samples.is_empty() || !cuts.is_empty() || !crossings.is_empty() {
                     let mut book = self.book.lock();
                     book.samples.extend(samples);
+                    book.crossings.extend(crossings);
                     for (time, xy, values) in cuts {
                         book.snapshots.add_interface_segment(time, xy, values);
                     }
@@ -357,6 +369,7 @@ pub fn solve_job(
             refinements: 0,
             coarsenings: 0,
             samples: Vec::new(),
+            crossings: Vec::new(),
             nonlinear_patches: 0,
             newton_iterations: 0,
             newton_max: 0,
@@ -374,7 +387,7 @@ pub fn solve_job(
             passed: Vec::new(),
             history: String::from(
                 "time_s,patches,front_energy_j,kinetic_j,strain_j,boundary_work_j,dissipation_j,\
-                 interface_work_j,friction_dissipation_j,balance_residual_j\n",
+                 interface_work_j,friction_dissipation_j,fracture_energy_j,balance_residual_j\n",
             ),
             progress: Progress::new(options.progress, state.mesh.vertices().len() as f64 * t_end),
             phi: vec![0.0; basis.len()],
@@ -436,6 +449,7 @@ pub fn solve_job(
         dissipation,
         interface_work,
         friction_dissipation: rho * book.totals.friction_dissipation,
+        fracture_energy: rho * book.totals.fracture_work,
         balance_residual_rel: (initial_j + work - final_j - dissipation - interface_work)
             / (initial_j + work.abs()).max(f64::MIN_POSITIVE),
     };
@@ -444,6 +458,21 @@ pub fn solve_job(
         newton_iterations_mean: book.newton_iterations as f64
             / book.nonlinear_patches.max(1) as f64,
         newton_iterations_max: book.newton_max,
+    };
+    let (crack_csv, crack) = if problem.interfaces.any_cohesive() {
+        let names = mesh.tag_names();
+        let crossings: Vec<_> = book
+            .crossings
+            .iter()
+            .map(|(tag, c)| {
+                let name = tag.map_or("untagged", |t| names[t as usize].as_str());
+                (name.to_string(), *c)
+            })
+            .collect();
+        let (csv, summary) = crack_output::write(&crossings, problem.material.c_r());
+        (Some(csv), Some(summary))
+    } else {
+        (None, None)
     };
     let error = problem.exact.as_ref().map(|w| {
         let e = slice_errors(mesh, solution, &basis, system, t_end, w);
@@ -476,6 +505,7 @@ pub fn solve_job(
         threads: scheduler.threads,
         energy,
         interface,
+        crack,
         error,
         snapshots: book.snapshots.written().to_vec(),
         refinements: book.refinements,
@@ -487,6 +517,9 @@ pub fn solve_job(
     };
     write_atomic(&dir, "history.csv", book.history.as_bytes())?;
     solve.write_probes(&dir, &mut book)?;
+    if let Some(csv) = crack_csv {
+        write_atomic(&dir, "crack_tips.csv", csv.as_bytes())?;
+    }
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;
     Ok((summary, dir))

@@ -25,8 +25,12 @@ pub struct EnergySummary {
     /// Work absorbed by interfaces (contact, free): the power their targets take out of the
     /// elements on both sides, integrated.
     pub interface_work: f64,
-    /// Part of `interface_work` done by tangential tractions on tangential velocity jumps.
+    /// Part of `interface_work` done by tangential tractions on tangential velocity jumps of
+    /// contact interfaces.
     pub friction_dissipation: f64,
+    /// Part of `interface_work` done on cohesive interfaces: the work of the cohesive
+    /// tractions, fracture energy.
+    pub fracture_energy: f64,
     /// `(initial + boundary_work - final - dissipation - interface_work) /
     /// (initial + |boundary_work|)`.
     pub balance_residual_rel: f64,
@@ -95,6 +99,9 @@ pub struct RunSummary {
     pub energy: EnergySummary,
     /// Newton statistics of patches with contact faces.
     pub interface: InterfaceSummary,
+    /// Crack tips of cohesive interfaces (runs with a cohesive law).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crack: Option<super::crack_output::CrackSummary>,
     /// Errors against `[exact]`, when configured.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<ErrorSummary>,

@@ -1,20 +1,23 @@
-//! The nonlinear faces of a patch: vertical faces above interface edges with a contact law.
+//! The nonlinear faces of a patch: vertical faces above interface edges with a contact or
+//! cohesive law.
 //!
 //! A patch with such faces solves `K Q + N(Q) = b` by Newton iterations, where `K Q = b` is the
-//! linear patch system with the contact faces bonded, and `N(Q)` gathers
-//! `int_F phi . (F*(q_a, q_b, delta) - F_bonded(q_a, q_b))` of the contact faces: how far the law's
-//! target flux from the two sides' traces and the normal separation `delta` on the face departs
-//! from the bonded one. The iterations start from the bonded solution, which a face in stick
-//! keeps. `delta` is itself the solution of the face's upwind DG in time
-//! (see [`crate::face`]), a nonlinear function of the traces (the law's area fractions depend on
-//! it); each iteration solves it exactly for the current traces (inner Newton on the face), and
-//! the Jacobian carries its dependence on the traces through the face system's implicit
-//! derivative, so the outer iterations converge quadratically. The Jacobian keeps the ring
-//! structure: a contact face couples only the two elements beside it.
+//! linear patch system with the nonlinear faces bonded, and `N(Q)` gathers
+//! `int_F phi . (F*(q_a, q_b, sep) - F_bonded(q_a, q_b))` of those faces: how far the law's
+//! target flux from the two sides' traces and the separation `sep` (normal, slip) on the face
+//! departs from the bonded one. The iterations start from the bonded solution, which a face in
+//! stick keeps. `sep` is itself the solution of the face's upwind DG in time
+//! (see [`crate::face`]), a nonlinear function of the traces (the law's area fractions and
+//! cohesive tractions depend on it); each iteration solves it exactly for the current traces
+//! (inner Newton on the face, both components together), and the Jacobian carries its
+//! dependence on the traces through the face system's implicit derivative, so the outer
+//! iterations converge quadratically. The Jacobian keeps the ring structure: a nonlinear face
+//! couples only the two elements beside it.
 
 use sdg_mesh::EdgeId;
 
 use crate::basis::Basis;
+use crate::crack::{self, Crossing, Level, SAMPLES};
 use crate::element::{FrontSolution, Geometry, SpacePoint};
 use crate::face::{FaceBasis, FaceGeometry, FaceState, MAX_FACE_BASIS, solve_dense};
 use crate::interface::{Contact, Targets, characteristics};
@@ -69,13 +72,16 @@ pub(super) struct ContactFace {
     psi_tau: Vec<f64>,
     phi_a: Vec<f64>,
     phi_b: Vec<f64>,
-    /// The face system's constant part: `int psi_k dpsi_l/dtau + int_bottom L psi_k psi_l`, and
-    /// the bottom edge's inflow of `delta` and of the slip.
+    /// The face system's constant part per component: `int psi_k dpsi_l/dtau +
+    /// int_bottom L psi_k psi_l`, and the bottom edge's inflow of the separation (normal
+    /// components, then slip components).
     m0: Vec<f64>,
-    inflow_delta: Vec<f64>,
-    inflow_slip: Vec<f64>,
-    delta: [f64; MAX_FACE_BASIS],
-    slip: [f64; MAX_FACE_BASIS],
+    inflow: Vec<f64>,
+    /// Coefficients of the separation: normal `delta`, then slip.
+    sep: [f64; 2 * MAX_FACE_BASIS],
+    /// The normal separation inherited from the face below on the crack probe lines
+    /// (cohesive faces).
+    below: [f64; SAMPLES],
     /// Per quadrature point: arriving characteristics and both sides' targets.
     w_a: Vec<[f64; 2]>,
     w_b: Vec<[f64; 2]>,
@@ -84,33 +90,76 @@ pub(super) struct ContactFace {
 }
 
 impl ContactFace {
-    /// `-G(d) = inflow - M0 d + int psi rate(delta) / c` of the face's separation system at the
-    /// coefficients `d` into `g`, and with `jacobian` its derivative `M0 - int psi psi
-    /// (d rate / d delta) / c` (row-major); returns `|G|`.
+    /// The face's interface state for a face basis of `nf` functions.
+    fn state(&self, nf: usize) -> FaceState {
+        let mut delta = [0.0; MAX_FACE_BASIS];
+        let mut slip = [0.0; MAX_FACE_BASIS];
+        delta[..nf].copy_from_slice(&self.sep[..nf]);
+        slip[..nf].copy_from_slice(&self.sep[nf..2 * nf]);
+        FaceState {
+            geometry: self.geometry,
+            delta,
+            slip,
+        }
+    }
+
+    /// The separation (normal, slip; m) at quadrature point `p` for coefficients `d`.
+    fn separation_at(&self, nf: usize, p: usize, d: &[f64]) -> [f64; 2] {
+        let psi = &self.psi[p * nf..(p + 1) * nf];
+        [0, 1].map(|c| psi.iter().zip(&d[c * nf..]).map(|(a, b)| a * b).sum())
+    }
+
+    /// `-G(d) = inflow - M0 d + int psi rate(sep) / c` of the face's separation system (both
+    /// components) at the coefficients `d` into `g` (length `2 nf`), and with `jacobian` its
+    /// derivative `M0 - int psi psi (d rate / d sep) / c` (row-major, `2 nf` square); returns
+    /// `|G|`.
     fn separation_residual(
         &self,
         c: f64,
-        d: &[f64; MAX_FACE_BASIS],
+        d: &[f64; 2 * MAX_FACE_BASIS],
         g: &mut [f64],
         mut jacobian: Option<&mut [f64]>,
     ) -> f64 {
-        let nf = g.len();
-        for (k, gk) in g.iter_mut().enumerate() {
-            *gk = self.inflow_delta[k] - (0..nf).map(|l| self.m0[k * nf + l] * d[l]).sum::<f64>();
+        let n2 = g.len();
+        let nf = n2 / 2;
+        for (row, gk) in g.iter_mut().enumerate() {
+            let (comp, k) = (row / nf, row % nf);
+            let md: f64 = (0..nf)
+                .map(|l| self.m0[k * nf + l] * d[comp * nf + l])
+                .sum();
+            *gk = self.inflow[row] - md;
         }
         if let Some(jac) = jacobian.as_deref_mut() {
-            jac.copy_from_slice(&self.m0[..nf * nf]);
+            jac.fill(0.0);
+            for comp in 0..2 {
+                for k in 0..nf {
+                    let row = &mut jac[(comp * nf + k) * n2 + comp * nf..][..nf];
+                    row.copy_from_slice(&self.m0[k * nf..(k + 1) * nf]);
+                }
+            }
         }
         for p in 0..self.weights.len() {
             let psi = &self.psi[p * nf..(p + 1) * nf];
-            let delta: f64 = psi.iter().zip(d).map(|(a, b)| a * b).sum();
-            let t = self.law.targets(self.w_a[p], self.w_b[p], delta);
+            let t = self
+                .law
+                .targets(self.w_a[p], self.w_b[p], self.separation_at(nf, p, d));
             let w = self.weights[p] / c;
-            for k in 0..nf {
-                g[k] += w * psi[k] * t.rate;
-                if let Some(jac) = jacobian.as_deref_mut() {
-                    for l in 0..nf {
-                        jac[k * nf + l] -= w * psi[k] * psi[l] * t.rate_delta;
+            for comp in 0..2 {
+                for k in 0..nf {
+                    g[comp * nf + k] += w * psi[k] * t.rate[comp];
+                }
+            }
+            if let Some(jac) = jacobian.as_deref_mut() {
+                for (comp, e) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                    let r = w * t.rate_sep[comp][e];
+                    if r == 0.0 {
+                        continue;
+                    }
+                    for k in 0..nf {
+                        let row = &mut jac[(comp * nf + k) * n2 + e * nf..][..nf];
+                        for (x, &pl) in row.iter_mut().zip(psi) {
+                            *x -= r * psi[k] * pl;
+                        }
                     }
                 }
             }
@@ -133,6 +182,7 @@ pub(super) struct ContactFaces {
     coupling: [Vec<f64>; 2],
     outer: Vec<f64>,
     block: Vec<f64>,
+    crossings: Vec<Crossing>,
 }
 
 /// Linear maps of one side's state to a face frame: rows `v[0], v[1], s[0], s[1]`.
@@ -225,6 +275,7 @@ impl ContactFaces {
                 k: 0.0,
                 r: [0.0; 2],
                 s: [0.0; 2],
+                cohesive: None,
             },
             normal: [1.0, 0.0],
             geometry: FaceGeometry::default(),
@@ -234,10 +285,9 @@ impl ContactFaces {
             phi_a: vec![0.0; points * n],
             phi_b: vec![0.0; points * n],
             m0: vec![0.0; nf * nf],
-            inflow_delta: vec![0.0; nf],
-            inflow_slip: vec![0.0; nf],
-            delta: [0.0; MAX_FACE_BASIS],
-            slip: [0.0; MAX_FACE_BASIS],
+            inflow: vec![0.0; 2 * nf],
+            sep: [0.0; 2 * MAX_FACE_BASIS],
+            below: [0.0; SAMPLES],
             w_a: vec![[0.0; 2]; points],
             w_b: vec![[0.0; 2]; points],
             targets_a: vec![Targets::default(); points],
@@ -249,29 +299,26 @@ impl ContactFaces {
             count: 0,
             psi: vec![0.0; nf],
             grad: vec![[0.0; 2]; nf],
-            jacobian: vec![0.0; nf * nf],
-            columns: vec![0.0; nf * 2 * m],
-            coupling: [vec![0.0; m * nf], vec![0.0; m * nf]],
+            jacobian: vec![0.0; 4 * nf * nf],
+            columns: vec![0.0; 2 * nf * (2 * m).max(2)],
+            coupling: [vec![0.0; 2 * m * nf], vec![0.0; 2 * m * nf]],
             outer: vec![0.0; n * n],
             block: vec![0.0; m * m],
+            crossings: Vec::with_capacity(2 * SAMPLES * max_faces),
             basis,
         }
     }
 
     /// `(delta, slip)` (m) of face `f` at the point `x` of its plane, after [`Self::finish`].
     pub(super) fn state_at(&mut self, f: usize, x: SpacePoint) -> (f64, f64) {
-        let face = &self.faces[f];
-        let state = FaceState {
-            geometry: face.geometry,
-            delta: face.delta,
-            slip: face.slip,
-        };
+        let state = self.faces[f].state(self.basis.len());
         state.evaluate(&self.basis, x, &mut self.psi)
     }
 
     /// Forgets the faces of the previous patch.
     pub(super) fn clear(&mut self) {
         self.count = 0;
+        self.crossings.clear();
     }
 
     /// The faces of the current patch.
@@ -338,8 +385,7 @@ impl ContactFaces {
                 }
             }
         }
-        face.inflow_delta.fill(0.0);
-        face.inflow_slip.fill(0.0);
+        face.inflow.fill(0.0);
         let below = solution.face(edge as usize);
         let [p0, p1, _] = corners;
         let length = face.geometry.length();
@@ -359,12 +405,26 @@ impl ContactFaces {
                 for l in 0..nf {
                     m0[k * nf + l] += w * psi[k] * psi[l];
                 }
-                face.inflow_delta[k] += w * psi[k] * delta;
-                face.inflow_slip[k] += w * psi[k] * slip;
+                face.inflow[k] += w * psi[k] * delta;
+                face.inflow[nf + k] += w * psi[k] * slip;
             }
         }
-        face.delta = [0.0; MAX_FACE_BASIS];
-        face.slip = [0.0; MAX_FACE_BASIS];
+        if law.cohesive.is_some() {
+            for (k, b) in face.below.iter_mut().enumerate() {
+                let f = crack::sample_fraction(k);
+                let x = [0, 1, 2].map(|i| p0[i] + f * (p1[i] - p0[i]));
+                *b = below.as_ref().map_or(0.0, |s| s.evaluate(basis, x, psi).0);
+            }
+        }
+        // First guess: the inherited separation carried up the face (no rate), `M0 d = inflow`.
+        let (guess, matrix) = (&mut self.columns[..2 * nf], &mut self.jacobian[..nf * nf]);
+        guess.copy_from_slice(&face.inflow);
+        matrix.copy_from_slice(m0);
+        if !solve_dense(matrix, nf, guess, 2) {
+            guess.fill(0.0);
+        }
+        face.sep = [0.0; 2 * MAX_FACE_BASIS];
+        face.sep[..2 * nf].copy_from_slice(guess);
         index
     }
 
@@ -425,24 +485,33 @@ impl ContactFaces {
             face.w_a[p] = w_a;
             face.w_b[p] = w_b;
         }
-        // Inner Newton on the face, G(d) = M0 d - inflow - int psi rate(delta) / c = 0, with a
+        // Inner Newton on the face, G(d) = M0 d - inflow - int psi rate(sep) / c = 0, with a
         // backtracking line search on |G|: the area fractions saturate (flat rate beyond r_c and
         // r_s), where plain Newton steps can cycle.
-        let scale = face.law.r[0].abs().max(face.law.r[1].abs());
-        let (g, rest) = self.columns.split_at_mut(nf);
-        let trial_g = &mut rest[..nf];
-        let jac = &mut self.jacobian[..nf * nf];
-        let mut norm = face.separation_residual(c, &face.delta, g, Some(jac));
+        let scale = face.law.separation_scale();
+        let n2 = 2 * nf;
+        let (g, rest) = self.columns.split_at_mut(n2);
+        let trial_g = &mut rest[..n2];
+        let jac = &mut self.jacobian[..n2 * n2];
+        let mut norm = face.separation_residual(c, &face.sep, g, Some(jac));
         let mut converged = false;
         let mut previous = f64::INFINITY;
         for _ in 0..60 {
-            if !solve_dense(jac, nf, g, 1) {
+            if !solve_dense(jac, n2, g, 1) {
                 return false;
             }
+            // Trust region: steps of at most half the law's scale or of the separation so far
+            // (the cohesive traction is not monotone; a long first step can land beyond its
+            // peak, in another basin of |G|).
+            let largest = g.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+            let limit = 0.5 * face.sep.iter().fold(scale, |m, d| m.max(d.abs()));
+            if largest > limit {
+                g.iter_mut().for_each(|s| *s *= limit / largest);
+            }
             let mut alpha = 1.0;
-            let mut trial = face.delta;
+            let mut trial = face.sep;
             loop {
-                for ((t, d), s) in trial.iter_mut().zip(&face.delta).zip(g.iter()) {
+                for ((t, d), s) in trial.iter_mut().zip(&face.sep).zip(g.iter()) {
                     *t = d + alpha * s;
                 }
                 let trial_norm = face.separation_residual(c, &trial, trial_g, None);
@@ -452,12 +521,12 @@ impl ContactFaces {
                 alpha *= 0.5;
             }
             let step = alpha * g.iter().fold(0.0f64, |m, s| m.max(s.abs()));
-            face.delta = trial;
-            let size = face.delta.iter().fold(scale, |m, d| m.max(d.abs()));
+            face.sep = trial;
+            let size = face.sep.iter().fold(scale, |m, d| m.max(d.abs()));
             if !step.is_finite() {
                 return false;
             }
-            norm = face.separation_residual(c, &face.delta, g, Some(jac));
+            norm = face.separation_residual(c, &face.sep, g, Some(jac));
             // Converged, or stalled at round-off (the step no longer halves).
             if step <= 1e-12 * size || (step <= 1e-9 * size && step >= 0.5 * previous) {
                 converged = true;
@@ -466,10 +535,9 @@ impl ContactFaces {
             previous = step;
         }
         for p in 0..points {
-            let psi = &face.psi[p * nf..(p + 1) * nf];
-            let delta: f64 = psi.iter().zip(&face.delta).map(|(a, b)| a * b).sum();
-            face.targets_a[p] = face.law.targets(face.w_a[p], face.w_b[p], delta);
-            face.targets_b[p] = face.law.targets(face.w_b[p], face.w_a[p], delta);
+            let sep = face.separation_at(nf, p, &face.sep);
+            face.targets_a[p] = face.law.targets(face.w_a[p], face.w_b[p], sep);
+            face.targets_b[p] = face.law.targets(face.w_b[p], face.w_a[p], sep);
         }
         converged
     }
@@ -506,6 +574,7 @@ impl ContactFaces {
         let fields = system.fields();
         let c = system.c_ref();
         let nf = self.basis.len();
+        let n2 = 2 * nf;
         let face = &self.faces[f];
         let n = face.phi_a.len() / face.weights.len();
         let m = n * fields;
@@ -524,10 +593,16 @@ impl ContactFaces {
         let [coupling_a, coupling_b] = &mut self.coupling;
         coupling_a.fill(0.0);
         coupling_b.fill(0.0);
-        let columns = &mut self.columns[..nf * 2 * m];
+        let columns = &mut self.columns[..n2 * 2 * m];
         columns.fill(0.0);
-        let jac = &mut self.jacobian[..nf * nf];
-        jac.copy_from_slice(&face.m0[..nf * nf]);
+        let jac = &mut self.jacobian[..n2 * n2];
+        jac.fill(0.0);
+        for comp in 0..2 {
+            for k in 0..nf {
+                jac[(comp * nf + k) * n2 + comp * nf..][..nf]
+                    .copy_from_slice(&face.m0[k * nf..(k + 1) * nf]);
+            }
+        }
         for p in 0..face.weights.len() {
             let w = face.weights[p];
             let (ta, tb) = (
@@ -558,51 +633,64 @@ impl ContactFaces {
                     &j,
                 );
             }
-            // Dependence through delta: d flux / d delta per side, and the face system's
-            // derivative with respect to the traces.
+            // Dependence through the separation: d flux / d sep per side, and the face
+            // system's derivative with respect to the traces.
             for (coupling, flux, t, phi) in [
                 (&mut *coupling_a, &flux_a, ta, phi_a),
                 (&mut *coupling_b, &flux_b, tb, phi_b),
             ] {
-                let df: [f64; MAX_FIELDS] =
-                    std::array::from_fn(|i| (0..4).map(|c| flux[c][i] * t.d_delta[c]).sum());
-                for (k, &ph) in phi.iter().enumerate() {
-                    for (i, &d) in df[..fields].iter().enumerate() {
-                        let row = &mut coupling[(k * fields + i) * nf..][..nf];
-                        for (r, &ps) in row.iter_mut().zip(psi) {
-                            *r += w * ph * d * ps;
+                for e in 0..2 {
+                    let df: [f64; MAX_FIELDS] =
+                        std::array::from_fn(|i| (0..4).map(|c| flux[c][i] * t.d_sep[c][e]).sum());
+                    for (k, &ph) in phi.iter().enumerate() {
+                        for (i, &d) in df[..fields].iter().enumerate() {
+                            let row = &mut coupling[(k * fields + i) * n2 + e * nf..][..nf];
+                            for (r, &ps) in row.iter_mut().zip(psi) {
+                                *r += w * ph * d * ps;
+                            }
                         }
                     }
                 }
             }
-            let drate: [[f64; MAX_FIELDS]; 2] = [(&ta.rate_wa, &dwa), (&ta.rate_wb, &dwb)]
-                .map(|(r, dw)| std::array::from_fn(|j| r[0] * dw[0][j] + r[1] * dw[1][j]));
-            for (side, phi) in [phi_a, phi_b].into_iter().enumerate() {
-                for (k, &ps) in psi.iter().enumerate() {
-                    for (l, &ph) in phi.iter().enumerate() {
-                        for (i, &dr) in drate[side][..fields].iter().enumerate() {
-                            columns[(side * m + l * fields + i) * nf + k] += w / c * ps * ph * dr;
+            for comp in 0..2 {
+                let drate: [[f64; MAX_FIELDS]; 2] =
+                    [(&ta.rate_wa[comp], &dwa), (&ta.rate_wb[comp], &dwb)]
+                        .map(|(r, dw)| std::array::from_fn(|j| r[0] * dw[0][j] + r[1] * dw[1][j]));
+                for (side, phi) in [phi_a, phi_b].into_iter().enumerate() {
+                    for (k, &ps) in psi.iter().enumerate() {
+                        for (l, &ph) in phi.iter().enumerate() {
+                            for (i, &dr) in drate[side][..fields].iter().enumerate() {
+                                columns[(side * m + l * fields + i) * n2 + comp * nf + k] +=
+                                    w / c * ps * ph * dr;
+                            }
                         }
                     }
                 }
-            }
-            for k in 0..nf {
-                for l in 0..nf {
-                    jac[k * nf + l] -= w / c * psi[k] * psi[l] * ta.rate_delta;
+                for e in 0..2 {
+                    let r = w / c * ta.rate_sep[comp][e];
+                    if r == 0.0 {
+                        continue;
+                    }
+                    for k in 0..nf {
+                        let row = &mut jac[(comp * nf + k) * n2 + e * nf..][..nf];
+                        for (x, &pl) in row.iter_mut().zip(psi) {
+                            *x -= r * psi[k] * pl;
+                        }
+                    }
                 }
             }
         }
-        // d delta / d q = J^-1 (int psi (d rate / d q) / c), one column per side unknown.
-        if !solve_dense(jac, nf, columns, 2 * m) {
+        // d sep / d q = J^-1 (int psi (d rate / d q) / c), one column per side unknown.
+        if !solve_dense(jac, n2, columns, 2 * m) {
             return;
         }
         for (row_side, coupling) in [(a, &*coupling_a), (b, &*coupling_b)] {
             for (col_side, offset) in [(a, 0), (b, m)] {
                 let block = &mut self.block[..m * m];
                 for col in 0..m {
-                    let dd = &columns[(offset + col) * nf..][..nf];
+                    let dd = &columns[(offset + col) * n2..][..n2];
                     for row in 0..m {
-                        block[col * m + row] = coupling[row * nf..(row + 1) * nf]
+                        block[col * m + row] = coupling[row * n2..(row + 1) * n2]
                             .iter()
                             .zip(dd)
                             .map(|(x, y)| x * y)
@@ -620,36 +708,40 @@ impl ContactFaces {
         }
     }
 
-    /// Solves each face's slip for the converged targets and returns, per face, the edge and
-    /// the interface state to store on the front.
-    pub(super) fn finish(&mut self, system: &System) -> impl Iterator<Item = (EdgeId, FaceState)> {
-        let c = system.c_ref();
+    /// Finds the crack-tracking crossings of the last patch's cohesive faces (after the solve);
+    /// `c_ref` converts scaled time to s.
+    pub(super) fn find_crossings(&mut self, c_ref: f64) {
+        self.crossings.clear();
         let nf = self.basis.len();
-        for face in &mut self.faces[..self.count] {
-            let jac = &mut self.jacobian[..nf * nf];
-            jac.copy_from_slice(&face.m0[..nf * nf]);
-            let rhs = &mut self.columns[..nf];
-            rhs.copy_from_slice(&face.inflow_slip[..nf]);
-            for p in 0..face.weights.len() {
-                // Tangential velocity jump v*_b,t - v*_a,t in side a's frame (b's frame flips it).
-                let jump = -face.targets_b[p].star.v[1] - face.targets_a[p].star.v[1];
-                let w = face.weights[p] / c;
-                for (r, ps) in rhs.iter_mut().zip(&face.psi[p * nf..(p + 1) * nf]) {
-                    *r += w * ps * jump;
-                }
-            }
-            solve_dense(jac, nf, rhs, 1);
-            face.slip[..nf].copy_from_slice(rhs);
+        for face in &self.faces[..self.count] {
+            let Some(law) = face.law.cohesive else {
+                continue;
+            };
+            crack::find_crossings(
+                &face.state(nf),
+                &self.basis,
+                (face.edge, &face.below),
+                [
+                    (Level::Tip, law.delta_c),
+                    (Level::Trailing, law.trailing_separation()),
+                ],
+                c_ref,
+                &mut self.psi,
+                &mut self.crossings,
+            );
         }
-        self.faces[..self.count].iter().map(|face| {
-            (
-                face.edge,
-                FaceState {
-                    geometry: face.geometry,
-                    delta: face.delta,
-                    slip: face.slip,
-                },
-            )
-        })
+    }
+
+    /// The crossings found by [`Self::find_crossings`].
+    pub(super) fn crossings(&self) -> &[Crossing] {
+        &self.crossings
+    }
+
+    /// Per face of the last patch, the edge and the interface state to store on the front.
+    pub(super) fn finish(&self) -> impl Iterator<Item = (EdgeId, FaceState)> + '_ {
+        let nf = self.basis.len();
+        self.faces[..self.count]
+            .iter()
+            .map(move |face| (face.edge, face.state(nf)))
     }
 }

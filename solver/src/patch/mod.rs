@@ -23,6 +23,7 @@ use sdg_mesh::{EdgeId, Front, Mesh, TagId, Tent, TriangleId, VertexId};
 
 use crate::basis::Basis;
 use crate::boundary::{Boundary, Condition};
+use crate::crack::Crossing;
 use crate::element::{FrontSolution, Geometry, SpacePoint, evaluate};
 use crate::exact::PlaneWave;
 use crate::face::FaceState;
@@ -52,9 +53,13 @@ pub struct ElementReport {
     /// Energy taken out of the element by interface faces (minus their part of
     /// `vertical_work`): summed over both sides of a face, the work absorbed by the interface.
     pub interface_work: f64,
-    /// Part of `interface_work` done by tangential tractions on tangential velocity jumps:
-    /// friction.
+    /// Part of `interface_work` done by tangential tractions on tangential velocity jumps of
+    /// contact faces: friction.
     pub friction_dissipation: f64,
+    /// Part of `interface_work` done on cohesive faces: the work of separation spent so far
+    /// (fracture energy; for the reversible Xu-Needleman law, partly stored until the faces
+    /// separate fully).
+    pub fracture_work: f64,
     /// Numerical dissipation from the jumps against the targets: a sum of non-negative terms.
     pub dissipation: f64,
     /// Dissipation from the energy balance `energy_in - energy_out + vertical_work`; equal to
@@ -82,6 +87,8 @@ pub struct PatchReport {
     pub interface_work: f64,
     /// See [`ElementReport::friction_dissipation`].
     pub friction_dissipation: f64,
+    /// See [`ElementReport::fracture_work`].
+    pub fracture_work: f64,
     /// See [`ElementReport::dissipation`].
     pub dissipation: f64,
     /// Largest [`ElementReport::momentum_residual`] of its elements.
@@ -666,13 +673,15 @@ impl PatchSolver {
             report.boundary_work += r.boundary_work;
             report.interface_work += r.interface_work;
             report.friction_dissipation += r.friction_dissipation;
+            report.fracture_work += r.fracture_work;
             report.dissipation += r.dissipation;
             report.momentum_residual = report.momentum_residual.max(r.momentum_residual);
             self.reports[i] = r;
             self.displacement(i, initial);
         }
         self.faces.clear();
-        self.faces.extend(self.contact.finish(&self.system));
+        self.faces.extend(self.contact.finish());
+        self.contact.find_crossings(c);
         Ok(report)
     }
 
@@ -683,9 +692,10 @@ impl PatchSolver {
         for i in 0..self.used {
             for s in 0..self.slots[i].side_count {
                 let side = self.slots[i].sides[s];
-                let (Some(j), Law::Contact(params)) =
-                    (side.neighbour, self.interfaces.law(side.tag))
-                else {
+                let (Some(j), Some(law)) = (
+                    side.neighbour,
+                    Contact::of(&self.system, &self.interfaces.law(side.tag)),
+                ) else {
                     continue;
                 };
                 if j < i {
@@ -702,7 +712,7 @@ impl PatchSolver {
                     (i, j),
                     (&slot.geometry, &geometry_b),
                     side.edge,
-                    Contact::new(&self.system, &params),
+                    law,
                     corners,
                     &self.basis,
                     solution,
@@ -801,6 +811,12 @@ impl PatchSolver {
         }
     }
 
+    /// Where the last patch's cohesive faces crossed the crack-tracking levels
+    /// ([`crate::crack`]).
+    pub fn crack_crossings(&self) -> &[Crossing] {
+        self.contact.crossings()
+    }
+
     /// The interface faces of the last patch: per contact face, its edge and interface state.
     pub fn interface_faces(&self) -> &[(EdgeId, FaceState)] {
         &self.faces
@@ -856,7 +872,8 @@ impl PatchSolver {
             &self.system.frame(&qa, normal),
             &self.system.frame(&qb, normal),
         );
-        let (a, b) = (law.targets(w_a, w_b, delta), law.targets(w_b, w_a, delta));
+        let sep = [delta, slip];
+        let (a, b) = (law.targets(w_a, w_b, sep), law.targets(w_b, w_a, sep));
         let z_ref = self.system.z_ref();
         Some(InterfaceSample {
             time: point[2] / self.system.c_ref(),
@@ -957,7 +974,7 @@ impl PatchSolver {
                 let normal = [nrm[0], nrm[1]];
                 let a = system.frame(&own(x, phi), normal);
                 let star_trace = match (side.neighbour, law) {
-                    (Some(_), Some(Law::Contact(_))) => {
+                    (Some(_), Some(Law::Contact(_) | Law::XuNeedleman(_))) => {
                         contact.expect("contact faces are registered")[point].star
                     }
                     (Some(_), Some(Law::Free)) => {
@@ -989,9 +1006,13 @@ impl PatchSolver {
                 match law {
                     None => r.boundary_work += power,
                     Some(Law::Bonded) => {}
-                    Some(_) => {
+                    Some(law) => {
                         r.interface_work -= power;
-                        r.friction_dissipation -= w * star_trace.v[1] * star_trace.s[1];
+                        if law.is_cohesive() {
+                            r.fracture_work -= power;
+                        } else {
+                            r.friction_dissipation -= w * star_trace.v[1] * star_trace.s[1];
+                        }
                     }
                 }
                 r.dissipation += w * riemann::dissipation(system, &a, &star_trace);

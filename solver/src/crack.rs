@@ -1,0 +1,177 @@
+//! Crack-tip tracking on cohesive faces (seed 2.4.2): where and when the normal separation
+//! first reaches the nominal crack-tip level `delta_c`, and the trailing-edge level `delta_T` of
+//! the cohesive process zone (the separation beyond `delta_c` at which the traction has fallen to
+//! 1% of the strength).
+//!
+//! Each cohesive face is probed on [`SAMPLES`] vertical lines above its edge, at the fractions
+//! `(k + 1/2) / SAMPLES` of the edge, a set that does not depend on which end the tent's pole
+//! stands at, so the faces stacked over an edge by the tents at either end probe the same lines.
+//! A line crosses a level in a face when the separation the face inherits at its bottom (the
+//! previous face's top value, DG upwind in time) is below the level and the face's top value is
+//! not; the crossing time is the root on the face (its bottom when the upwind jump alone crossed).
+
+use sdg_mesh::EdgeId;
+
+use crate::face::{FaceBasis, FaceState};
+
+/// Vertical probe lines per face.
+pub const SAMPLES: usize = 4;
+
+/// The levels of the separation tracked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Level {
+    /// `delta = delta_c`: the nominal crack tip (the leading edge of the process zone).
+    Tip,
+    /// `delta = delta_T`: the trailing edge of the process zone.
+    Trailing,
+}
+
+/// A point of a cohesive interface where the normal separation reached a level.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crossing {
+    /// The edge.
+    pub edge: EdgeId,
+    /// The point, m.
+    pub point: [f64; 2],
+    /// The time, s.
+    pub time: f64,
+    /// Which level.
+    pub level: Level,
+}
+
+/// The edge fraction of probe line `k` (from either end).
+pub fn sample_fraction(k: usize) -> f64 {
+    (k as f64 + 0.5) / SAMPLES as f64
+}
+
+/// Adds to `out` the crossings of `levels` (m) on the face `state` over `edge`, for the inherited
+/// separations `below` at the probe lines; `c_ref` converts the face's scaled time (m) to s, and
+/// `psi` is scratch of the face basis length.
+pub fn find_crossings(
+    state: &FaceState,
+    basis: &FaceBasis,
+    (edge, below): (EdgeId, &[f64; SAMPLES]),
+    levels: [(Level, f64); 2],
+    c_ref: f64,
+    psi: &mut [f64],
+    out: &mut Vec<Crossing>,
+) {
+    let [p0, p1, p2] = state.geometry.corners();
+    for (k, &under) in below.iter().enumerate() {
+        let f = sample_fraction(k);
+        let lerp = |a: [f64; 3], b: [f64; 3]| [0, 1, 2].map(|i| a[i] + f * (b[i] - a[i]));
+        let (bottom, top) = (lerp(p0, p1), lerp(p2, p1));
+        let at =
+            |tau: f64, psi: &mut [f64]| state.evaluate(basis, [bottom[0], bottom[1], tau], psi).0;
+        let top_value = at(top[2], psi);
+        for (level, value) in levels {
+            if !(under < value && top_value >= value) {
+                continue;
+            }
+            // Bisection on the face's polynomial between the bottom and the top of the line.
+            let (mut lo, mut hi) = (bottom[2], top[2]);
+            if at(lo, psi) < value {
+                for _ in 0..60 {
+                    let mid = 0.5 * (lo + hi);
+                    if at(mid, psi) < value {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+            } else {
+                hi = lo;
+            }
+            out.push(Crossing {
+                edge,
+                point: [bottom[0], bottom[1]],
+                time: hi / c_ref,
+                level,
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::face::{FaceGeometry, MAX_FACE_BASIS};
+
+    /// A face over the edge from (0, 0) to (1, 0) with its pole at the origin, rising from
+    /// tau = 0 to 2 there; the far end at tau = 1.
+    fn face(delta: impl Fn([f64; 2]) -> f64) -> FaceState {
+        let geometry = FaceGeometry::new([[0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 0.0, 2.0]]);
+        // Linear separation in (xi, eta): interpolate the corner values.
+        let mut coefficients = [0.0; MAX_FACE_BASIS];
+        let c0 = delta([0.0, 0.0]);
+        coefficients[0] = c0;
+        coefficients[1] = delta([1.0, 0.0]) - c0;
+        coefficients[2] = delta([0.0, 1.0]) - c0;
+        FaceState {
+            geometry,
+            delta: coefficients,
+            slip: [0.0; MAX_FACE_BASIS],
+        }
+    }
+
+    #[test]
+    fn crossings_are_found_on_the_probe_lines_at_the_level() {
+        let basis = FaceBasis::new(1);
+        // delta = 3 eta (the pole direction): 0 at the bottom edge, 3 at the pole top.
+        let state = face(|x| 3.0 * x[1]);
+        let mut out = Vec::new();
+        let mut psi = vec![0.0; basis.len()];
+        let levels = [(Level::Tip, 1.0), (Level::Trailing, 2.5)];
+        find_crossings(
+            &state,
+            &basis,
+            (7, &[0.0; SAMPLES]),
+            levels,
+            1.0,
+            &mut psi,
+            &mut out,
+        );
+        for c in &out {
+            // Check against the face's own value at the reported point and time.
+            let value = state
+                .evaluate(&basis, [c.point[0], c.point[1], c.time], &mut psi)
+                .0;
+            let want = if c.level == Level::Tip { 1.0 } else { 2.5 };
+            assert!((value - want).abs() < 1e-12, "{c:?}: {value}");
+            assert_eq!(c.edge, 7);
+        }
+        // On the line at fraction f the top value is 3 (1 - f): 2.625, 1.875, 1.125, 0.375 for
+        // f = 1/8 ... 7/8; three lines reach 1, one reaches 2.5.
+        assert_eq!(out.iter().filter(|c| c.level == Level::Tip).count(), 3);
+        assert_eq!(out.iter().filter(|c| c.level == Level::Trailing).count(), 1);
+        // Already above the level below: no new crossing.
+        out.clear();
+        find_crossings(
+            &state,
+            &basis,
+            (7, &[1.5; SAMPLES]),
+            levels,
+            1.0,
+            &mut psi,
+            &mut out,
+        );
+        assert!(out.iter().all(|c| c.level != Level::Tip));
+        // An upwind jump across the level: the crossing is at the bottom of the line.
+        let state = face(|_| 1.2);
+        out.clear();
+        find_crossings(
+            &state,
+            &basis,
+            (7, &[0.5; SAMPLES]),
+            levels,
+            2.0,
+            &mut psi,
+            &mut out,
+        );
+        assert_eq!(out.len(), SAMPLES);
+        for (k, c) in out.iter().enumerate() {
+            let f = sample_fraction(k);
+            assert!((c.point[0] - f).abs() < 1e-15 && (c.time - f / 2.0).abs() < 1e-15);
+        }
+    }
+}
