@@ -243,6 +243,27 @@ fn invalid_interface_settings() {
             &["case.toml", words[0], words[1]],
         );
     }
+    // A cohesive law with a non-positive strength or critical separation.
+    let cohesive = format!("{CONFIG}{CRACKED}").replace(
+        "law = \"contact\"",
+        "law = \"xu_needleman\"\nstrength = 3.24e8\ncritical_separation = 4e-7",
+    );
+    let (_dir, config) = config_file(&cohesive);
+    for (set, words) in [
+        (
+            "interface.0.strength=0.0",
+            ["interface[0].strength", "must be a finite number > 0"],
+        ),
+        (
+            "interface.0.critical_separation=-1e-7",
+            ["interface[0].critical_separation", "must be a finite number > 0"],
+        ),
+    ] {
+        expect_input_error(
+            &["validate", &config, "--set", set],
+            &["case.toml", words[0], words[1]],
+        );
+    }
     let bonded = format!("{CONFIG}{CRACKED}").replace("law = \"contact\"", "law = \"bonded\"");
     let (_dir, config) = config_file(&bonded);
     expect_input_error(
