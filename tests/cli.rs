@@ -256,7 +256,10 @@ fn invalid_interface_settings() {
         ),
         (
             "interface.0.critical_separation=-1e-7",
-            ["interface[0].critical_separation", "must be a finite number > 0"],
+            [
+                "interface[0].critical_separation",
+                "must be a finite number > 0",
+            ],
         ),
     ] {
         expect_input_error(
