@@ -13,10 +13,13 @@ use crate::error::EngineError;
 use crate::frontier::{Coarsening, Frontier, Refined, refinement_edge_length};
 
 impl Solve<'_> {
-    /// The indicator of a patch with `report` over spacetime volume `volume` (m^2 s).
+    /// The indicator of a patch with `report` over spacetime volume `volume` (m^2 s): the larger
+    /// of the bulk (numerical dissipation) and the cohesive (traction mismatch) measures, both
+    /// normalized alike.
     pub(super) fn indicator(&self, adapt: &Adapt, report: &PatchReport, volume: f64) -> f64 {
         let energy = f64::from_bits(self.energy_reference.load(Ordering::Relaxed));
-        adapt.indicator(report.dissipation, volume, energy)
+        let measure = report.dissipation.max(report.cohesive_mismatch);
+        adapt.indicator(measure, volume, energy)
     }
 
     /// The edge ends of bisection vertex `m` and the front times of `m` and of the edge's

@@ -732,6 +732,41 @@ impl ContactFaces {
         }
     }
 
+    /// The cohesive indicator's measure of the last patch (seed 2.5.2, 4.4.2): on the cohesive
+    /// faces, the work rate of the mismatch between the law's traction at the face's separation
+    /// (the target) and at the separation of the two elements' displacement traces, on the
+    /// separated fraction, `int (1 - eta) |(T(sep) - T([[u]])) . [[v*]]|` (scaled units, like the
+    /// numerical dissipation). `displacement(i, phi)` gives patch element `i`'s displacement
+    /// (m) at a point from its basis values `phi` there.
+    pub(super) fn cohesive_mismatch(
+        &self,
+        displacement: impl Fn(usize, &[f64]) -> [f64; 2],
+    ) -> f64 {
+        let nf = self.basis.len();
+        let mut total = 0.0;
+        for face in &self.faces[..self.count] {
+            let Some(law) = face.law.cohesive else {
+                continue;
+            };
+            let n = face.phi_a.len() / face.weights.len();
+            let m = face.normal;
+            for p in 0..face.weights.len() {
+                let ua = displacement(face.a, &face.phi_a[p * n..(p + 1) * n]);
+                let ub = displacement(face.b, &face.phi_b[p * n..(p + 1) * n]);
+                let du = [ub[0] - ua[0], ub[1] - ua[1]];
+                let traced = [du[0] * m[0] + du[1] * m[1], -du[0] * m[1] + du[1] * m[0]];
+                let (at_traces, _) = law.traction(traced);
+                let (at_face, _) = law.traction(face.separation_at(nf, p, &face.sep));
+                let t = &face.targets_a[p];
+                let power: f64 = (0..2)
+                    .map(|k| (at_face[k] - at_traces[k]) * t.rate[k])
+                    .sum();
+                total += face.weights[p] * (1.0 - t.eta) * power.abs();
+            }
+        }
+        total
+    }
+
     /// The crossings found by [`Self::find_crossings`].
     pub(super) fn crossings(&self) -> &[Crossing] {
         &self.crossings

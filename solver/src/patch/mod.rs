@@ -96,6 +96,10 @@ pub struct PatchReport {
     /// Newton iterations (linear solves) of a patch with nonlinear faces; zero for a linear
     /// patch.
     pub newton_iterations: usize,
+    /// The cohesive indicator's measure: the work of the mismatch between the cohesive traction
+    /// of the faces' separation and of the elements' displacement jump (see
+    /// `ContactFaces::cohesive_mismatch`), scaled units like `dissipation`.
+    pub cohesive_mismatch: f64,
 }
 
 /// The state of a contact interface at one point, physical units, in the frame of the face
@@ -682,6 +686,16 @@ impl PatchSolver {
         self.faces.clear();
         self.faces.extend(self.contact.finish());
         self.contact.find_crossings(c);
+        let (fields, width, output) = (self.system.fields(), self.width(), &self.output);
+        report.cohesive_mismatch = self.contact.cohesive_mismatch(|i, phi| {
+            let mut u = [0.0; 2];
+            for (k, ph) in phi.iter().enumerate() {
+                let at = &output[(i * n + k) * width + fields..];
+                u[0] += ph * at[0];
+                u[1] += ph * at[1];
+            }
+            u
+        });
         Ok(report)
     }
 
