@@ -80,12 +80,12 @@ fn interface_rows(dir: &Path) -> Vec<(f64, f64, f64)> {
         .collect()
 }
 
-#[test]
-fn a_cohesive_interface_below_its_strength_is_a_nonlinear_spring() {
+/// Checks a run of `cohesive_wave.toml` (summary, output folder) against the 1D reference: the
+/// opening and the traction at the probe while the load ramps and holds, the fracture energy
+/// against the law's potential, the balance, and no crack tip.
+fn check_spring(summary: &sdg_engine::RunSummary, dir: &Path) {
     let t_end = 2e-6;
-    let problem = common::shipped("cohesive_wave.toml", &[]);
-    let (summary, dir) = common::solve(&problem, 2, true);
-    let rows = interface_rows(dir.path());
+    let rows = interface_rows(dir);
     let reference = reference(W, t_end);
     let at = |t: f64| {
         reference[reference
@@ -117,19 +117,21 @@ fn a_cohesive_interface_below_its_strength_is_a_nonlinear_spring() {
     let stored = 0.004 * phi * (1.0 - (1.0 + d) * (-d).exp());
     let energy = summary.energy.fracture_energy;
     eprintln!(
-        "{} rows, {} patches ({} nonlinear, {:.2} solves each); largest errors: delta \
-         {delta_err:.2e} of {delta_hold:.4e} m, s_n {s_err:.2e} of {W:.3e} Pa; final delta \
-         {delta_last:.5e} m, s_n {s_last:.5e} Pa; fracture energy {energy:.5e} J/m against the \
-         potential {stored:.5e}; balance {:.1e}",
+        "{} rows, {} patches ({} nonlinear, {:.2} solves each, {} refinements, {} \
+         coarsenings); largest errors: delta {delta_err:.2e} of {delta_hold:.4e} m, s_n \
+         {s_err:.2e} of {W:.3e} Pa; final delta {delta_last:.5e} m, s_n {s_last:.5e} Pa; \
+         fracture energy {energy:.5e} J/m against the potential {stored:.5e}; balance {:.1e}",
         rows.len(),
         summary.patches,
         summary.interface.nonlinear_patches,
         summary.interface.newton_iterations_mean,
+        summary.refinements,
+        summary.coarsenings,
         summary.energy.balance_residual_rel
     );
     assert!(rows.len() > 20);
-    // Measured: 1.3e-2 and 6.8e-3, largest while the load ramps (tents of about 0.05 us
-    // against a 0.2 us ramp); the hold values to 1e-3 below.
+    // Measured: 1.3e-2 and 6.8e-3 on the shipped mesh, largest while the load ramps (tents of
+    // about 0.05 us against a 0.2 us ramp); the hold values to 1e-3 below.
     assert!(delta_err < 0.02, "{delta_err}");
     assert!(s_err < 0.01, "{s_err}");
     assert!((delta_last / delta_hold - 1.0).abs() < 1e-3);
@@ -138,10 +140,55 @@ fn a_cohesive_interface_below_its_strength_is_a_nonlinear_spring() {
     assert_eq!(energy, summary.energy.interface_work);
     assert!(summary.energy.balance_residual_rel.abs() < 1e-9);
     // Below the strength nothing reaches delta_c: no crack tip.
-    let crack = summary.crack.expect("a cohesive run reports its cracks");
+    let crack = summary
+        .crack
+        .as_ref()
+        .expect("a cohesive run reports its cracks");
     assert_eq!(crack.tip_states, 0);
-    let tips = std::fs::read_to_string(dir.path().join("crack_tips.csv")).unwrap();
+    let tips = std::fs::read_to_string(dir.join("crack_tips.csv")).unwrap();
     assert_eq!(tips.lines().count(), 1, "the header only");
+}
+
+#[test]
+fn a_cohesive_interface_below_its_strength_is_a_nonlinear_spring() {
+    let problem = common::shipped("cohesive_wave.toml", &[]);
+    let (summary, dir) = common::solve(&problem, 2, true);
+    check_spring(&summary, dir.path());
+}
+
+/// Segments of the interface on a snapshot's slice (`interface_NNNN.vtu`): one per interface
+/// face the plane cuts, so one per interface edge where the slice crosses each face once.
+fn interface_segments(dir: &Path, k: usize) -> usize {
+    let text = std::fs::read_to_string(dir.join(format!("interface_{k:04}.vtu"))).unwrap();
+    let at = text.find("NumberOfCells=\"").unwrap() + "NumberOfCells=\"".len();
+    text[at..].split('"').next().unwrap().parse().unwrap()
+}
+
+/// With adaptivity the wave's arrival refines the front across the interface and the calm that
+/// follows coarsens it again, the interface's own edges included: their separation crosses each
+/// coarsening on the coarsening patch's face (no projection), so the opening still follows the
+/// reference and the energy still balances.
+#[test]
+fn coarsening_across_a_cohesive_interface_keeps_the_spring() {
+    let problem = common::shipped(
+        "cohesive_wave.toml",
+        &[
+            "adapt.enabled=true",
+            "adapt.tol=0.3",
+            "adapt.min_edge=30e-6",
+            "output.snapshot_times=[1.2e-6, 2e-6]",
+        ],
+    );
+    let (summary, dir) = common::solve(&problem, 2, true);
+    check_spring(&summary, dir.path());
+    // Measured: 8 interface segments at 1.2 us (every interface edge halved), 4 at the end.
+    let (refined, end) = (
+        interface_segments(dir.path(), 0),
+        interface_segments(dir.path(), 1),
+    );
+    assert!(refined > 4, "the interface was refined: {refined} segments");
+    assert_eq!(end, 4, "and coarsened back to the mesh's four edges");
+    assert!(summary.coarsenings > 0);
 }
 
 #[test]

@@ -11,12 +11,15 @@
 //! Coarsening undoes a bisection once the elements around its vertex `m` are calm: the
 //! coarsening patch ([`PatchSolver::solve_coarsening`]) fills the spacetime between the four (or
 //! two) children and their parents' facets with one element per parent, so the parents again
-//! lie each on one element, and `m` leaves the mesh (the last vertex takes its id).
+//! lie each on one element, and `m` leaves the mesh (the last vertex takes its id). On an
+//! interface with its own law, the patch's face over the restored edge carries the interface
+//! state on from the faces over the two halves, and the restored edge keeps it.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use sdg_mesh::{Front, Merge, Mesh, Pitcher, Point, Split, TriangleId, VertexId};
 use sdg_solver::element::{FrontSolution, Geometry};
+use sdg_solver::face::FaceState;
 
 /// The space mesh, its front, the elements under the front and the pitcher.
 #[derive(Debug)]
@@ -53,6 +56,8 @@ pub(crate) struct Coarsening {
     /// Per element: the corners of the child `(m, z, a)` whose id its parent takes, the
     /// element's geometry and coefficients.
     pub(crate) elements: Vec<([VertexId; 3], Geometry, Vec<f64>)>,
+    /// The interface face over the restored edge, on an interface with its own law.
+    pub(crate) face: Option<FaceState>,
     /// Accepted below the lower tolerance.
     pub(crate) calm: bool,
 }
@@ -130,6 +135,11 @@ impl Frontier {
         let parents: Vec<TriangleId> = children.iter().map(|&t| merge.triangle_after(t)).collect();
         for (&parent, (_, geometry, coefficients)) in parents.iter().zip(&c.elements) {
             self.solution.store(parent as usize, geometry, coefficients);
+        }
+        if let Some(face) = &c.face {
+            // A parent (z, a, b) has the restored edge ab opposite its first corner.
+            let restored = self.mesh.triangle_edges(parents[0])[0];
+            self.solution.store_face(restored as usize, face);
         }
         self.pitcher.remove(&self.mesh, &merge);
         merge.apply_to_vertices(&mut self.insist);

@@ -44,32 +44,42 @@ pub fn sample_fraction(k: usize) -> f64 {
     (k as f64 + 0.5) / SAMPLES as f64
 }
 
-/// Adds to `out` the crossings of `levels` (m) on the face `state` over `edge`, for the inherited
-/// separations `below` at the probe lines; `c_ref` converts the face's scaled time (m) to s, and
-/// `psi` is scratch of the face basis length.
+/// One probe line of a face: vertical at `bottom`'s space point, from `bottom` (on the front
+/// below the face, scaled spacetime, m) to the scaled time `top` (m, on the face's top), with the
+/// normal separation `under` (m) the face inherits there from the face below.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Probe {
+    /// Bottom of the line.
+    pub bottom: [f64; 3],
+    /// Scaled time of the line's top.
+    pub top: f64,
+    /// Inherited normal separation at the bottom.
+    pub under: f64,
+}
+
+/// Adds to `out` the crossings of `levels` (m) on the face `state` over `edge`, on its probe
+/// lines `probes`; `c_ref` converts the face's scaled time (m) to s, and `psi` is scratch of
+/// the face basis length.
 pub fn find_crossings(
     state: &FaceState,
     basis: &FaceBasis,
-    (edge, below): (EdgeId, &[f64; SAMPLES]),
+    (edge, probes): (EdgeId, &[Probe; SAMPLES]),
     levels: [(Level, f64); 2],
     c_ref: f64,
     psi: &mut [f64],
     out: &mut Vec<Crossing>,
 ) {
-    let [p0, p1, p2] = state.geometry.corners();
-    for (k, &under) in below.iter().enumerate() {
-        let f = sample_fraction(k);
-        let lerp = |a: [f64; 3], b: [f64; 3]| [0, 1, 2].map(|i| a[i] + f * (b[i] - a[i]));
-        let (bottom, top) = (lerp(p0, p1), lerp(p2, p1));
+    for probe in probes {
+        let bottom = probe.bottom;
         let at =
             |tau: f64, psi: &mut [f64]| state.evaluate(basis, [bottom[0], bottom[1], tau], psi).0;
-        let top_value = at(top[2], psi);
+        let top_value = at(probe.top, psi);
         for (level, value) in levels {
-            if !(under < value && top_value >= value) {
+            if !(probe.under < value && top_value >= value) {
                 continue;
             }
             // Bisection on the face's polynomial between the bottom and the top of the line.
-            let (mut lo, mut hi) = (bottom[2], top[2]);
+            let (mut lo, mut hi) = (bottom[2], probe.top);
             if at(lo, psi) < value {
                 for _ in 0..60 {
                     let mid = 0.5 * (lo + hi);
@@ -114,6 +124,18 @@ mod tests {
         }
     }
 
+    /// The probe lines of [`face`] with inherited separation `under`.
+    fn probes(under: f64) -> [Probe; SAMPLES] {
+        std::array::from_fn(|k| {
+            let f = sample_fraction(k);
+            Probe {
+                bottom: [f, 0.0, f],
+                top: 2.0 - f,
+                under,
+            }
+        })
+    }
+
     #[test]
     fn crossings_are_found_on_the_probe_lines_at_the_level() {
         let basis = FaceBasis::new(1);
@@ -125,7 +147,7 @@ mod tests {
         find_crossings(
             &state,
             &basis,
-            (7, &[0.0; SAMPLES]),
+            (7, &probes(0.0)),
             levels,
             1.0,
             &mut psi,
@@ -149,7 +171,7 @@ mod tests {
         find_crossings(
             &state,
             &basis,
-            (7, &[1.5; SAMPLES]),
+            (7, &probes(1.5)),
             levels,
             1.0,
             &mut psi,
@@ -162,7 +184,7 @@ mod tests {
         find_crossings(
             &state,
             &basis,
-            (7, &[0.5; SAMPLES]),
+            (7, &probes(0.5)),
             levels,
             2.0,
             &mut psi,

@@ -7,7 +7,7 @@ use sdg_mesh::TriangleId;
 use sdg_scheduler::{Changed, VertexId};
 use sdg_solver::patch::{PatchReport, PatchSolver};
 
-use super::{Outcome, Solve};
+use super::{InterfaceRecords, Outcome, Solve};
 use crate::adapt::Adapt;
 use crate::error::EngineError;
 use crate::frontier::{Coarsening, Frontier, Refined, refinement_edge_length};
@@ -97,21 +97,24 @@ impl Solve<'_> {
             at: mesh.vertex(m),
             times,
             elements,
+            face: solver.interface_faces().first().map(|&(_, face)| face),
             calm: eta < adapt.lower,
         };
         Some(Outcome::Coarsen {
             coarsening: Box::new(coarsening),
             report,
+            interface: self.interface_records(mesh, solver),
         })
     }
 
-    /// The coarsening event: applies `coarsening` (with `report`) if nothing changed since it
-    /// was solved; otherwise the patch counts as rejected.
+    /// The coarsening event: applies `coarsening` (with `report` and its `interface` records) if
+    /// nothing changed since it was solved; otherwise the patch counts as rejected.
     pub(super) fn coarsen(
         &self,
         state: &mut Frontier,
         coarsening: &Coarsening,
         report: &PatchReport,
+        interface: InterfaceRecords,
     ) -> Changed {
         let m = coarsening.vertex;
         let Some((merge, parents)) = state.coarsen(coarsening) else {
@@ -129,6 +132,7 @@ impl Solve<'_> {
         let t_end = self.problem.loaded.config.time.end;
         let mut book = self.book.lock();
         self.add_patch(&mut book, report);
+        interface.add_to(&mut book);
         book.coarsenings += 1;
         book.milestones.remove_vertex(t_m);
         book.progress.grow(-(t_end - t_m));

@@ -215,6 +215,15 @@ impl Solve<'_> {
             rho * totals.fracture_work,
             rho * balance
         );
+        // Progress for batch jobs, which have no progress bar: one line per history row.
+        tracing::info!(
+            front_min_time_s = state.front.min_time(),
+            patches = book.patches,
+            rejected = book.rejected,
+            vertices = state.mesh.vertices().len(),
+            crack_crossings = book.crossings.len(),
+            "progress"
+        );
     }
 }
 

@@ -89,15 +89,12 @@ impl Solve<'_> {
 /// What one tent hands to the bookkeeping.
 #[derive(Debug)]
 enum Outcome {
-    /// The patch is stored and the vertex advanced; `samples` are the interface probes on it,
-    /// `crossings` its cohesive faces' crack-tracking crossings with their edge's tag.
+    /// The patch is stored and the vertex advanced.
     Accepted {
         t_old: f64,
         t_new: f64,
         report: PatchReport,
-        samples: Vec<(usize, InterfaceSample)>,
-        cuts: Vec<interface_output::Cut>,
-        crossings: Vec<(Option<TagId>, Crossing)>,
+        interface: InterfaceRecords,
     },
     /// The indicator rejected the patch: nothing advanced; these star triangles (with their
     /// corners, to notice a change) are to be bisected.
@@ -108,7 +105,56 @@ enum Outcome {
     Coarsen {
         coarsening: Box<Coarsening>,
         report: PatchReport,
+        interface: InterfaceRecords,
     },
+}
+
+/// What a patch's interface faces add to the outputs: `samples` are the interface probes on
+/// it, `cuts` its faces' cuts by snapshot planes, `crossings` its cohesive faces'
+/// crack-tracking crossings with their edge's tag.
+#[derive(Debug, Default)]
+struct InterfaceRecords {
+    samples: Vec<(usize, InterfaceSample)>,
+    cuts: Vec<interface_output::Cut>,
+    crossings: Vec<(Option<TagId>, Crossing)>,
+}
+
+impl InterfaceRecords {
+    /// Adds the records to the bookkeeping.
+    fn add_to(self, book: &mut Book) {
+        book.samples.extend(self.samples);
+        book.crossings.extend(self.crossings);
+        for (time, xy, values) in self.cuts {
+            book.snapshots.add_interface_segment(time, xy, values);
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.samples.is_empty() && self.cuts.is_empty() && self.crossings.is_empty()
+    }
+}
+
+impl Solve<'_> {
+    /// The interface records of the patch `solver` just solved on `mesh`.
+    fn interface_records(
+        &self,
+        mesh: &sdg_mesh::Mesh,
+        solver: &mut PatchSolver,
+    ) -> InterfaceRecords {
+        InterfaceRecords {
+            samples: interface_output::sample(&self.problem.probes, mesh, solver),
+            cuts: interface_output::snapshot_cuts(
+                &self.problem.loaded.config.output.snapshot_times,
+                self.problem.system.c_ref(),
+                solver,
+            ),
+            crossings: solver
+                .crack_crossings()
+                .iter()
+                .map(|c| (mesh.edges()[c.edge as usize].tag, *c))
+                .collect(),
+        }
+    }
 }
 
 impl<'a> Work<'a> for Solve<'a> {
@@ -200,17 +246,7 @@ impl<'a> Work<'a> for Solve<'a> {
             t_old: tent.t_old,
             t_new,
             report,
-            samples: interface_output::sample(&self.problem.probes, mesh, solver),
-            cuts: interface_output::snapshot_cuts(
-                &self.problem.loaded.config.output.snapshot_times,
-                self.problem.system.c_ref(),
-                solver,
-            ),
-            crossings: solver
-                .crack_crossings()
-                .iter()
-                .map(|c| (mesh.edges()[c.edge as usize].tag, *c))
-                .collect(),
+            interface: self.interface_records(mesh, solver),
         };
         Ok((t_new, outcome))
     }
@@ -227,23 +263,20 @@ impl<'a> Work<'a> for Solve<'a> {
                 t_old,
                 t_new,
                 report,
-                samples,
-                cuts,
-                crossings,
+                interface,
             } => {
-                if !samples.is_empty() || !cuts.is_empty() || !crossings.is_empty() {
-                    let mut book = self.book.lock();
-                    book.samples.extend(samples);
-                    book.crossings.extend(crossings);
-                    for (time, xy, values) in cuts {
-                        book.snapshots.add_interface_segment(time, xy, values);
-                    }
+                if !interface.is_empty() {
+                    interface.add_to(&mut self.book.lock());
                 }
                 (t_old, t_new, report)
             }
-            Outcome::Coarsen { coarsening, report } => {
+            Outcome::Coarsen {
+                coarsening,
+                report,
+                interface,
+            } => {
                 events.push(Box::new(move |state: &mut Frontier| {
-                    self.coarsen(state, &coarsening, &report)
+                    self.coarsen(state, &coarsening, &report, interface)
                 }));
                 return Ok(());
             }

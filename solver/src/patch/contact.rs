@@ -17,7 +17,7 @@
 use sdg_mesh::EdgeId;
 
 use crate::basis::Basis;
-use crate::crack::{self, Crossing, Level, SAMPLES};
+use crate::crack::{self, Crossing, Level, Probe, SAMPLES};
 use crate::element::{FrontSolution, Geometry, SpacePoint};
 use crate::face::{FaceBasis, FaceGeometry, FaceState, MAX_FACE_BASIS, solve_dense};
 use crate::interface::{Contact, Targets, characteristics};
@@ -79,9 +79,9 @@ pub(super) struct ContactFace {
     inflow: Vec<f64>,
     /// Coefficients of the separation: normal `delta`, then slip.
     sep: [f64; 2 * MAX_FACE_BASIS],
-    /// The normal separation inherited from the face below on the crack probe lines
+    /// The crack probe lines with the normal separation inherited from the faces below
     /// (cohesive faces).
-    below: [f64; SAMPLES],
+    probes: [Probe; SAMPLES],
     /// Per quadrature point: arriving characteristics and both sides' targets.
     w_a: Vec<[f64; 2]>,
     w_b: Vec<[f64; 2]>,
@@ -165,6 +165,74 @@ impl ContactFace {
             }
         }
         g.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+}
+
+/// Where a nonlinear face lies: its corners and the segments of its boundary, in scaled
+/// spacetime (m).
+///
+/// A tent's face over star edge `(v, w)` has corners `P0` (pole bottom), `P1` (`w`), `P2` (pole
+/// top); its bottom `P0 P1` lies on the front over the edge, its top is `P2 P1`. A coarsening
+/// patch's face over the restored edge `ab` has corners `m` (the removed vertex, below), `a`,
+/// `b`; its bottom is the two halves `m a` and `m b` of the front, each over its own edge, and
+/// its top `a b`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct FaceShape {
+    /// Corners of the face's affine map.
+    pub(super) corners: [SpacePoint; 3],
+    /// The bottom segments, each with the edge whose face lies below it; one or two.
+    pub(super) bottom: [(EdgeId, [SpacePoint; 2]); 2],
+    pub(super) bottom_count: usize,
+    /// The top segment, from one end of the edge to the other.
+    pub(super) top: [SpacePoint; 2],
+}
+
+impl FaceShape {
+    /// The face a tent builds: corners `P0` (pole bottom), `P1` (far end), `P2` (pole top) over
+    /// `edge`.
+    pub(super) fn tent(corners: [SpacePoint; 3], edge: EdgeId) -> Self {
+        let [p0, p1, p2] = corners;
+        Self {
+            corners,
+            bottom: [(edge, [p0, p1]); 2],
+            bottom_count: 1,
+            top: [p2, p1],
+        }
+    }
+
+    /// The face a coarsening patch builds over the restored edge `ab`: corners `m` (below the
+    /// edge's midpoint), `a`, `b`; `edges` are the halves `m a` and `m b`.
+    pub(super) fn coarsening(corners: [SpacePoint; 3], edges: [EdgeId; 2]) -> Self {
+        let [m, a, b] = corners;
+        Self {
+            corners,
+            bottom: [(edges[0], [m, a]), (edges[1], [m, b])],
+            bottom_count: 2,
+            top: [a, b],
+        }
+    }
+
+    /// The bottom segments.
+    fn bottom(&self) -> &[(EdgeId, [SpacePoint; 2])] {
+        &self.bottom[..self.bottom_count]
+    }
+
+    /// The point of the bottom below the space point `x` of the edge, and the edge of the
+    /// segment it lies on.
+    fn bottom_at(&self, x: [f64; 2]) -> (SpacePoint, EdgeId) {
+        let along = |[p, q]: [SpacePoint; 2]| {
+            let d = [q[0] - p[0], q[1] - p[1]];
+            ((x[0] - p[0]) * d[0] + (x[1] - p[1]) * d[1]) / (d[0] * d[0] + d[1] * d[1])
+        };
+        let (edge, segment) = self
+            .bottom()
+            .iter()
+            .copied()
+            .find(|&(_, segment)| (0.0..=1.0).contains(&along(segment)))
+            .unwrap_or(self.bottom[0]);
+        let t = along(segment).clamp(0.0, 1.0);
+        let [p, q] = segment;
+        ([0, 1, 2].map(|i| p[i] + t * (q[i] - p[i])), edge)
     }
 }
 
@@ -287,7 +355,7 @@ impl ContactFaces {
             m0: vec![0.0; nf * nf],
             inflow: vec![0.0; 2 * nf],
             sep: [0.0; 2 * MAX_FACE_BASIS],
-            below: [0.0; SAMPLES],
+            probes: [Probe::default(); SAMPLES],
             w_a: vec![[0.0; 2]; points],
             w_b: vec![[0.0; 2]; points],
             targets_a: vec![Targets::default(); points],
@@ -326,18 +394,17 @@ impl ContactFaces {
         &self.faces[..self.count]
     }
 
-    /// Adds the face between patch elements `a` and `b` over `edge`: corners `P0` (pole bottom),
-    /// `P1` (far end), `P2` (pole top); `points` visits its quadrature points (the patch's face
-    /// rule on side a's face) as `(x, weight, normal)`. Reads the face below from `solution`.
-    /// Returns the face's index.
+    /// Adds the face between patch elements `a` and `b` with `shape`, known by the edge of its
+    /// first bottom segment (its tent's star edge); `points` visits
+    /// its quadrature points (the patch's face rule on side a's face) as `(x, weight, normal)`.
+    /// Reads the faces below from `solution`. Returns the face's index.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn add(
         &mut self,
         (a, b): (usize, usize),
         (geometry_a, geometry_b): (&Geometry, &Geometry),
-        edge: EdgeId,
         law: Contact,
-        corners: [SpacePoint; 3],
+        shape: &FaceShape,
         element_basis: &Basis,
         solution: &FrontSolution,
         points: impl FnOnce(&mut dyn FnMut(SpacePoint, f64, [f64; 3])),
@@ -350,9 +417,9 @@ impl ContactFaces {
         let face = &mut self.faces[index];
         face.a = a;
         face.b = b;
-        face.edge = edge;
+        face.edge = shape.bottom[0].0;
         face.law = law;
-        face.geometry = FaceGeometry::new(corners);
+        face.geometry = FaceGeometry::new(shape.corners);
         let d_tau = face.geometry.d_tau();
         let mut q = 0;
         points(&mut |x, w, nrm| {
@@ -386,34 +453,42 @@ impl ContactFaces {
             }
         }
         face.inflow.fill(0.0);
-        let below = solution.face(edge as usize);
-        let [p0, p1, _] = corners;
-        let length = face.geometry.length();
-        for (t, &wg) in self
-            .bottom_rule
-            .points
-            .iter()
-            .zip(&self.bottom_rule.weights)
-        {
-            let x = [0, 1, 2].map(|i| p0[i] + t[0] * (p1[i] - p0[i]));
-            let (delta, slip) = below
-                .as_ref()
-                .map_or((0.0, 0.0), |f| f.evaluate(basis, x, psi));
-            basis.eval(face.geometry.to_reference(x), psi);
-            let w = wg * length;
-            for k in 0..nf {
-                for l in 0..nf {
-                    m0[k * nf + l] += w * psi[k] * psi[l];
+        for &(under, [p, q]) in shape.bottom() {
+            let below = solution.face(under as usize);
+            let length = (q[0] - p[0]).hypot(q[1] - p[1]);
+            for (t, &wg) in self
+                .bottom_rule
+                .points
+                .iter()
+                .zip(&self.bottom_rule.weights)
+            {
+                let x = [0, 1, 2].map(|i| p[i] + t[0] * (q[i] - p[i]));
+                let (delta, slip) = below
+                    .as_ref()
+                    .map_or((0.0, 0.0), |f| f.evaluate(basis, x, psi));
+                basis.eval(face.geometry.to_reference(x), psi);
+                let w = wg * length;
+                for k in 0..nf {
+                    for l in 0..nf {
+                        m0[k * nf + l] += w * psi[k] * psi[l];
+                    }
+                    face.inflow[k] += w * psi[k] * delta;
+                    face.inflow[nf + k] += w * psi[k] * slip;
                 }
-                face.inflow[k] += w * psi[k] * delta;
-                face.inflow[nf + k] += w * psi[k] * slip;
             }
         }
         if law.cohesive.is_some() {
-            for (k, b) in face.below.iter_mut().enumerate() {
+            let [a, b] = shape.top;
+            for (k, probe) in face.probes.iter_mut().enumerate() {
                 let f = crack::sample_fraction(k);
-                let x = [0, 1, 2].map(|i| p0[i] + f * (p1[i] - p0[i]));
-                *b = below.as_ref().map_or(0.0, |s| s.evaluate(basis, x, psi).0);
+                let (bottom, under) =
+                    shape.bottom_at([a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]);
+                let below = solution.face(under as usize);
+                *probe = Probe {
+                    bottom,
+                    top: a[2] + f * (b[2] - a[2]),
+                    under: below.map_or(0.0, |s| s.evaluate(basis, bottom, psi).0),
+                };
             }
         }
         // First guess: the inherited separation carried up the face (no rate), `M0 d = inflow`.
@@ -720,7 +795,7 @@ impl ContactFaces {
             crack::find_crossings(
                 &face.state(nf),
                 &self.basis,
-                (face.edge, &face.below),
+                (face.edge, &face.probes),
                 [
                     (Level::Tip, law.delta_c),
                     (Level::Trailing, law.trailing_separation()),

@@ -35,7 +35,7 @@ use crate::system::{FrameTrace, MAX_FIELDS, Matrix, State, System};
 
 mod contact;
 
-use contact::ContactFaces;
+use contact::{ContactFaces, FaceShape};
 pub use contact::{Newton, NewtonFailure};
 
 /// Energy terms and diagnostics of one solved element, in scaled units (physical: times the
@@ -160,6 +160,9 @@ struct Vertical {
     /// Tag and id of its space edge.
     tag: Option<TagId>,
     edge: EdgeId,
+    /// On a coarsening patch's face over the restored edge `ab` (then `edge` is the half `ma`):
+    /// the other half `mb`.
+    split: Option<EdgeId>,
     /// Its index among the patch's contact faces.
     contact: Option<usize>,
 }
@@ -445,8 +448,11 @@ impl PatchSolver {
     /// the boundary condition. This is the tent at `m` raised onto edge `ab`, with one polynomial
     /// per parent (seed Fig. 4.6), so that every parent again lies on one element. The caller
     /// checks that `m` is below edge `ab` on the front and that the parents' facets are causal.
-    /// [`Self::commit_to`] stores the result. Returns `None` when `m` is not coarsenable or edge
-    /// `ab` is an interface whose law is not bonded (vertices on interfaces stay).
+    /// [`Self::commit_to`] stores the result. On an interface with its own law, the face over
+    /// `ab` inherits its separation from the faces over the halves `ma` and `mb` (two inflow
+    /// segments): the interface state crosses the coarsening without projection, like the
+    /// bulk; [`Self::interface_faces`] has it under the edge of the half `ma`. Returns `None`
+    /// when `m` is not coarsenable or the patch's Newton iterations do not converge.
     pub fn solve_coarsening(
         &mut self,
         mesh: &Mesh,
@@ -457,17 +463,6 @@ impl PatchSolver {
         solution: &FrontSolution,
     ) -> Option<PatchReport> {
         let ends = mesh.coarsenable(m)?;
-        let on_interface = mesh.vertex_triangles(m).iter().any(|&t| {
-            mesh.triangle_edges(t).iter().any(|&e| {
-                let edge = mesh.edges()[e as usize];
-                edge.vertices.contains(&m)
-                    && edge.is_interface()
-                    && self.interfaces.law(edge.tag) != Law::Bonded
-            })
-        });
-        if on_interface {
-            return None;
-        }
         let c = self.system.c_ref();
         let at = |w: VertexId| {
             let p = mesh.vertex(w);
@@ -496,6 +491,18 @@ impl PatchSolver {
                 })
                 .expect("the sibling child (m, b, z) is in the star");
             let e = mesh.triangle_edges(t)[(k + 1) % 3];
+            let tag = mesh.edges()[e as usize].tag;
+            // The half m b, for the interface face over the restored edge.
+            let split = (self.interfaces.law(tag) != Law::Bonded).then(|| {
+                *mesh
+                    .triangle_edges(other)
+                    .iter()
+                    .find(|&&h| {
+                        let ends = mesh.edges()[h as usize].vertices;
+                        ends.contains(&m) && ends.contains(&b)
+                    })
+                    .expect("the sibling child has the half m b")
+            });
             sources[2 * parents] = t;
             sources[2 * parents + 1] = other;
             let vertices = [at(m), at(z), at(a), at(b)];
@@ -511,8 +518,9 @@ impl PatchSolver {
                 sides: [
                     Vertical {
                         face: ([0, 2, 3], 1),
-                        tag: mesh.edges()[e as usize].tag,
+                        tag,
                         edge: e,
+                        split,
                         ..Default::default()
                     },
                     Vertical::default(),
@@ -527,8 +535,7 @@ impl PatchSolver {
         }
         self.used = parents;
         self.inflow.gather(&sources[..2 * parents], solution);
-        let report = self.solve_slots(boundary, initial, solution);
-        Some(report.expect("a coarsening patch has no contact face"))
+        self.solve_slots(boundary, initial, solution).ok()
     }
 
     /// Assembles and solves the patch of the first `self.used` slots, whose inflow sources are
@@ -721,13 +728,16 @@ impl PatchSolver {
                 );
                 let slot = self.slots[i];
                 let corners = side.face.0.map(|k| slot.vertices[k]);
+                let shape = match side.split {
+                    None => FaceShape::tent(corners, side.edge),
+                    Some(half) => FaceShape::coarsening(corners, [side.edge, half]),
+                };
                 let (rule, geometry_b) = (&self.face_rule, self.slots[j].geometry);
                 let index = self.contact.add(
                     (i, j),
                     (&slot.geometry, &geometry_b),
-                    side.edge,
                     law,
-                    corners,
+                    &shape,
                     &self.basis,
                     solution,
                     |visit| face_points(rule, &slot.vertices, side.face, visit),
@@ -1181,6 +1191,7 @@ fn vertical_faces(mesh: &Mesh, star: &[TriangleId], t: TriangleId, corner: usize
             neighbour,
             tag: edge.tag,
             edge: e,
+            split: None,
             contact: None,
         }
     })
