@@ -178,6 +178,10 @@ fn invalid_adaptivity_settings() {
             "adapt.max_edge=1e-4",
             ["adapt.max_edge", "twice adapt.min_edge"],
         ),
+        (
+            "adapt.reference_energy=-1.0",
+            ["adapt.reference_energy", "positive energy"],
+        ),
     ] {
         let args = [
             "validate",

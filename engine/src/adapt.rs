@@ -32,13 +32,17 @@ pub(crate) struct Adapt {
     pub(crate) max_edge: f64,
     /// Zones with a finer longest edge.
     zones: Vec<ZoneConfig>,
+    /// Least reference energy, in the scaled units of the indicator's energies (J/m over the
+    /// density).
+    energy_floor: f64,
     /// `A L / c`, m^2 s: the spacetime volume of one crossing of the domain.
     crossing: f64,
 }
 
 impl Adapt {
-    /// Settings for `mesh` and fastest wave speed `c_max` (m/s), or `None` when disabled.
-    pub(crate) fn new(config: &AdaptConfig, mesh: &Mesh, c_max: f64) -> Option<Self> {
+    /// Settings for `mesh`, fastest wave speed `c_max` (m/s) and density `rho` (kg/m^3, which
+    /// scales J/m to the indicator's energies), or `None` when disabled.
+    pub(crate) fn new(config: &AdaptConfig, mesh: &Mesh, c_max: f64, rho: f64) -> Option<Self> {
         if !config.enabled {
             return None;
         }
@@ -61,6 +65,7 @@ impl Adapt {
             min_edge: config.min_edge.unwrap_or(1e-3 * mesh.edge_length_range().0),
             max_edge: config.max_edge.unwrap_or(f64::INFINITY),
             zones: config.zone.clone(),
+            energy_floor: config.reference_energy.map_or(0.0, |e| e / rho),
             crossing: area * diameter / c_max,
         })
     }
@@ -74,9 +79,11 @@ impl Adapt {
             .fold(self.max_edge, f64::min)
     }
 
-    /// `eta` of a patch that dissipated `dissipation` (J/m) over spacetime volume `volume`
-    /// (m^2 s), with reference energy `energy` (J/m); zero while the body holds no energy.
+    /// `eta` of a patch that dissipated `dissipation` over spacetime volume `volume` (m^2 s),
+    /// with reference energy `energy` (at least `adapt.reference_energy`; both energies in the
+    /// same units); zero while the body holds no energy.
     pub(crate) fn indicator(&self, dissipation: f64, volume: f64, energy: f64) -> f64 {
+        let energy = energy.max(self.energy_floor);
         if energy > 0.0 {
             dissipation * self.crossing / (energy * volume)
         } else {
@@ -123,7 +130,7 @@ mod tests {
             ],
             ..AdaptConfig::default()
         };
-        let a = Adapt::new(&config, &unit(4), 1.0).unwrap();
+        let a = Adapt::new(&config, &unit(4), 1.0, 1.0).unwrap();
         assert_eq!(a.max_edge_at([0.5, 0.59]), 0.05);
         assert_eq!(a.max_edge_at([0.5, 0.61]), 0.5);
         assert_eq!(
@@ -156,7 +163,7 @@ mod tests {
             enabled: true,
             ..AdaptConfig::default()
         };
-        let a = Adapt::new(&config, &unit(4), 2.0).unwrap();
+        let a = Adapt::new(&config, &unit(4), 2.0, 1.0).unwrap();
         // A = 2, L = sqrt(5), c = 2: one crossing is sqrt(5) m^2 s.
         let crossing = 5f64.sqrt();
         let eta = a.indicator(1e-3, 0.1 * crossing, 2.0);
@@ -164,7 +171,15 @@ mod tests {
         assert_eq!(a.indicator(1.0, 1.0, 0.0), 0.0);
         // The same loss at four times the energy and the same share is four times smaller.
         assert!((a.indicator(1e-3, 0.1 * crossing, 8.0) - eta / 4.0).abs() < 1e-15);
-        assert!(Adapt::new(&AdaptConfig::default(), &unit(4), 2.0).is_none());
+        assert!(Adapt::new(&AdaptConfig::default(), &unit(4), 2.0, 1.0).is_none());
+        // A reference energy floor of 8 J/m at density 2 (4 in scaled units) replaces the 2.
+        let floored = AdaptConfig {
+            reference_energy: Some(8.0),
+            ..config
+        };
+        let f = Adapt::new(&floored, &unit(4), 2.0, 2.0).unwrap();
+        assert!((f.indicator(1e-3, 0.1 * crossing, 2.0) - eta / 2.0).abs() < 1e-15);
+        assert!((f.indicator(1e-3, 0.1 * crossing, 8.0) - eta / 4.0).abs() < 1e-15);
     }
 
     #[test]
@@ -173,7 +188,7 @@ mod tests {
             enabled: true,
             ..AdaptConfig::default()
         };
-        let a = Adapt::new(&config, &unit(4), 1.0).unwrap();
+        let a = Adapt::new(&config, &unit(4), 1.0, 1.0).unwrap();
         assert!((a.min_edge - 1e-3 * 0.25).abs() < 1e-18);
         assert_eq!(a.max_edge, f64::INFINITY);
     }

@@ -141,6 +141,9 @@ pub struct AdaptConfig {
     /// never coarsened beyond it.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub zone: Vec<ZoneConfig>,
+    /// Least reference energy of the indicator, J/m. Default: none (the energy put in so far).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_energy: Option<f64>,
 }
 
 /// `[[adapt.zone]]`: the points within `radius` of the segment `from`-`to` keep edges no longer
@@ -175,6 +178,7 @@ impl Default for AdaptConfig {
             min_edge: None,
             max_edge: None,
             zone: Vec::new(),
+            reference_energy: None,
         }
     }
 }

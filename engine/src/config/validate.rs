@@ -87,6 +87,12 @@ impl Config {
                 }
             }
         }
+        if let Some(e) = a.reference_energy.filter(|e| !(e.is_finite() && *e > 0.0)) {
+            return fail(
+                "reference_energy",
+                format!("must be a positive energy in J/m, got {e}"),
+            );
+        }
         if let (Some(lo), Some(hi)) = (a.min_edge, a.max_edge) {
             if 2.0 * lo > hi {
                 return fail(

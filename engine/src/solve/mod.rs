@@ -339,7 +339,7 @@ pub fn solve_job(
     let dir = options.output_dir(problem)?;
     let scheduler = options.scheduler(problem);
 
-    let adapt = Adapt::new(&config.adapt, mesh, c_max);
+    let adapt = Adapt::new(&config.adapt, mesh, c_max, rho);
     let pitcher = if adapt.is_some() {
         pitcher.for_refinement(mesh)
     } else {
