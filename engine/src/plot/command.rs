@@ -273,6 +273,15 @@ pub fn history_chart(csv: &str) -> Result<LineChart, EngineError> {
     Ok(chart)
 }
 
+/// Draws `history.csv`'s text `csv` as `dir/history.png`; a picture that cannot be drawn is
+/// logged as a warning, never an error of the run.
+pub fn write_history_png(dir: &Path, csv: &str) {
+    let path = dir.join("history.png");
+    if let Err(e) = history_chart(csv).and_then(|c| c.write_png(&path, HISTORY_PNG_SIZE)) {
+        tracing::warn!("{}: {e}", path.display());
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -301,11 +301,11 @@ impl<'a> FieldPlot<'a> {
     }
 }
 
-/// About five round values (steps of 1, 2 or 5 times a power of ten) in `[lo, hi]`.
+/// Four to eight round values (steps of 1, 2, 2.5 or 5 times a power of ten) in `[lo, hi]`.
 fn nice_ticks(lo: f64, hi: f64) -> Vec<f64> {
-    let raw = (hi - lo) / 5.0;
+    let raw = (hi - lo) / 6.0;
     let power = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0]
+    let step = [1.0, 2.0, 2.5, 5.0, 10.0]
         .into_iter()
         .map(|m| m * power)
         .find(|&s| s >= raw)

@@ -118,8 +118,8 @@ impl LineChart {
                 .axis_desc_style((family, f))
                 .x_label_formatter(&formatter)
                 .y_label_formatter(&formatter)
-                .light_line_style(RGBColor(235, 235, 235))
-                .bold_line_style(RGBColor(215, 215, 215))
+                .light_line_style(WHITE)
+                .bold_line_style(RGBColor(225, 225, 225))
                 .draw()
                 .map_err(plot_error)?;
             let width = (f / 8.0).round().max(2.0) as u32;
@@ -154,13 +154,38 @@ impl LineChart {
                     .label_font((family, 0.9 * f))
                     .background_style(WHITE.mix(0.85))
                     .border_style(BLACK)
-                    .position(SeriesLabelPosition::UpperRight)
+                    .position(self.legend_corner((x0, x1), (y0 - pad, y1 + pad)))
                     .draw()
                     .map_err(plot_error)?;
             }
             root.present().map_err(plot_error)?;
         }
         Ok(image)
+    }
+
+    /// The corner of the plot whose third in x and y holds the fewest points, for the legend.
+    fn legend_corner(&self, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+        let corners = [
+            (SeriesLabelPosition::UpperRight, true, true),
+            (SeriesLabelPosition::UpperLeft, false, true),
+            (SeriesLabelPosition::LowerRight, true, false),
+            (SeriesLabelPosition::LowerLeft, false, false),
+        ];
+        let near = |v: f64, (lo, hi): (f64, f64), high: bool| {
+            let t = (v - lo) / (hi - lo);
+            if high { t > 0.6 } else { t < 0.4 }
+        };
+        let count = |right: bool, top: bool| {
+            self.series
+                .iter()
+                .flat_map(|s| &s.points)
+                .filter(|p| near(p.0, x, right) && near(p.1, y, top))
+                .count()
+        };
+        corners
+            .into_iter()
+            .min_by_key(|&(_, right, top)| count(right, top))
+            .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
     }
 
     /// Renders the chart and writes it as PNG to `path` (atomically).

@@ -18,7 +18,9 @@ use plotters::style::FontStyle;
 use crate::error::EngineError;
 use crate::output::write_atomic;
 
-pub use command::{FIELD_PNG_SIZE, HISTORY_PNG_SIZE, PlotRequest, history_chart, plot_vtu};
+pub use command::{
+    FIELD_PNG_SIZE, HISTORY_PNG_SIZE, PlotRequest, history_chart, plot_vtu, write_history_png,
+};
 pub use field::{FieldLayout, FieldPlot, Values, viridis};
 pub use line::{LineChart, LineStyle};
 pub use vtu::VtuGrid;
