@@ -4,7 +4,7 @@
 
 use std::io::IsTerminal;
 use std::num::NonZeroUsize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -63,6 +63,21 @@ enum Command {
         /// TOML configuration file.
         config: PathBuf,
     },
+    /// Draw a field of a VTU file (a snapshot, or any triangle grid) as PNG.
+    Plot {
+        /// VTU file: ASCII, base64 binary or appended, uncompressed or zlib.
+        vtu: PathBuf,
+        /// Point or cell field: NAME (vectors: magnitude), NAME_x, NAME_xy, or von_mises
+        /// [default: velocity, i.e. its magnitude].
+        #[arg(long, value_name = "NAME")]
+        field: Option<String>,
+        /// PNG file [default: the VTU path with extension png].
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+        /// Overlay the mesh edges.
+        #[arg(long)]
+        edges: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -85,8 +100,41 @@ fn main() -> ExitCode {
 }
 
 fn execute(cli: &Cli) -> Result<(), EngineError> {
-    let (Command::Run { config } | Command::Mesh { config } | Command::Validate { config }) =
-        &cli.command;
+    let (job, config) = match &cli.command {
+        Command::Run { config } => (Job::Run, config),
+        Command::Mesh { config } => (Job::Mesh, config),
+        Command::Validate { config } => (Job::Validate, config),
+        Command::Plot {
+            vtu,
+            field,
+            out,
+            edges,
+        } => {
+            let request = sdg_engine::plot::PlotRequest {
+                vtu: vtu.clone(),
+                field: field.clone(),
+                out: out.clone(),
+                edges: *edges,
+            };
+            let path = sdg_engine::plot::plot_vtu(&request)?;
+            if !cli.quiet {
+                println!("{}", path.display());
+            }
+            return Ok(());
+        }
+    };
+    config_command(cli, job, config)
+}
+
+/// The commands that load a config.
+#[derive(Clone, Copy, Debug)]
+enum Job {
+    Run,
+    Mesh,
+    Validate,
+}
+
+fn config_command(cli: &Cli, job: Job, config: &Path) -> Result<(), EngineError> {
     let problem = Problem::setup(LoadedConfig::load(config, &cli.set)?)?;
     let options = RunOptions {
         output_dir: cli.output.clone(),
@@ -94,8 +142,8 @@ fn execute(cli: &Cli) -> Result<(), EngineError> {
         deterministic: cli.deterministic,
         progress: !cli.quiet,
     };
-    match cli.command {
-        Command::Validate { .. } => {
+    match job {
+        Job::Validate => {
             if !cli.quiet {
                 println!(
                     "{}: valid ({} vertices, {} triangles)",
@@ -106,7 +154,7 @@ fn execute(cli: &Cli) -> Result<(), EngineError> {
             }
             Ok(())
         }
-        Command::Mesh { .. } => {
+        Job::Mesh => {
             let (summary, dir) = sdg_engine::mesh_job(&problem, &options)?;
             if !cli.quiet {
                 println!(
@@ -123,7 +171,7 @@ fn execute(cli: &Cli) -> Result<(), EngineError> {
             }
             Ok(())
         }
-        Command::Run { .. } => {
+        Job::Run => {
             let (summary, dir) = sdg_engine::solve_job(&problem, &options)?;
             if !cli.quiet {
                 let error = summary.error.map_or(String::new(), |e| {

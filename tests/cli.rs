@@ -191,7 +191,8 @@ fn invalid_adaptivity_settings() {
             "--set",
             set,
         ];
-        expect_input_error(&args, &["case.toml", words[0], words[1]]);
+        let source = format!("--set {set}");
+        expect_input_error(&args, &[&source, words[0], words[1]]);
     }
 }
 
@@ -244,7 +245,7 @@ fn invalid_interface_settings() {
     ] {
         expect_input_error(
             &["validate", &config, "--set", set],
-            &["case.toml", words[0], words[1]],
+            &[&source_of(set, words[0]), words[0], words[1]],
         );
     }
     // A cohesive law with a non-positive strength or critical separation.
@@ -268,7 +269,7 @@ fn invalid_interface_settings() {
     ] {
         expect_input_error(
             &["validate", &config, "--set", set],
-            &["case.toml", words[0], words[1]],
+            &[&source_of(set, words[0]), words[0], words[1]],
         );
     }
     let bonded = format!("{CONFIG}{CRACKED}").replace("law = \"contact\"", "law = \"bonded\"");
@@ -280,6 +281,39 @@ fn invalid_interface_settings() {
             "interface[0].friction",
             "not a parameter of law = \"bonded\"",
         ],
+    );
+}
+
+/// Where an error at `key` caused by the override `set` comes from: the override when it set
+/// that key (or a list holding it), else the config file (`interface.0.s_c` makes `s_s`
+/// invalid). Checks against the mesh, made when the problem is set up (interface tags, probes),
+/// name the file too.
+fn source_of(set: &str, key: &str) -> String {
+    let path = set.split('=').next().unwrap().replace(".0.", "[0].");
+    let setup_checks = ["interface[0].tags", "output.interface_probes[0]"];
+    if key.starts_with(&path) && !setup_checks.contains(&key) {
+        format!("--set {set}")
+    } else {
+        "case.toml".into()
+    }
+}
+
+#[test]
+fn errors_name_the_override_or_the_file() {
+    let (_dir, config) = config_file(CONFIG);
+    let out = sdg(&["validate", &config, "--set", "mesh.nx=0"]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.starts_with("error: --set mesh.nx=0: mesh.nx: must be at least 1"),
+        "{err}"
+    );
+    assert!(!err.contains("case.toml"), "{err}");
+    // The same value from the file names the file, whatever else is overridden.
+    let (_dir, config) = config_file(&CONFIG.replace("nx = 8", "nx = 0"));
+    expect_input_error(
+        &["validate", &config, "--set", "mesh.ny=8"],
+        &["case.toml: mesh.nx: must be at least 1"],
     );
 }
 

@@ -115,6 +115,19 @@ fn solver_configs_match_stored_results() {
         assert!(s["energy"]["balance_residual_rel"].as_f64().unwrap().abs() < 1e-10);
         assert!(dir.path().join("snapshot_0000.vtu").exists());
         assert!(dir.path().join("history.csv").exists());
+        // `output.png = true` in every shipped config: the pictures decode at their sizes.
+        for (file, size) in [
+            ("snapshot_0000.png", sdg_engine::plot::FIELD_PNG_SIZE),
+            ("history.png", sdg_engine::plot::HISTORY_PNG_SIZE),
+        ] {
+            let bytes = std::fs::read(dir.path().join(file)).unwrap();
+            let info = png::Decoder::new(std::io::Cursor::new(bytes))
+                .read_info()
+                .unwrap()
+                .info()
+                .clone();
+            assert_eq!((info.width, info.height), size, "{config}: {file}");
+        }
     }
 }
 

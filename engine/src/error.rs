@@ -22,17 +22,25 @@ pub enum EngineError {
         /// The I/O error.
         source: std::io::Error,
     },
+    /// An input file other than the config and its mesh (a VTU file to plot) cannot be read,
+    /// is not in a supported format or lacks what was asked for; the message names the file.
+    #[error("{0}")]
+    Input(String),
     /// The run failed after it started.
     #[error("{0}")]
     Runtime(String),
+    /// A picture could not be drawn (data that cannot be plotted, an image too small).
+    #[error("plot: {0}")]
+    Plot(String),
 }
 
 impl EngineError {
-    /// Process exit code: 2 for invalid input (config, mesh), 1 for a runtime failure.
+    /// Process exit code: 2 for invalid input (config, mesh, input file), 1 for a runtime
+    /// failure.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Self::Config(_) | Self::Mesh(_) => 2,
-            Self::Io { .. } | Self::Runtime(_) => 1,
+            Self::Config(_) | Self::Mesh(_) | Self::Input(_) => 2,
+            Self::Io { .. } | Self::Runtime(_) | Self::Plot(_) => 1,
         }
     }
 

@@ -6,6 +6,7 @@ pub mod config;
 pub mod error;
 mod frontier;
 pub mod output;
+pub mod plot;
 pub mod problem;
 pub mod progress;
 pub mod run;

@@ -32,6 +32,7 @@ use std::path::PathBuf;
 
 use crate::error::EngineError;
 use crate::output::{CellType, Field, UnstructuredGrid, write_atomic};
+use crate::plot::{FIELD_PNG_SIZE, FieldPlot, Values};
 
 /// Field values at a point of a slice, physical SI units.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -113,6 +114,8 @@ pub struct Snapshots {
     written: Vec<(f64, String)>,
     /// Interface files written: (time in s, file name).
     interface_files: Vec<(f64, String)>,
+    /// Also draw each snapshot as `snapshot_NNNN.png`.
+    png: bool,
 }
 
 impl std::fmt::Debug for Snapshots {
@@ -173,7 +176,14 @@ impl Snapshots {
             next: 0,
             written: Vec::new(),
             interface_files: Vec::new(),
+            png: false,
         }
+    }
+
+    /// Also draw each snapshot as `snapshot_NNNN.png` (velocity magnitude, interfaces in red).
+    pub fn with_png(mut self, png: bool) -> Self {
+        self.png = png;
+        self
     }
 
     /// The pending snapshot times (s) whose plane cuts a face spanning `tau` from `lo` to `hi`
@@ -287,6 +297,14 @@ impl Snapshots {
                 triangles_grid(&triangles).to_vtu().as_bytes(),
             )?;
             self.written.push((snap.time, name));
+            if self.png && !triangles.is_empty() {
+                let name = format!("snapshot_{:04}.png", snap.index);
+                let path = self.dir.join(&name);
+                // A picture that cannot be drawn must not end a run: warn and go on.
+                if let Err(e) = draw_png(&triangles, &snap.segments, snap.time, &path) {
+                    tracing::warn!("{}: {e}", path.display());
+                }
+            }
             if !snap.segments.is_empty() {
                 let segments = std::mem::take(&mut snap.segments);
                 let name = format!("interface_{:04}.vtu", snap.index);
@@ -433,6 +451,35 @@ fn cut(below: [f64; 3], above: [f64; 3], tau_s: f64) -> [f64; 3] {
 /// Signed area of the triangle `a, b, c`: positive when counter-clockwise.
 fn signed_area(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+}
+
+/// Draws the velocity magnitude on `triangles` with the interface `segments` on top into the
+/// PNG file `path`.
+fn draw_png(
+    triangles: &[Triangle],
+    segments: &[Segment],
+    time: f64,
+    path: &std::path::Path,
+) -> Result<(), EngineError> {
+    let points: Vec<[f64; 2]> = triangles.iter().flat_map(|t| t.xy).collect();
+    let speed: Vec<f64> = triangles
+        .iter()
+        .flat_map(|t| {
+            t.values
+                .iter()
+                .map(|v| v.velocity.iter().map(|c| c * c).sum::<f64>().sqrt())
+        })
+        .collect();
+    let corners: Vec<[u32; 3]> = (0..triangles.len() as u32)
+        .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+        .collect();
+    let lines: Vec<[[f64; 2]; 2]> = segments.iter().map(|s| s.xy).collect();
+    FieldPlot::new(&points, &corners, Values::Points(&speed))
+        .title("velocity magnitude (m/s)")
+        .time(Some(time))
+        .segments(&lines)
+        .render(FIELD_PNG_SIZE)?
+        .write_png(path)
 }
 
 /// The triangles as an unstructured grid with points `[x, y, 0]` (three per triangle: fields

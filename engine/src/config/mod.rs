@@ -25,7 +25,7 @@ pub use settings::{
     AdaptConfig, OutputConfig, PitchConfig, SchedulerConfig, SolverConfig, TimeConfig, ZoneConfig,
 };
 
-use overrides::apply_override;
+use overrides::{apply_override, attribute};
 
 /// A configuration error: where it came from, which key, and why.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -128,16 +128,20 @@ impl Config {
         }
         let config: Config = serde_path_to_error::deserialize(root).map_err(|e| {
             let path = e.path().to_string();
-            ConfigError {
+            let error = ConfigError {
                 file: source.to_string(),
                 key: (path != ".").then_some(path),
                 reason: e.into_inner().message().to_string(),
-            }
+            };
+            attribute(error, overrides)
         })?;
-        config.validate().map_err(|(key, reason)| ConfigError {
-            file: source.to_string(),
-            key: Some(key),
-            reason,
+        config.validate().map_err(|(key, reason)| {
+            let error = ConfigError {
+                file: source.to_string(),
+                key: Some(key),
+                reason,
+            };
+            attribute(error, overrides)
         })?;
         Ok(config)
     }

@@ -33,6 +33,42 @@ pub(super) fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), C
     Ok(())
 }
 
+/// `error` (from the file after the overrides were applied) blamed on the last override that set
+/// its key, or a table or list containing it: its source becomes `--set KEY=VALUE`. Errors of
+/// keys no override set keep naming the file.
+pub(super) fn attribute(mut error: ConfigError, overrides: &[String]) -> ConfigError {
+    let Some(key) = error.key.clone() else {
+        return error;
+    };
+    let culprit = overrides.iter().rev().find_map(|spec| {
+        let path = dotted(spec.split_once('=')?.0.trim());
+        let inside = key
+            .strip_prefix(path.as_str())
+            .is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']));
+        inside.then_some(spec)
+    });
+    if let Some(spec) = culprit {
+        error.file = format!("--set {spec}");
+    }
+    error
+}
+
+/// An override's key path as error keys spell it: `interface.0.r_c` is `interface[0].r_c`.
+fn dotted(path: &str) -> String {
+    let mut out = String::new();
+    for segment in path.split('.') {
+        if segment.parse::<usize>().is_ok() {
+            out.push_str(&format!("[{segment}]"));
+        } else {
+            if !out.is_empty() {
+                out.push('.');
+            }
+            out.push_str(segment);
+        }
+    }
+    out
+}
+
 /// The entry `key` of a table (a new empty table when missing) or of an array (`key` an index
 /// below its length), or why `node` has none.
 fn entry<'a>(node: &'a mut toml::Value, key: &str) -> Result<&'a mut toml::Value, String> {
@@ -59,6 +95,32 @@ mod tests {
 
     use crate::config::DiagonalName;
     use crate::config::tests::{BASE, parse};
+
+    #[test]
+    fn errors_of_overridden_keys_name_the_override() {
+        let e = parse(BASE, &["mesh.nx=0"]).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("--set mesh.nx=0: mesh.nx: must be at least 1"),
+            "{e}"
+        );
+        let e = parse(BASE, &["pitch.safety=1.5", "mesh.ny=8"]).unwrap_err();
+        assert_eq!(e.file, "--set pitch.safety=1.5");
+        // A table set whole: the key inside it stays in the message.
+        let e = parse(BASE, &["adapt={tol = -1.0}"]).unwrap_err();
+        assert_eq!(
+            (e.file.as_str(), e.key.as_deref()),
+            ("--set adapt={tol = -1.0}", Some("adapt.tol"))
+        );
+        // A type error of an overridden key.
+        let e = parse(BASE, &["mesh.nx=many"]).unwrap_err();
+        assert_eq!(e.file, "--set mesh.nx=many");
+        // An error in a key no override set names the file.
+        let e = parse(&BASE.replace("nx = 16", "nx = 0"), &["mesh.ny=8"]).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("mesh.nx"));
+        assert!(!e.file.starts_with("--set"), "{e}");
+        assert_eq!(super::dotted("interface.0.r_c"), "interface[0].r_c");
+    }
 
     #[test]
     fn defaults_and_overrides() {

@@ -50,6 +50,10 @@ pub struct OutputConfig {
     /// midpoint of the initial mesh, where the interface is recorded over time. Default none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub interface_probes: Vec<[f64; 2]>,
+    /// `sdg run`: write `snapshot_NNNN.png` beside each snapshot (velocity magnitude) and
+    /// `history.png` (energies against time). Default false.
+    #[serde(default)]
+    pub png: bool,
 }
 
 fn default_output_dir() -> PathBuf {
@@ -63,6 +67,7 @@ impl Default for OutputConfig {
             spacetime_mesh: false,
             snapshot_times: Vec::new(),
             interface_probes: Vec::new(),
+            png: false,
         }
     }
 }

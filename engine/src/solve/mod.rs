@@ -25,6 +25,7 @@ use crate::adapt::Adapt;
 use crate::error::EngineError;
 use crate::frontier::{Coarsening, Frontier};
 use crate::output::write_atomic;
+use crate::plot;
 use crate::problem::Problem;
 use crate::progress::Progress;
 use crate::run::{RunOptions, scheduler_error};
@@ -411,7 +412,8 @@ pub fn solve_job(
             elements: 0,
             dofs: 0,
             max_slope_ratio: 0.0,
-            snapshots: Snapshots::new(&config.output.snapshot_times, c_max, dir.clone()),
+            snapshots: Snapshots::new(&config.output.snapshot_times, c_max, dir.clone())
+                .with_png(config.output.png),
             milestones: Milestones::new(
                 state.mesh.vertices().len(),
                 t_end,
@@ -448,6 +450,9 @@ pub fn solve_job(
             book.progress.finish();
             solve.history_row(&state, &mut book);
             write_atomic(&dir, "history.csv", book.history.as_bytes())?;
+            if config.output.png {
+                plot::write_history_png(&dir, &book.history);
+            }
             solve.write_probes(&dir, &mut book)?;
             return Err(scheduler_error(e));
         }
@@ -549,6 +554,9 @@ pub fn solve_job(
         max_edge,
     };
     write_atomic(&dir, "history.csv", book.history.as_bytes())?;
+    if config.output.png {
+        plot::write_history_png(&dir, &book.history);
+    }
     solve.write_probes(&dir, &mut book)?;
     if let Some(csv) = crack_csv {
         write_atomic(&dir, "crack_tips.csv", csv.as_bytes())?;

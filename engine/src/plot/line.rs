@@ -1,0 +1,259 @@
+//! Line charts: named `(x, y)` series with a legend, e.g. energies against time.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::{Image, finite_range, font_family, font_px, plot_error, tick_label, widen};
+use crate::error::EngineError;
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LineStyle {
+    /// A solid line (computed results).
+    #[default]
+    Solid,
+    /// A dashed line (references).
+    Dashed,
+}
+
+/// Series colours, in order (Tableau 10).
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+#[derive(Clone, Debug)]
+struct Series {
+    name: String,
+    points: Vec<(f64, f64)>,
+    style: LineStyle,
+}
+
+/// A line chart built series by series.
+///
+/// ```no_run
+/// # use sdg_engine::plot::{LineChart, LineStyle};
+/// LineChart::new("crack tip", "time (us)", "position (mm)")
+///     .series("computed", &[(0.0, 0.0), (1.0, 2.0)], LineStyle::Solid)
+///     .series("LEFM", &[(0.0, 0.0), (1.0, 2.1)], LineStyle::Dashed)
+///     .write_png(std::path::Path::new("tip.png"), (900, 600))?;
+/// # Ok::<(), sdg_engine::EngineError>(())
+/// ```
+///
+/// Non-finite points are skipped and break the line there. A chart without any finite point
+/// still renders its axes (ranges 0 to 1).
+#[derive(Clone, Debug)]
+pub struct LineChart {
+    title: String,
+    x_label: String,
+    y_label: String,
+    series: Vec<Series>,
+}
+
+impl LineChart {
+    /// An empty chart with a title and axis labels (units included by the caller).
+    pub fn new(title: &str, x_label: &str, y_label: &str) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            series: Vec::new(),
+        }
+    }
+
+    /// Adds a series named `name` (shown in the legend), coloured in turn from a palette.
+    pub fn series(mut self, name: &str, points: &[(f64, f64)], style: LineStyle) -> Self {
+        self.series.push(Series {
+            name: name.into(),
+            points: points.to_vec(),
+            style,
+        });
+        self
+    }
+
+    /// Renders the chart into an image of `size` (width, height) pixels.
+    pub fn render(&self, size: (u32, u32)) -> Result<Image, EngineError> {
+        let family = font_family()?;
+        let mut image = Image::white(size)?;
+        let f = font_px(size);
+        let finite = || {
+            self.series
+                .iter()
+                .flat_map(|s| &s.points)
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+        };
+        let (x0, x1) = widen(finite_range(finite().map(|p| p.0)).unwrap_or((0.0, 1.0)));
+        let (y0, y1) = widen(finite_range(finite().map(|p| p.1)).unwrap_or((0.0, 1.0)));
+        let pad = 0.05 * (y1 - y0);
+        if f64::from(size.0) < 12.0 * f || f64::from(size.1) < 8.0 * f {
+            return Err(EngineError::Plot(format!(
+                "a {}x{} image is too small for a chart",
+                size.0, size.1
+            )));
+        }
+        {
+            let root = BitMapBackend::with_buffer(&mut image.rgb, size).into_drawing_area();
+            let mut chart = ChartBuilder::on(&root)
+                .caption(&self.title, (family, 1.2 * f))
+                .margin((0.8 * f) as u32)
+                .x_label_area_size((2.8 * f) as u32)
+                .y_label_area_size((5.0 * f) as u32)
+                .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
+                .map_err(plot_error)?;
+            let formatter = |v: &f64| tick_label(*v);
+            chart
+                .configure_mesh()
+                .x_desc(self.x_label.as_str())
+                .y_desc(self.y_label.as_str())
+                .label_style((family, f))
+                .axis_desc_style((family, f))
+                .x_label_formatter(&formatter)
+                .y_label_formatter(&formatter)
+                .light_line_style(WHITE)
+                .bold_line_style(RGBColor(225, 225, 225))
+                .draw()
+                .map_err(plot_error)?;
+            let width = (f / 8.0).round().max(2.0) as u32;
+            for (k, s) in self.series.iter().enumerate() {
+                let colour = PALETTE[k % PALETTE.len()];
+                let style = colour.stroke_width(width);
+                let mut labelled = false;
+                for run in runs(&s.points) {
+                    let drawn = match s.style {
+                        LineStyle::Solid => chart.draw_series(LineSeries::new(run, style)),
+                        LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(
+                            run,
+                            (0.8 * f) as u32,
+                            (0.5 * f) as u32,
+                            style,
+                        )),
+                    }
+                    .map_err(plot_error)?;
+                    if !labelled {
+                        labelled = true;
+                        let dashed = s.style == LineStyle::Dashed;
+                        drawn.label(s.name.as_str()).legend(move |(x, y)| {
+                            let end = if dashed { x + 8 } else { x + 20 };
+                            PathElement::new([(x, y), (end, y)], style)
+                        });
+                    }
+                }
+            }
+            if self.series.iter().any(|s| !runs(&s.points).is_empty()) {
+                chart
+                    .configure_series_labels()
+                    .label_font((family, 0.9 * f))
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .position(self.legend_corner((x0, x1), (y0 - pad, y1 + pad)))
+                    .draw()
+                    .map_err(plot_error)?;
+            }
+            root.present().map_err(plot_error)?;
+        }
+        Ok(image)
+    }
+
+    /// The corner of the plot whose third in x and y holds the fewest points, for the legend.
+    fn legend_corner(&self, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+        let corners = [
+            (SeriesLabelPosition::UpperRight, true, true),
+            (SeriesLabelPosition::UpperLeft, false, true),
+            (SeriesLabelPosition::LowerRight, true, false),
+            (SeriesLabelPosition::LowerLeft, false, false),
+        ];
+        let near = |v: f64, (lo, hi): (f64, f64), high: bool| {
+            let t = (v - lo) / (hi - lo);
+            if high { t > 0.6 } else { t < 0.4 }
+        };
+        let count = |right: bool, top: bool| {
+            self.series
+                .iter()
+                .flat_map(|s| &s.points)
+                .filter(|p| near(p.0, x, right) && near(p.1, y, top))
+                .count()
+        };
+        corners
+            .into_iter()
+            .min_by_key(|&(_, right, top)| count(right, top))
+            .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+    }
+
+    /// Renders the chart and writes it as PNG to `path` (atomically).
+    pub fn write_png(&self, path: &Path, size: (u32, u32)) -> Result<(), EngineError> {
+        self.render(size)?.write_png(path)
+    }
+}
+
+/// The maximal runs of finite points of `points`.
+fn runs(points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
+    points
+        .split(|p| !(p.0.is_finite() && p.1.is_finite()))
+        .filter(|r| !r.is_empty())
+        .map(<[(f64, f64)]>::to_vec)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pixels of exactly `colour` in the image.
+    fn count(image: &Image, colour: RGBColor) -> usize {
+        image
+            .rgb
+            .chunks(3)
+            .filter(|p| p == &[colour.0, colour.1, colour.2])
+            .count()
+    }
+
+    #[test]
+    fn series_are_drawn_in_their_colours() {
+        let sine: Vec<(f64, f64)> = (0..200)
+            .map(|i| (f64::from(i) * 0.05, (f64::from(i) * 0.05).sin()))
+            .collect();
+        let mut gappy = sine.iter().map(|p| (p.0, 0.5 * p.1)).collect::<Vec<_>>();
+        gappy[50].1 = f64::NAN;
+        let image = LineChart::new("sines", "t (us)", "y (J)")
+            .series("sin", &sine, LineStyle::Solid)
+            .series("half", &gappy, LineStyle::Dashed)
+            .render((900, 600))
+            .unwrap();
+        assert_eq!((image.width, image.height), (900, 600));
+        let (a, b) = (count(&image, PALETTE[0]), count(&image, PALETTE[1]));
+        assert!(a > 1000, "{a}");
+        // Dashed: fewer pixels than a solid line of the same length would have.
+        assert!(b > 300 && b < a, "{b} {a}");
+    }
+
+    #[test]
+    fn empty_or_non_finite_charts_still_render() {
+        let image = LineChart::new("empty", "x", "y")
+            .render((600, 400))
+            .unwrap();
+        let dark = image.rgb.chunks(3).filter(|p| p[0] < 50).count();
+        assert!(dark > 100, "axes and labels are drawn");
+        LineChart::new("nan", "x", "y")
+            .series(
+                "nan",
+                &[(f64::NAN, 1.0), (2.0, f64::INFINITY)],
+                LineStyle::Solid,
+            )
+            .series("one", &[(1.0, 1.0)], LineStyle::Solid)
+            .render((600, 400))
+            .unwrap();
+        let err = LineChart::new("tiny", "x", "y")
+            .render((50, 40))
+            .unwrap_err();
+        assert!(err.to_string().contains("too small"), "{err}");
+    }
+}
