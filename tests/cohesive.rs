@@ -1,7 +1,8 @@
 //! Cohesive interfaces (Xu-Needleman, seed 2.2.5, 2.5.2) through the shipped configs: a plane
 //! wave stretching a cohesive interface below its strength against an independent 1D reference,
 //! with the work of the cohesive tractions in the energy balance; determinism across thread
-//! counts. The LEFM reference of the mode-I crack (seed 2.5.1) lives in `lefm/`.
+//! counts; the mode-I crack of `mode1_lefm.toml` against LEFM, whose reference (seed 2.5.1)
+//! lives in `lefm/`.
 
 mod common;
 mod lefm;
@@ -249,4 +250,105 @@ fn cohesive_runs_are_bitwise_deterministic_across_thread_counts() {
         common::outputs(dir_one.path()),
         common::outputs(dir_two.path())
     );
+}
+
+/// `configs/mode1_lefm.toml`: (tau' (s), t0 (s), c_R (m/s)) from the material, the law and the
+/// load ratio sigma' = 0.1, independently of the solver (seed 2.59, 2.67).
+fn mode1_scales() -> (f64, f64, f64) {
+    let (e, nu, rho) = (3.24e9, 0.35, 1190.0);
+    let mu = e / (2.0 * (1.0 + nu));
+    let (c_d, _) = p_wave();
+    let c_s = (mu / rho).sqrt();
+    let phi = std::f64::consts::E * SIGMA_C * DELTA_C;
+    let sigma_bar = 0.1 * SIGMA_C;
+    let tau = std::f64::consts::PI * mu * phi * c_d / (4.0 * (c_s * sigma_bar).powi(2));
+    (tau, 1.2e-3 / c_d, lefm::rayleigh_speed(c_d, c_s))
+}
+
+/// Rows of `crack_tips.csv`: (t, extension).
+fn tip_rows(dir: &Path) -> Vec<(f64, f64)> {
+    let text = std::fs::read_to_string(dir.join("crack_tips.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (t, a) = (col("t_s"), col("extension_m"));
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[t].parse().unwrap(), f[a].parse().unwrap())
+        })
+        .collect()
+}
+
+/// The normalized time `t'` at which the crack extension first exceeds `a` (m) in `rows`.
+fn time_to(rows: &[(f64, f64)], a: f64, (tau, t0): (f64, f64)) -> f64 {
+    let &(t, _) = rows
+        .iter()
+        .find(|r| r.1 > a)
+        .expect("the crack grew that far");
+    (t - t0) / tau
+}
+
+/// The normalized time at which the LEFM tip reaches `a` (m), by bisection.
+fn lefm_time_to(a: f64, length: f64) -> f64 {
+    let (mut lo, mut hi) = (lefm::initiation(), 10.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if lefm::tip(mid, 4000).0 * length < a {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The crack of `mode1_lefm.toml` starts when LEFM says: the times at which it has grown 5, 10
+/// and 20 um (a few probe spacings of the refined tip) against the reference's, to t' = 1.85.
+/// The full run to t' = 3.5 is `mode1_crack_follows_lefm` below (11 minutes, not in CI).
+#[test]
+fn mode1_crack_starts_when_lefm_says() {
+    let (tau, t0, c_r) = mode1_scales();
+    let end = t0 + 1.85 * tau;
+    let problem = common::shipped("mode1_lefm.toml", &[&format!("time.end={end:e}")]);
+    let (summary, dir) = common::solve(&problem, 2, false);
+    let rows = tip_rows(dir.path());
+    for a in [5e-6, 10e-6, 20e-6] {
+        let (t, t_ref) = (time_to(&rows, a, (tau, t0)), lefm_time_to(a, tau * c_r));
+        eprintln!("extension {a:e} m at t' = {t:.3}, LEFM {t_ref:.3}");
+        // Measured: within 0.05 (1.60, 1.67, 1.77 against 1.64, 1.70, 1.79).
+        assert!((t - t_ref).abs() < 0.15, "{a}: {t} vs {t_ref}");
+    }
+    assert!(summary.energy.balance_residual_rel.abs() < 1e-6);
+    assert!(summary.coarsenings > 0);
+}
+
+/// The issue's acceptance on `mode1_lefm.toml` (seed 2.5.3, sigma' = 0.1): the tip within 5% of
+/// LEFM for t' >= 3, slower than c_R, and the fracture energy about phi per unit extension.
+/// `cargo test --release --test cohesive -- --ignored --nocapture` (11 minutes on 2 cores).
+#[test]
+#[ignore = "11 minutes on 2 cores: run on demand"]
+fn mode1_crack_follows_lefm() {
+    let (tau, t0, c_r) = mode1_scales();
+    let problem = common::shipped("mode1_lefm.toml", &[]);
+    let (summary, dir) = common::solve(&problem, 2, false);
+    let rows = tip_rows(dir.path());
+    let length = tau * c_r;
+    let mut worst = 0.0f64;
+    for &(t, a) in rows.iter().filter(|r| (r.0 - t0) / tau >= 3.0) {
+        let a_ref = lefm::tip((t - t0) / tau, 4000).0 * length;
+        worst = worst.max((a / a_ref - 1.0).abs());
+    }
+    let crack = summary.crack.expect("a cohesive run reports its cracks");
+    let per_area = summary.energy.fracture_energy / crack.final_length;
+    let phi = std::f64::consts::E * SIGMA_C * DELTA_C;
+    eprintln!(
+        "tip within {worst:.3} of LEFM for t' >= 3; final extension {:.4e} m; largest speed \
+         {:.3} c_R; fracture energy per unit extension {per_area:.1} J/m^2 (phi = {phi:.1}); \
+         {} patches",
+        crack.final_length, crack.max_speed_over_c_r, summary.patches
+    );
+    assert!(worst < 0.05, "{worst}");
+    assert!(crack.max_speed_over_c_r < 1.0);
+    assert!((per_area / phi - 1.0).abs() < 0.1, "{per_area}");
 }

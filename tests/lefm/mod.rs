@@ -49,6 +49,24 @@ pub fn initiation() -> f64 {
     0.5 * (lo + hi)
 }
 
+/// The Rayleigh wave speed (m/s) for dilatational and shear speeds `c_d`, `c_s`: the root in
+/// `(0, c_s)` of `(2 - x)^2 - 4 sqrt(1 - x c_s^2 / c_d^2) sqrt(1 - x)` with `x = (c / c_s)^2`.
+pub fn rayleigh_speed(c_d: f64, c_s: f64) -> f64 {
+    let k = (c_s / c_d).powi(2);
+    let f = |x: f64| (2.0 - x).powi(2) - 4.0 * (1.0 - k * x).sqrt() * (1.0 - x).sqrt();
+    // For Poisson ratios of solids f < 0 at x = 1/2 and f(1) = 1: the root is between.
+    let (mut lo, mut hi) = (0.5, 0.999_999);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    c_s * (0.5 * (lo + hi)).sqrt()
+}
+
 #[test]
 fn the_reference_reproduces_the_step_load_limit_and_the_seed_s_delay() {
     // Beyond the ramp F(t') = int H' sqrt(t' - u): against quadrature, and F ~ sqrt(t' - 1/2)
