@@ -255,7 +255,7 @@ fn cohesive_runs_are_bitwise_deterministic_across_thread_counts() {
 /// `configs/mode1_lefm.toml`: (tau' (s), t0 (s), c_R (m/s)) from the material, the law and the
 /// load ratio sigma' = 0.1, independently of the solver (seed 2.59, 2.67).
 fn mode1_scales() -> (f64, f64, f64) {
-    let (e, nu, rho) = (3.24e9, 0.35, 1190.0);
+    let (e, nu, rho): (f64, f64, f64) = (3.24e9, 0.35, 1190.0);
     let mu = e / (2.0 * (1.0 + nu));
     let (c_d, _) = p_wave();
     let c_s = (mu / rho).sqrt();
