@@ -22,8 +22,8 @@ fn deterministic_mode_is_bitwise_identical_for_1_2_4_and_8_threads() {
     let expected = outputs(dir.path());
     assert_eq!(
         expected.len(),
-        6,
-        "summary, history, pvd and three snapshots"
+        10,
+        "summary, history and its picture, pvd, three snapshots and their pictures"
     );
     for threads in [2, 4, 8] {
         let (summary, dir) = solve(&problem, threads, true);
@@ -90,8 +90,9 @@ fn deterministic_mode_is_bitwise_identical_with_contact_and_adaptivity() {
     assert!(reference.refinements > 0 && reference.interface.nonlinear_patches > 0);
     assert_eq!(
         expected.len(),
-        8,
-        "summary, history, interface.csv, pvd, two snapshots and their interface cuts"
+        11,
+        "summary, history and its picture, interface.csv, pvd, two snapshots, their pictures and \
+         their interface cuts"
     );
     for threads in [2, 4] {
         let (summary, dir) = solve(&problem, threads, true);
