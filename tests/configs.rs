@@ -40,12 +40,13 @@ const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 3] = [
 ];
 
 /// Shipped configs checked against references by other tests: (file, test).
-const CHECKED_ELSEWHERE: [(&str, &str); 5] = [
+const CHECKED_ELSEWHERE: [(&str, &str); 6] = [
     ("contact_separation.toml", "tests/contact.rs"),
     ("stick_slip.toml", "tests/contact.rs"),
     ("cohesive_wave.toml", "tests/cohesive.rs"),
     ("decohesion.toml", "tests/cohesive.rs"),
     ("mode1_lefm.toml", "tests/cohesive.rs"),
+    ("damage_interface.toml", "tests/damage.rs"),
 ];
 
 fn run_mesh(config: &str, out: &Path) -> serde_json::Value {

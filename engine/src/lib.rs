@@ -5,6 +5,7 @@ mod adapt;
 pub mod config;
 pub mod error;
 mod frontier;
+pub mod lefm;
 pub mod output;
 pub mod plot;
 pub mod problem;

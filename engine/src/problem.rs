@@ -10,8 +10,8 @@ use sdg_solver::interface::{Interfaces, Law};
 use sdg_solver::system::System;
 
 use crate::config::{
-    BoundaryConfig, BoundaryKind, Config, ConfigError, LoadedConfig, MeshKind, ProfileName,
-    WaveName, rectangle_key,
+    BoundaryConfig, BoundaryKind, Config, ConfigError, LoadScales, LoadedConfig, MeshKind,
+    ProfileName, WaveName, rectangle_key,
 };
 use crate::error::EngineError;
 
@@ -34,6 +34,19 @@ pub struct Problem {
     pub probes: Vec<Probe>,
     /// The exact solution, if configured.
     pub exact: Option<PlaneWave>,
+    /// The scales of `[loading]`, if configured.
+    pub loading: Option<Loading>,
+}
+
+/// The mode-I load of `[loading]` on the mesh.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Loading {
+    /// Load ratio, amplitude, ramp time and the units of normalized time and length.
+    #[serde(flatten)]
+    pub scales: LoadScales,
+    /// Time at which the waves reach the loaded interface, s: the distance from the loaded
+    /// sides' vertices to its edges over `c_d`.
+    pub arrival_time: f64,
 }
 
 /// A point where an interface is recorded over time: the midpoint of the interface edge of the
@@ -112,7 +125,15 @@ impl Problem {
         let interfaces = laws(config, &mesh, &sites).map_err(invalid)?;
         all_named(&mesh, &sites, &boundary, &interfaces).map_err(invalid)?;
         let probes = probes(&config.output.interface_probes, &mesh).map_err(invalid)?;
+        let loading = config
+            .load_scales()
+            .map_err(invalid)?
+            .map(|scales| Loading {
+                scales,
+                arrival_time: arrival_distance(config, &mesh) / material.c_d(),
+            });
         Ok(Self {
+            loading,
             system: System::new(&material),
             boundary: Boundary::new(boundary, exact.clone()),
             interfaces: Interfaces::new(interfaces),
@@ -166,6 +187,34 @@ impl TagSites {
     }
 }
 
+/// The shortest distance from a vertex on a side of `[loading]` to an edge of its interface,
+/// m; zero without `[loading]`.
+fn arrival_distance(config: &Config, mesh: &Mesh) -> f64 {
+    let Some(l) = &config.loading else {
+        return 0.0;
+    };
+    let tagged = |names: &[String]| -> Vec<[[f64; 2]; 2]> {
+        let tags: Vec<TagId> = names.iter().filter_map(|n| mesh.tag_id(n)).collect();
+        mesh.edges()
+            .iter()
+            .filter(|e| e.tag.is_some_and(|t| tags.contains(&t)))
+            .map(|e| e.vertices.map(|v| mesh.vertex(v)))
+            .collect()
+    };
+    let crack = tagged(std::slice::from_ref(&l.interface));
+    let sides = tagged(&l.sides);
+    let to_segment = |p: [f64; 2], [a, b]: [[f64; 2]; 2]| {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+        (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+    };
+    sides
+        .iter()
+        .flatten()
+        .flat_map(|&p| crack.iter().map(move |&s| to_segment(p, s)))
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// The `[[boundary]]` conditions by tag id; each side must tag boundary edges only.
 fn conditions(
     config: &Config,
@@ -173,8 +222,8 @@ fn conditions(
     sites: &TagSites,
 ) -> Result<Vec<Option<Condition>>, Invalid> {
     let mut by_tag = vec![None; mesh.tag_names().len()];
-    for (i, b) in config.boundary.iter().enumerate() {
-        let key = || format!("boundary[{i}].sides");
+    for (prefix, b) in config.boundaries() {
+        let key = || format!("{prefix}.sides");
         for side in &b.sides {
             let tag = sites.find(mesh, side).ok_or_else(|| {
                 let known = TagSites::names(mesh, &sites.boundary);
@@ -192,7 +241,7 @@ fn conditions(
                     ),
                 ));
             }
-            by_tag[tag as usize] = Some(condition(b));
+            by_tag[tag as usize] = Some(condition(&b));
         }
     }
     Ok(by_tag)

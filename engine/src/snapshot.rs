@@ -54,11 +54,14 @@ pub struct InterfaceValues {
     pub delta: f64,
     /// Tangential slip, m.
     pub slip: f64,
+    /// Damage `D` in effect (damage law; 0 with other laws).
+    pub damage: f64,
     /// Target traction (normal, tangential), Pa.
     pub traction: [f64; 2],
     /// Contact area fraction.
     pub eta: f64,
-    /// Mode with the largest area fraction: 0 stick, 1 slip, 2 separation.
+    /// Mode with the largest area fraction: 0 stick, 1 slip, 2 separation, 3 bonded (damage
+    /// law).
     pub mode: f64,
 }
 
@@ -515,7 +518,8 @@ fn triangles_grid(triangles: &[Triangle]) -> UnstructuredGrid {
 }
 
 /// The interface segments as an unstructured grid of lines with points `[x, y, 0]` (two per
-/// segment) and point fields `delta`, `slip`, `traction` (normal, tangential, 0), `eta`, `mode`.
+/// segment) and point fields `delta`, `slip`, `damage`, `traction` (normal, tangential, 0), `eta`,
+/// `mode`.
 fn segments_grid(segments: &[Segment]) -> UnstructuredGrid {
     let values = || segments.iter().flat_map(|s| s.values.iter());
     let scalar = |name: &str, get: fn(&InterfaceValues) -> f64| {
@@ -531,6 +535,7 @@ fn segments_grid(segments: &[Segment]) -> UnstructuredGrid {
         point_data: vec![
             scalar("delta", |v| v.delta),
             scalar("slip", |v| v.slip),
+            scalar("damage", |v| v.damage),
             Field {
                 name: "traction".into(),
                 components: 3,

@@ -72,7 +72,7 @@ pub fn find_crossings(
     for probe in probes {
         let bottom = probe.bottom;
         let at =
-            |tau: f64, psi: &mut [f64]| state.evaluate(basis, [bottom[0], bottom[1], tau], psi).0;
+            |tau: f64, psi: &mut [f64]| state.evaluate(basis, [bottom[0], bottom[1], tau], psi)[0];
         let top_value = at(probe.top, psi);
         for (level, value) in levels {
             if !(probe.under < value && top_value >= value) {
@@ -117,11 +117,12 @@ mod tests {
         coefficients[0] = c0;
         coefficients[1] = delta([1.0, 0.0]) - c0;
         coefficients[2] = delta([0.0, 1.0]) - c0;
-        FaceState {
+        let mut state = FaceState {
             geometry,
-            delta: coefficients,
-            slip: [0.0; MAX_FACE_BASIS],
-        }
+            coefficients: [[0.0; MAX_FACE_BASIS]; 3],
+        };
+        state.coefficients[0] = coefficients;
+        state
     }
 
     /// The probe lines of [`face`] with inherited separation `under`.
@@ -155,9 +156,7 @@ mod tests {
         );
         for c in &out {
             // Check against the face's own value at the reported point and time.
-            let value = state
-                .evaluate(&basis, [c.point[0], c.point[1], c.time], &mut psi)
-                .0;
+            let value = state.evaluate(&basis, [c.point[0], c.point[1], c.time], &mut psi)[0];
             let want = if c.level == Level::Tip { 1.0 } else { 2.5 };
             assert!((value - want).abs() < 1e-12, "{c:?}: {value}");
             assert_eq!(c.edge, 7);

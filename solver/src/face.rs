@@ -5,10 +5,10 @@
 //! `P0 = (v, tau_old)`, `P1 = (w, tau_w)` and `P2 = (v, tau_new)` in scaled coordinates. Its
 //! bottom edge `P0 P1` lies on the front (it is the top edge of the previous face over the same
 //! edge), its top edge `P2 P1` becomes the front. On an interface edge the face carries the
-//! normal separation `delta` (m) and the tangential slip (m), each a polynomial of total degree
-//! `p` on the face, advanced in time by its own upwind DG (seed 4.21-4.22 for damage; here for
-//! (3.40)): `d delta / d tau = [[v*_n]] / c_ref`, no flux along the edge, the previous face's
-//! trace as inflow on the bottom edge. A bisected edge hands each half the parent's face, whose
+//! normal separation `delta` (m), the tangential slip (m) and, with the damage law, the damage
+//! `D`, each a polynomial of total degree `p` on the face, advanced in time by its own upwind DG
+//! (seed 4.21-4.22): `d delta / d tau = [[v*_n]] / c_ref` (3.40), `d D / d tau = (dD/dt) / c_ref`
+//! (4.8), no flux along the edge, the previous face's trace as inflow on the bottom edge. A bisected edge hands each half the parent's face, whose
 //! polynomial restricts exactly: nothing is projected.
 
 use crate::element::SpacePoint;
@@ -131,24 +131,32 @@ impl FaceGeometry {
     }
 }
 
-/// The interface state on one face: coefficients of `delta` and of the slip (m) in the face's
-/// [`FaceBasis`].
+/// Components of the interface state: the normal separation `delta` (m), the tangential slip
+/// (m) and the damage `D` (dimensionless, seed 4.2; zero for laws without damage).
+pub const STATE_COMPONENTS: usize = 3;
+
+/// The interface state on one face: coefficients of each of its [`STATE_COMPONENTS`] in the
+/// face's [`FaceBasis`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FaceState {
     /// Where the face lies.
     pub geometry: FaceGeometry,
-    /// Normal separation coefficients; only the first `FaceBasis::len` are used.
-    pub delta: [f64; MAX_FACE_BASIS],
-    /// Tangential slip coefficients, like `delta`.
-    pub slip: [f64; MAX_FACE_BASIS],
+    /// Coefficients of `delta`, slip and `D`; only the first `FaceBasis::len` of each are used.
+    pub coefficients: [[f64; MAX_FACE_BASIS]; STATE_COMPONENTS],
 }
 
 impl FaceState {
-    /// `(delta, slip)` (m) at the point `x` of the face; `psi` is scratch of the basis length.
-    pub fn evaluate(&self, basis: &FaceBasis, x: SpacePoint, psi: &mut [f64]) -> (f64, f64) {
+    /// `[delta (m), slip (m), D]` at the point `x` of the face; `psi` is scratch of the basis
+    /// length.
+    pub fn evaluate(
+        &self,
+        basis: &FaceBasis,
+        x: SpacePoint,
+        psi: &mut [f64],
+    ) -> [f64; STATE_COMPONENTS] {
         basis.eval(self.geometry.to_reference(x), psi);
-        let dot = |c: &[f64]| psi.iter().zip(c).map(|(p, c)| p * c).sum::<f64>();
-        (dot(&self.delta), dot(&self.slip))
+        self.coefficients
+            .map(|c| psi.iter().zip(&c).map(|(p, c)| p * c).sum::<f64>())
     }
 }
 

@@ -31,6 +31,7 @@
 
 use sdg_mesh::TagId;
 
+use crate::face::STATE_COMPONENTS;
 use crate::system::{FrameTrace, System};
 
 /// Parameters of a contact interface, physical units.
@@ -161,6 +162,202 @@ impl CohesiveParams {
     }
 }
 
+/// Parameters of the delayed-damage interface law (seed 4.2), physical units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DamageParams {
+    /// Strength `sigma_c` (Pa, > 0) that scales the effective traction `y = s_eff / sigma_c`.
+    pub strength: f64,
+    /// Delay time `tau` (s, > 0): the damage rate is at most `1 / tau`.
+    pub delay: f64,
+    /// Rate exponent `a` (> 0): near its target `f(y)` the damage approaches it with the time
+    /// constant `tau / a`.
+    pub a: f64,
+    /// Threshold `c0` in (0, 1): no damage grows while `y <= c0`.
+    pub c0: f64,
+    /// Mixity factor `beta` (>= 0) of the tangential traction in `s_eff`.
+    pub beta: f64,
+    /// A face counts as fully debonded (`D = 1` in its targets) once `D >= 1 - eps`; `eps` in
+    /// (0, 1).
+    pub eps: f64,
+    /// Damage at t = 0 in [0, 1] (1: a pre-existing crack).
+    pub initial: f64,
+    /// Contact of the debonded part.
+    pub contact: ContactParams,
+}
+
+impl DamageParams {
+    /// Default `beta`: the tangential traction counts as much as the normal one.
+    pub const DEFAULT_BETA: f64 = 1.0;
+    /// Default `eps`.
+    pub const DEFAULT_EPS: f64 = 1e-4;
+
+    /// Checks the ranges above (all finite) and the contact parameters.
+    pub fn validate(&self) -> Result<(), LawError> {
+        let checks: [(&'static str, f64, bool, &str); 7] = [
+            (
+                "strength",
+                self.strength,
+                self.strength > 0.0,
+                "must be > 0 (Pa)",
+            ),
+            ("delay", self.delay, self.delay > 0.0, "must be > 0 (s)"),
+            ("a", self.a, self.a > 0.0, "must be > 0"),
+            (
+                "c0",
+                self.c0,
+                self.c0 > 0.0 && self.c0 < 1.0,
+                "must be in (0, 1)",
+            ),
+            ("beta", self.beta, self.beta >= 0.0, "must be >= 0"),
+            (
+                "damage_eps",
+                self.eps,
+                self.eps > 0.0 && self.eps < 1.0,
+                "must be in (0, 1)",
+            ),
+            (
+                "initial_damage",
+                self.initial,
+                (0.0..=1.0).contains(&self.initial),
+                "must be in [0, 1]",
+            ),
+        ];
+        for (key, value, ok, reason) in checks {
+            if !(value.is_finite() && ok) {
+                return Err(LawError {
+                    key,
+                    reason: format!("{reason}, got {value}"),
+                });
+            }
+        }
+        self.contact.validate()
+    }
+}
+
+/// The delayed-damage law in scaled units (tractions over `Z_ref`), for [`Contact`].
+///
+/// Evolution (4.8)-(4.14): `dD/dt = (1/tau) (1 - exp(-a <f(y) - D>_+))`, which only approaches
+/// `D = 1`; `y = s_eff / sigma_c` with `s_eff = sqrt(<sI_n>_+^2 + beta^2 sI_t^2)` of the
+/// bonded Riemann traction `sI`; `f` the cubic smoothstep from 0 at `y = c0` to 1 at `y = 1`.
+/// Targets (4.20): `(1 - D)` times the bonded targets plus `D` times the contact law's, with
+/// `D` clipped to [0, 1] and taken as 1 from `1 - eps` on (see [`DamageLaw::effective`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DamageLaw {
+    /// `sigma_c`, scaled.
+    pub strength: f64,
+    /// `tau`, s.
+    pub delay: f64,
+    /// `a`.
+    pub a: f64,
+    /// `c0`.
+    pub c0: f64,
+    /// `beta`.
+    pub beta: f64,
+    /// `eps`.
+    pub eps: f64,
+    /// `D` at t = 0.
+    pub initial: f64,
+}
+
+impl DamageLaw {
+    /// The damage in effect for the state's `d`, and its derivative: `d` clipped to [0, 1],
+    /// and 1 from `1 - eps` on, reached continuously (slope 2 from `1 - 2 eps`) so that the
+    /// Newton iterations meet no jump.
+    pub fn effective(&self, d: f64) -> (f64, f64) {
+        let knee = 1.0 - 2.0 * self.eps;
+        if d <= 0.0 {
+            (0.0, 0.0)
+        } else if d <= knee {
+            (d, 1.0)
+        } else if d < 1.0 - self.eps {
+            (knee + 2.0 * (d - knee), 2.0)
+        } else {
+            (1.0, 0.0)
+        }
+    }
+
+    /// `f(y)` and `f'(y)`.
+    pub fn target(&self, y: f64) -> (f64, f64) {
+        let xi = (y - self.c0) / (1.0 - self.c0);
+        if xi <= 0.0 {
+            (0.0, 0.0)
+        } else if xi >= 1.0 {
+            (1.0, 0.0)
+        } else {
+            (
+                xi * xi * (3.0 - 2.0 * xi),
+                6.0 * xi * (1.0 - xi) / (1.0 - self.c0),
+            )
+        }
+    }
+
+    /// Blends the contact targets `t` (of the debonded part) with the bonded ones for the
+    /// damage `d`: star values and their derivatives, and `d star / d D`.
+    fn blend(&self, t: &mut Targets, z: [f64; 2], w_a: [f64; 2], w_b: [f64; 2], d: f64) {
+        let (de, dde) = self.effective(d);
+        let si = t.bonded_traction;
+        let vi = [0, 1].map(|k| (w_b[k] - w_a[k]) / (2.0 * z[k]));
+        let bonded = [vi[0], vi[1], si[0], si[1]];
+        let contact = [t.star.v[0], t.star.v[1], t.star.s[0], t.star.s[1]];
+        // d bonded row r / d w_a[j], d w_b[j]: diagonal in the frame direction.
+        let bonded_d = |r: usize, j: usize| -> (f64, f64) {
+            let k = r % 2;
+            match (r < 2, j == k) {
+                (_, false) => (0.0, 0.0),
+                (true, true) => (-0.5 / z[k], 0.5 / z[k]),
+                (false, true) => (0.5, 0.5),
+            }
+        };
+        let mut star = [0.0; 4];
+        for r in 0..4 {
+            star[r] = (1.0 - de) * bonded[r] + de * contact[r];
+            for j in 0..2 {
+                let (ba, bb) = bonded_d(r, j);
+                t.d_wa[r][j] = (1.0 - de) * ba + de * t.d_wa[r][j];
+                t.d_wb[r][j] = (1.0 - de) * bb + de * t.d_wb[r][j];
+                t.d_sep[r][j] *= de;
+            }
+            t.d_sep[r][2] = dde * (contact[r] - bonded[r]);
+        }
+        t.star = FrameTrace {
+            v: [star[0], star[1]],
+            s: [star[2], star[3]],
+        };
+        t.damage = de;
+    }
+
+    /// `dD/dt` (1/s) for the damage `d` and its derivatives into `t` (`rate[2]`, `rate_wa[2]`,
+    /// `rate_wb[2]`, `rate_sep[2]`); `strength` and the bonded traction are scaled alike.
+    fn evolution(&self, t: &mut Targets, d: f64) {
+        t.rate[2] = 0.0;
+        t.rate_wa[2] = [0.0; 2];
+        t.rate_wb[2] = [0.0; 2];
+        t.rate_sep[2] = [0.0; STATE_COMPONENTS];
+        let si = t.bonded_traction;
+        let tension = si[0].max(0.0);
+        let s_eff = (tension * tension + self.beta * self.beta * si[1] * si[1]).sqrt();
+        let (f, df) = self.target(s_eff / self.strength);
+        let g = f - d;
+        if g <= 0.0 {
+            return;
+        }
+        let e = (-self.a * g).exp();
+        t.rate[2] = (1.0 - e) / self.delay;
+        let rate_g = self.a * e / self.delay;
+        t.rate_sep[2][2] = -rate_g;
+        if s_eff > 0.0 {
+            // sI = (w_a + w_b) / 2 per direction.
+            let dy = [
+                tension / (self.strength * s_eff),
+                self.beta * self.beta * si[1] / (self.strength * s_eff),
+            ];
+            let r = dy.map(|x| 0.5 * rate_g * df * x);
+            t.rate_wa[2] = r;
+            t.rate_wb[2] = r;
+        }
+    }
+}
+
 /// The Xu-Needleman law (2.69) with equal normal and tangential critical separations: with
 /// `D1 = delta / delta_c`, `D2 = slip / delta_c`, `T_n = sigma_c D1 exp(1 - D1 - D2^2)` and
 /// `T_t = 2 sigma_c D2 (1 + D1) exp(1 - D1 - D2^2)`. For `D1 < 0` (interpenetration, which the
@@ -220,17 +417,19 @@ pub enum Law {
     Contact(ContactParams),
     /// Xu-Needleman cohesive law, in contact under compression.
     XuNeedleman(CohesiveParams),
+    /// Delayed damage, the debonded part in contact.
+    Damage(DamageParams),
 }
 
 impl Law {
     /// True when the targets depend nonlinearly on the traces (a Newton patch).
     pub fn is_nonlinear(&self) -> bool {
-        matches!(self, Law::Contact(_) | Law::XuNeedleman(_))
+        matches!(self, Law::Contact(_) | Law::XuNeedleman(_) | Law::Damage(_))
     }
 
-    /// True for a cohesive law, whose interface work is fracture energy.
+    /// True for a fracture law (cohesive or damage), whose interface work is fracture energy.
     pub fn is_cohesive(&self) -> bool {
-        matches!(self, Law::XuNeedleman(_))
+        matches!(self, Law::XuNeedleman(_) | Law::Damage(_))
     }
 }
 
@@ -273,6 +472,8 @@ pub struct Contact {
     pub s: [f64; 2],
     /// The cohesive law of the separated part (scaled strength).
     pub cohesive: Option<XuNeedleman>,
+    /// The damage law blending the bonded part with this one (scaled strength).
+    pub damage: Option<DamageLaw>,
 }
 
 /// Side a's targets of a contact face and their derivatives.
@@ -284,35 +485,44 @@ pub struct Targets {
     pub d_wa: [[f64; 2]; 4],
     /// `d star / d w_b[j]`.
     pub d_wb: [[f64; 2]; 4],
-    /// `d star / d sep[j]` (per m) for the separation `sep` = (normal, slip).
-    pub d_sep: [[f64; 2]; 4],
-    /// Separation rate `[[v*]] = v*_b - v*_a` (normal, tangential; m/s), the same from both
-    /// sides.
-    pub rate: [f64; 2],
+    /// `d star / d state[j]` for the interface state (normal separation, slip: per m; damage).
+    pub d_sep: [[f64; STATE_COMPONENTS]; 4],
+    /// Rates of the interface state: the separation rate `[[v*]] = v*_b - v*_a` (normal,
+    /// tangential; m/s) and `dD/dt` (1/s), the same from both sides.
+    pub rate: [f64; STATE_COMPONENTS],
     /// `d rate[k] / d w_a[j]`.
-    pub rate_wa: [[f64; 2]; 2],
+    pub rate_wa: [[f64; 2]; STATE_COMPONENTS],
     /// `d rate[k] / d w_b[j]`.
-    pub rate_wb: [[f64; 2]; 2],
-    /// `d rate[k] / d sep[j]`.
-    pub rate_sep: [[f64; 2]; 2],
+    pub rate_wb: [[f64; 2]; STATE_COMPONENTS],
+    /// `d rate[k] / d state[j]`.
+    pub rate_sep: [[f64; STATE_COMPONENTS]; STATE_COMPONENTS],
     /// Bonded Riemann tractions `sI` (normal, tangential; scaled).
     pub bonded_traction: [f64; 2],
-    /// Contact area fraction `eta`.
+    /// Contact area fraction `eta` of the debonded part.
     pub eta: f64,
     /// Stick flag `gamma` (0 or 1).
     pub gamma: f64,
+    /// Damage `D` in effect: the debonded fraction (1 for laws without damage).
+    pub damage: f64,
 }
 
 impl Targets {
-    /// The mode with the largest area fraction.
+    /// The mode with the largest area fraction: bonded `1 - D`, separation `D (1 - eta)`,
+    /// stick `D eta gamma`, slip `D eta (1 - gamma)`.
     pub fn mode(&self) -> Mode {
-        if self.eta < 0.5 {
-            Mode::Separation
-        } else if self.gamma > 0.5 {
-            Mode::Stick
-        } else {
-            Mode::Slip
-        }
+        let d = self.damage;
+        let fractions = [
+            (Mode::Bonded, 1.0 - d),
+            (Mode::Stick, d * self.eta * self.gamma),
+            (Mode::Slip, d * self.eta * (1.0 - self.gamma)),
+            (Mode::Separation, d * (1.0 - self.eta)),
+        ];
+        fractions
+            .into_iter()
+            .fold((Mode::Separation, -1.0), |best, f| {
+                if f.1 > best.1 { f } else { best }
+            })
+            .0
     }
 }
 
@@ -335,8 +545,13 @@ fn fraction(x: f64, lo: f64, hi: f64) -> (f64, f64) {
 
 impl Contact {
     /// The scaled law of `params` for `system` (in-plane modes only), with the cohesive law
-    /// `cohesive` on the separated part.
-    pub fn new(system: &System, params: &ContactParams, cohesive: Option<&CohesiveParams>) -> Self {
+    /// `cohesive` on the separated part, or the whole blended with the bonded law by `damage`.
+    pub fn new(
+        system: &System,
+        params: &ContactParams,
+        cohesive: Option<&CohesiveParams>,
+        damage: Option<&DamageParams>,
+    ) -> Self {
         let z_ref = system.z_ref();
         Self {
             z: system.impedance(),
@@ -347,16 +562,36 @@ impl Contact {
                 strength: c.strength / z_ref,
                 delta_c: c.critical_separation,
             }),
+            damage: damage.map(|d| DamageLaw {
+                strength: d.strength / z_ref,
+                delay: d.delay,
+                a: d.a,
+                c0: d.c0,
+                beta: d.beta,
+                eps: d.eps,
+                initial: d.initial,
+            }),
         }
     }
 
     /// The scaled law of a nonlinear interface law; `None` for a linear one.
     pub fn of(system: &System, law: &Law) -> Option<Self> {
         match law {
-            Law::Contact(params) => Some(Self::new(system, params, None)),
-            Law::XuNeedleman(c) => Some(Self::new(system, &c.contact, Some(c))),
+            Law::Contact(params) => Some(Self::new(system, params, None, None)),
+            Law::XuNeedleman(c) => Some(Self::new(system, &c.contact, Some(c), None)),
+            Law::Damage(d) => Some(Self::new(system, &d.contact, None, Some(d))),
             Law::Bonded | Law::Free => None,
         }
+    }
+
+    /// Components of the interface state the law evolves: separation and slip, and damage.
+    pub fn components(&self) -> usize {
+        if self.damage.is_some() { 3 } else { 2 }
+    }
+
+    /// The state at t = 0 (before any face): no separation, the initial damage.
+    pub fn initial_state(&self) -> [f64; STATE_COMPONENTS] {
+        [0.0, 0.0, self.damage.map_or(0.0, |d| d.initial)]
     }
 
     /// Separations (m) of the order of the law's scales: its regularization band and the
@@ -367,8 +602,34 @@ impl Contact {
     }
 
     /// Side a's targets from the arriving characteristics `w_a`, `w_b` (normal, tangential) and
-    /// the separation `sep` (normal `delta`, tangential slip; m).
-    pub fn targets(&self, w_a: [f64; 2], w_b: [f64; 2], sep: [f64; 2]) -> Targets {
+    /// the interface state (normal separation `delta`, tangential slip: m; damage).
+    pub fn targets(&self, w_a: [f64; 2], w_b: [f64; 2], state: [f64; STATE_COMPONENTS]) -> Targets {
+        let mut out = self.contact_targets(w_a, w_b, [state[0], state[1]]);
+        if let Some(law) = &self.damage {
+            law.blend(&mut out, self.z, w_a, w_b, state[2]);
+        }
+        // [[v*]] = v*_b - v*_a = (w_b - s*) / Z - (s* - w_a) / Z per direction.
+        for k in 0..2 {
+            let zk = self.z[k];
+            out.rate[k] = (w_a[k] + w_b[k] - 2.0 * out.star.s[k]) / zk;
+            for j in 0..2 {
+                let unit = if j == k { 1.0 } else { 0.0 };
+                out.rate_wa[k][j] = (unit - 2.0 * out.d_wa[2 + k][j]) / zk;
+                out.rate_wb[k][j] = (unit - 2.0 * out.d_wb[2 + k][j]) / zk;
+            }
+            for j in 0..STATE_COMPONENTS {
+                out.rate_sep[k][j] = -2.0 * out.d_sep[2 + k][j] / zk;
+            }
+        }
+        if let Some(law) = &self.damage {
+            law.evolution(&mut out, state[2]);
+        }
+        out
+    }
+
+    /// The contact law's targets (star values and their derivatives, area fractions) for the
+    /// separation `sep` (normal, slip; m), before any damage blending and rates.
+    fn contact_targets(&self, w_a: [f64; 2], w_b: [f64; 2], sep: [f64; 2]) -> Targets {
         let delta = sep[0];
         let [z0, z1] = self.z;
         let si = [0.5 * (w_a[0] + w_b[0]), 0.5 * (w_a[1] + w_b[1])];
@@ -411,6 +672,7 @@ impl Contact {
             bonded_traction: si,
             eta,
             gamma: if stick { 1.0 } else { 0.0 },
+            damage: 1.0,
             ..Default::default()
         };
         out.star = FrameTrace {
@@ -444,17 +706,6 @@ impl Contact {
             out.d_sep[3][j] = e * (t - tc[1]) + (1.0 - eta) * dtc[1][j];
         }
 
-        // [[v*]] = v*_b - v*_a = (w_b - s*) / Z - (s* - w_a) / Z per direction.
-        for k in 0..2 {
-            let zk = self.z[k];
-            out.rate[k] = (w_a[k] + w_b[k] - 2.0 * out.star.s[k]) / zk;
-            for j in 0..2 {
-                let unit = if j == k { 1.0 } else { 0.0 };
-                out.rate_wa[k][j] = (unit - 2.0 * out.d_wa[2 + k][j]) / zk;
-                out.rate_wb[k][j] = (unit - 2.0 * out.d_wb[2 + k][j]) / zk;
-                out.rate_sep[k][j] = -2.0 * out.d_sep[2 + k][j] / zk;
-            }
-        }
         out
     }
 }
@@ -516,6 +767,7 @@ mod tests {
                 s_c: s[0],
                 s_s: s[1],
             },
+            None,
             None,
         )
     }
@@ -650,14 +902,14 @@ mod tests {
 
     #[test]
     fn every_mode_matches_the_characteristic_solution() {
-        check_modes(|c, w_a, w_b, delta| c.targets(w_a, w_b, [delta, 0.0])).unwrap();
+        check_modes(|c, w_a, w_b, delta| c.targets(w_a, w_b, [delta, 0.0, 0.0])).unwrap();
     }
 
     #[test]
     fn a_sign_flip_in_the_solution_is_caught() {
         // The same check on a law whose slip traction points against the stick traction.
         let flipped = |c: &Contact, w_a: [f64; 2], w_b: [f64; 2], delta: f64| {
-            let mut t = c.targets(w_a, w_b, [delta, 0.0]);
+            let mut t = c.targets(w_a, w_b, [delta, 0.0, 0.0]);
             if t.mode() == Mode::Slip {
                 t.star.s[1] = -t.star.s[1];
             }
@@ -666,7 +918,7 @@ mod tests {
         assert!(check_modes(flipped).is_err());
         // And one whose separation velocity takes the wrong characteristic sign.
         let wrong = |c: &Contact, w_a: [f64; 2], w_b: [f64; 2], delta: f64| {
-            c.targets([-w_a[0], w_a[1]], w_b, [delta, 0.0])
+            c.targets([-w_a[0], w_a[1]], w_b, [delta, 0.0, 0.0])
         };
         assert!(check_modes(wrong).is_err());
     }
@@ -684,14 +936,14 @@ mod tests {
             s: [-0.7, 0.12],
         };
         let (w_a, w_b) = characteristics(sys.impedance(), &a, &b);
-        let t = c.targets(w_a, w_b, [-2e-6, 0.0]);
+        let t = c.targets(w_a, w_b, [-2e-6, 0.0, 0.0]);
         let bonded = riemann::bonded(&sys, &a, &b);
         assert_eq!(t.mode(), Mode::Stick);
         for j in 0..2 {
             assert!((t.star.v[j] - bonded.v[j]).abs() < 1e-15);
             assert!((t.star.s[j] - bonded.s[j]).abs() < 1e-15);
         }
-        assert_eq!(t.rate, [0.0, 0.0]);
+        assert_eq!(t.rate, [0.0; 3]);
     }
 
     #[test]
@@ -702,7 +954,7 @@ mod tests {
         for (i, delta) in [-5e-7, 0.0, 3e-7].into_iter().enumerate() {
             let w_a = [0.1 - 0.2 * i as f64, 0.3];
             let w_b = [-0.2, 0.1 + 0.1 * i as f64];
-            let t = c.targets(w_a, w_b, [delta, 0.0]);
+            let t = c.targets(w_a, w_b, [delta, 0.0, 0.0]);
             assert!(
                 t.eta > 0.0 && t.eta < 1.0,
                 "blend at {delta}: eta {}",
@@ -761,7 +1013,7 @@ mod tests {
             assert!(eta > 0.0 && eta < 1.0, "a blend: eta {eta}");
             let on = expected(z, &a, &b, contact, c.k);
             let off = expected(z, &a, &b, Mode::Separation, c.k);
-            let got = c.targets(w_a, w_b, [delta, 0.0]);
+            let got = c.targets(w_a, w_b, [delta, 0.0, 0.0]);
             assert!((got.eta - eta).abs() < 1e-14);
             for j in 0..2 {
                 let v = eta * on.v[j] + (1.0 - eta) * off.v[j];
@@ -773,8 +1025,8 @@ mod tests {
     }
 
     /// Checks every analytic derivative of `c.targets` against central differences at
-    /// `(w_a, w_b, sep)`.
-    fn check_derivatives(c: &Contact, w_a: [f64; 2], w_b: [f64; 2], sep: [f64; 2]) {
+    /// `(w_a, w_b, state)`.
+    fn check_derivatives(c: &Contact, w_a: [f64; 2], w_b: [f64; 2], state: [f64; 3]) {
         let values = |t: &Targets| {
             [
                 t.star.v[0],
@@ -783,9 +1035,10 @@ mod tests {
                 t.star.s[1],
                 t.rate[0],
                 t.rate[1],
+                t.rate[2],
             ]
         };
-        let t = c.targets(w_a, w_b, sep);
+        let t = c.targets(w_a, w_b, state);
         let analytic = |r: usize, wrt: usize, j: usize| match (r, wrt) {
             (0..4, 0) => t.d_wa[r][j],
             (0..4, 1) => t.d_wb[r][j],
@@ -794,31 +1047,39 @@ mod tests {
             (_, 1) => t.rate_wb[r - 4][j],
             (_, _) => t.rate_sep[r - 4][j],
         };
-        for wrt in 0..3 {
-            for j in 0..2 {
+        for (wrt, count) in [(0, 2), (1, 2), (2, 3)] {
+            for j in 0..count {
                 // Steps well inside the narrowest band of the law.
                 let band = c
                     .cohesive
                     .map_or(f64::INFINITY, |x| x.delta_c)
                     .min(c.r[1] - c.r[0]);
-                let h = if wrt == 2 { 1e-4 * band } else { 1e-7 };
+                let h = match (wrt, j) {
+                    (2, 2) => 1e-6,
+                    (2, _) => 1e-4 * band,
+                    _ => 1e-7,
+                };
                 let shifted = |sign: f64| {
-                    let (mut a, mut b, mut d) = (w_a, w_b, sep);
-                    [&mut a, &mut b, &mut d][wrt][j] += sign * h;
+                    let (mut a, mut b, mut d) = (w_a, w_b, state);
+                    match wrt {
+                        0 => a[j] += sign * h,
+                        1 => b[j] += sign * h,
+                        _ => d[j] += sign * h,
+                    }
                     values(&c.targets(a, b, d))
                 };
                 let (f, g) = (shifted(1.0), shifted(-1.0));
-                for r in 0..6 {
+                for r in 0..7 {
                     let fd = (f[r] - g[r]) / (2.0 * h);
                     let tol = if wrt == 2 { 1e-4 } else { 1e-6 };
-                    let scale = if wrt == 2 {
-                        1.0 / c.separation_scale()
-                    } else {
-                        1.0
+                    let scale = match (wrt, r) {
+                        (2, _) if j < 2 => 1.0 / c.separation_scale(),
+                        (_, 6) => c.damage.map_or(1.0, |d| d.a / d.delay),
+                        _ => 1.0,
                     };
                     assert!(
                         (analytic(r, wrt, j) - fd).abs() < tol * (scale + fd.abs()),
-                        "row {r}, argument {wrt}[{j}] at {sep:?}: {} vs {fd}",
+                        "row {r}, argument {wrt}[{j}] at {state:?}: {} vs {fd}",
                         analytic(r, wrt, j)
                     );
                 }
@@ -836,7 +1097,7 @@ mod tests {
             ([-0.1, 0.01], [-0.15, 0.02], 4e-7),
             ([0.05, 0.01], [0.1, 0.02], 1e-7),
         ] {
-            check_derivatives(&c, w_a, w_b, [delta, 3e-7]);
+            check_derivatives(&c, w_a, w_b, [delta, 3e-7, 0.0]);
         }
         // Cohesive: opening, slip and both, in tension and in compression.
         let x = cohesive(&sys);
@@ -847,7 +1108,7 @@ mod tests {
             ([-0.3, 0.01], [-0.2, 0.02], [-0.004 * dc, 0.1 * dc]),
             ([0.1, 0.3], [0.05, 0.2], [0.3 * dc, -1.3 * dc]),
         ] {
-            check_derivatives(&x, w_a, w_b, sep);
+            check_derivatives(&x, w_a, w_b, [sep[0], sep[1], 0.0]);
         }
     }
 
@@ -916,7 +1177,7 @@ mod tests {
         );
         let sep = [1.5e-7, 0.2e-7];
         let (w_a, w_b) = characteristics(z, &a, &b);
-        let t = x.targets(w_a, w_b, sep);
+        let t = x.targets(w_a, w_b, [sep[0], sep[1], 0.0]);
         let (tc, _) = law.traction(sep);
         assert_eq!(t.eta, 0.0);
         for j in 0..2 {
@@ -935,7 +1196,7 @@ mod tests {
             },
         );
         let (w_a, w_b) = characteristics(z, &a, &b);
-        let t = x.targets(w_a, w_b, [-1e-8, 0.0]);
+        let t = x.targets(w_a, w_b, [-1e-8, 0.0, 0.0]);
         let bonded = riemann::bonded(&sys, &a, &b);
         assert_eq!(t.eta, 1.0);
         for j in 0..2 {
@@ -1001,6 +1262,140 @@ mod tests {
                 },
                 "strength",
             ),
+        ] {
+            assert_eq!(p.validate().unwrap_err().key, want);
+        }
+    }
+
+    /// The seed's damage law (4.5, first set) for PMMA with frictional contact when debonded.
+    fn damage_params() -> DamageParams {
+        DamageParams {
+            strength: 62.1e6,
+            delay: 1e-8,
+            a: 10.0,
+            c0: 0.8,
+            beta: 1.0,
+            eps: DamageParams::DEFAULT_EPS,
+            initial: 0.0,
+            contact: ContactParams {
+                friction: 0.3,
+                r_c: -1e-7,
+                r_s: 1e-7,
+                s_c: 0.0,
+                s_s: 1e6,
+            },
+        }
+    }
+
+    #[test]
+    fn damage_blends_the_bonded_and_the_contact_law() {
+        let sys = system();
+        let p = damage_params();
+        let d = Contact::of(&sys, &Law::Damage(p)).unwrap();
+        let c = Contact::of(&sys, &Law::Contact(p.contact)).unwrap();
+        assert_eq!(d.components(), 3);
+        let z = sys.impedance();
+        let mut rng = 0.37f64;
+        let mut next = || {
+            rng = (rng * 9301.0 + 0.49297).fract();
+            rng - 0.5
+        };
+        for _ in 0..50 {
+            let (w_a, w_b) = ([next(), next()], [next(), next()]);
+            let sep = [2e-7 * next(), 1e-7 * next()];
+            // Undamaged: the bonded solution; fully debonded: the contact law, exactly.
+            let bonded = d.targets(w_a, w_b, [sep[0], sep[1], 0.0]);
+            for k in 0..2 {
+                assert_eq!(bonded.star.s[k], 0.5 * (w_a[k] + w_b[k]));
+                assert_eq!(bonded.star.v[k], (w_b[k] - w_a[k]) / (2.0 * z[k]));
+                assert_eq!(bonded.rate[k], 0.0);
+            }
+            assert_eq!(bonded.mode(), Mode::Bonded);
+            let contact = c.targets(w_a, w_b, [sep[0], sep[1], 0.0]);
+            for full in [1.0, 1.0 - 0.5 * p.eps, 1.2] {
+                let debonded = d.targets(w_a, w_b, [sep[0], sep[1], full]);
+                assert_eq!(debonded.star, contact.star);
+                assert_eq!(&debonded.rate[..2], &contact.rate[..2]);
+                if full >= 1.0 {
+                    assert_eq!(debonded.rate[2], 0.0, "no growth beyond 1");
+                }
+            }
+            // In between: area-weighted, and the outgoing characteristic kept.
+            let half = d.targets(w_a, w_b, [sep[0], sep[1], 0.3]);
+            for k in 0..2 {
+                let want = 0.7 * bonded.star.s[k] + 0.3 * contact.star.s[k];
+                assert!((half.star.s[k] - want).abs() < 1e-14);
+                assert!((half.star.s[k] - z[k] * half.star.v[k] - w_a[k]).abs() < 1e-14);
+            }
+        }
+    }
+
+    #[test]
+    fn damage_grows_at_the_seed_s_rate() {
+        let sys = system();
+        let p = damage_params();
+        let d = Contact::of(&sys, &Law::Damage(p)).unwrap();
+        let law = d.damage.unwrap();
+        let s = |pa: f64| pa / sys.z_ref();
+        // Below c0 sigma_c nothing grows; in compression nothing grows.
+        let t = d.targets([s(0.7 * 62.1e6); 2], [s(0.7 * 62.1e6), 0.0], [0.0; 3]);
+        assert!(t.bonded_traction[0] > 0.0 && t.rate[2] == 0.0);
+        let t = d.targets([s(-2e8), 0.0], [s(-2e8), 0.0], [0.0; 3]);
+        assert_eq!(t.rate[2], 0.0);
+        // At y = 0.9 (f = 1/2) from D = 0.1: (1 - exp(-10 * 0.4)) / tau.
+        let t = d.targets(
+            [s(0.9 * 62.1e6), 0.0],
+            [s(0.9 * 62.1e6), 0.0],
+            [0.0, 0.0, 0.1],
+        );
+        assert!((law.target(0.9).0 - 0.5).abs() < 1e-12);
+        let want = (1.0 - (-4.0f64).exp()) / 1e-8;
+        assert!((t.rate[2] / want - 1.0).abs() < 1e-12, "{}", t.rate[2]);
+        // Shear counts through beta: the same y from a pure shear traction.
+        let t = d.targets(
+            [0.0, s(0.9 * 62.1e6)],
+            [0.0, s(0.9 * 62.1e6)],
+            [0.0, 0.0, 0.1],
+        );
+        assert!((t.rate[2] / want - 1.0).abs() < 1e-12);
+        // Derivatives, in growth and in blended contact.
+        for (w_a, w_b, state) in [
+            ([s(5.8e7), s(1e7)], [s(5.4e7), s(-0.4e7)], [5e-8, 1e-8, 0.2]),
+            ([s(-3e7), s(2e7)], [s(-1e7), s(1e7)], [-3e-8, 2e-8, 0.6]),
+            (
+                [s(6.1e7), s(-2e7)],
+                [s(5.7e7), s(-1e7)],
+                [0.3e-7, -1e-8, 0.05],
+            ),
+            // Within the last 2 eps, where the damage in effect runs to 1.
+            (
+                [s(7.5e7), s(1e6)],
+                [s(7.4e7), 0.0],
+                [2e-7, 0.0, 1.0 - 1.5 * p.eps],
+            ),
+        ] {
+            check_derivatives(&d, w_a, w_b, state);
+        }
+    }
+
+    #[test]
+    fn invalid_damage_parameters_are_named() {
+        let ok = damage_params();
+        assert!(ok.validate().is_ok());
+        for (p, want) in [
+            (DamageParams { delay: 0.0, ..ok }, "delay"),
+            (DamageParams { c0: 1.0, ..ok }, "c0"),
+            (DamageParams { c0: 0.0, ..ok }, "c0"),
+            (DamageParams { initial: 1.5, ..ok }, "initial_damage"),
+            (
+                DamageParams {
+                    strength: -1.0,
+                    ..ok
+                },
+                "strength",
+            ),
+            (DamageParams { a: f64::NAN, ..ok }, "a"),
+            (DamageParams { eps: 1.0, ..ok }, "damage_eps"),
         ] {
             assert_eq!(p.validate().unwrap_err().key, want);
         }

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use sdg_solver::interface::{CohesiveParams, ContactParams, Law};
+use sdg_solver::interface::{CohesiveParams, ContactParams, DamageParams, Law};
 
 /// Kind of a boundary condition.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
@@ -55,19 +55,26 @@ pub enum LawName {
     Contact,
     /// Xu-Needleman cohesive law, in contact under compression (in-plane modes only).
     XuNeedleman,
+    /// Delayed damage, the debonded part in contact (in-plane modes only).
+    Damage,
 }
 
 impl LawName {
     /// True for laws that need a normal direction (not anti-plane shear).
     pub fn is_in_plane_only(self) -> bool {
-        matches!(self, LawName::Contact | LawName::XuNeedleman)
+        matches!(
+            self,
+            LawName::Contact | LawName::XuNeedleman | LawName::Damage
+        )
     }
 }
 
 /// `[[interface]]`: one law on one or more interface tags. The contact parameters (seed 3.2.1,
 /// 3.3.1) are required with `law = "contact"`; with `law = "xu_needleman"` `strength` and
 /// `critical_separation` are required and the contact parameters optional (defaults:
-/// [`CohesiveParams::default_contact`]). Parameters a law does not use are rejected.
+/// [`CohesiveParams::default_contact`]); with `law = "damage"` `strength`, `delay`, `a`, `c0`
+/// and the contact parameters (of the debonded part) are required, `beta`, `damage_eps` and
+/// `initial_damage` optional. Parameters a law does not use are rejected.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct InterfaceConfig {
@@ -97,6 +104,24 @@ pub struct InterfaceConfig {
     /// Critical separation `delta_c`, m (> 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub critical_separation: Option<f64>,
+    /// Damage delay time `tau`, s (> 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delay: Option<f64>,
+    /// Damage rate exponent `a` (> 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a: Option<f64>,
+    /// Damage threshold `c0` in (0, 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub c0: Option<f64>,
+    /// Damage mixity factor `beta` (>= 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beta: Option<f64>,
+    /// Damage at and above `1 - damage_eps` counts as full debonding.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damage_eps: Option<f64>,
+    /// Damage at t = 0 in [0, 1].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_damage: Option<f64>,
 }
 
 impl InterfaceConfig {
@@ -113,11 +138,20 @@ impl InterfaceConfig {
             ("strength", self.strength),
             ("critical_separation", self.critical_separation),
         ];
+        let damage = [
+            ("delay", self.delay),
+            ("a", self.a),
+            ("c0", self.c0),
+            ("beta", self.beta),
+            ("damage_eps", self.damage_eps),
+            ("initial_damage", self.initial_damage),
+        ];
         let name = match self.law {
             LawName::Bonded => "bonded",
             LawName::Free => "free",
             LawName::Contact => "contact",
             LawName::XuNeedleman => "xu_needleman",
+            LawName::Damage => "damage",
         };
         let unused = |keys: &[(&str, Option<f64>)]| match keys.iter().find(|(_, v)| v.is_some()) {
             Some((key, _)) => Err((
@@ -139,6 +173,7 @@ impl InterfaceConfig {
             LawName::Bonded | LawName::Free => {
                 unused(&contact)?;
                 unused(&cohesive)?;
+                unused(&damage)?;
                 Ok(if self.law == LawName::Bonded {
                     Law::Bonded
                 } else {
@@ -147,6 +182,7 @@ impl InterfaceConfig {
             }
             LawName::Contact => {
                 unused(&cohesive)?;
+                unused(&damage)?;
                 let [friction, r_c, r_s, s_c, s_s] = contact.map(required);
                 let params = ContactParams {
                     friction: friction?,
@@ -159,6 +195,7 @@ impl InterfaceConfig {
                 Ok(Law::Contact(params))
             }
             LawName::XuNeedleman => {
+                unused(&damage)?;
                 let [strength, critical_separation] = cohesive.map(required);
                 let (strength, critical_separation) = (strength?, critical_separation?);
                 let default = CohesiveParams::default_contact(strength, critical_separation);
@@ -175,6 +212,29 @@ impl InterfaceConfig {
                 };
                 params.validate().map_err(invalid)?;
                 Ok(Law::XuNeedleman(params))
+            }
+            LawName::Damage => {
+                unused(&cohesive[1..])?;
+                let [friction, r_c, r_s, s_c, s_s] = contact.map(required);
+                let [delay, a, c0] = [damage[0], damage[1], damage[2]].map(required);
+                let params = DamageParams {
+                    strength: required(cohesive[0])?,
+                    delay: delay?,
+                    a: a?,
+                    c0: c0?,
+                    beta: self.beta.unwrap_or(DamageParams::DEFAULT_BETA),
+                    eps: self.damage_eps.unwrap_or(DamageParams::DEFAULT_EPS),
+                    initial: self.initial_damage.unwrap_or(0.0),
+                    contact: ContactParams {
+                        friction: friction?,
+                        r_c: r_c?,
+                        r_s: r_s?,
+                        s_c: s_c?,
+                        s_s: s_s?,
+                    },
+                };
+                params.validate().map_err(invalid)?;
+                Ok(Law::Damage(params))
             }
         }
     }

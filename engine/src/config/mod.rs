@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 mod conditions;
+mod loading;
 mod material;
 mod mesh;
 mod overrides;
@@ -18,6 +19,7 @@ pub use conditions::{
     BoundaryConfig, BoundaryKind, ExactConfig, ExactKind, HistoryConfig, HistoryKind,
     InterfaceConfig, LawName, ProfileName, WaveName,
 };
+pub use loading::{LoadScales, LoadingConfig};
 pub use material::{MaterialConfig, PlaneName};
 pub(crate) use mesh::rectangle_key;
 pub use mesh::{DiagonalName, MeshConfig, MeshKind, SegmentConfig};
@@ -72,6 +74,9 @@ pub struct Config {
     /// tag of the mesh must be named by one entry.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub interface: Vec<InterfaceConfig>,
+    /// A mode-I load given by its load ratio: transmitting conditions on its sides.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loading: Option<LoadingConfig>,
     /// An exact solution: initial data, `exact` boundaries and the error at the end time.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub exact: Option<ExactConfig>,

@@ -154,9 +154,11 @@ impl Config {
         self.validate_interfaces()?;
         let antiplane = self.material.plane == PlaneName::Antiplane;
         let components = if antiplane { 1 } else { 2 };
+        self.load_scales()?;
+        let boundaries = self.boundaries();
         let mut seen: Vec<&str> = Vec::new();
-        for (i, b) in self.boundary.iter().enumerate() {
-            let key = |k: &str| format!("boundary[{i}].{k}");
+        for (prefix, b) in &boundaries {
+            let key = |k: &str| format!("{prefix}.{k}");
             if b.sides.is_empty() {
                 return Err((key("sides"), "lists no side".into()));
             }

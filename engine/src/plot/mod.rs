@@ -6,6 +6,7 @@
 //! registered once from the bytes compiled in; nothing is read from the system.
 
 mod command;
+mod crack;
 mod field;
 mod line;
 mod vtu;
@@ -21,6 +22,7 @@ use crate::output::write_atomic;
 pub use command::{
     FIELD_PNG_SIZE, HISTORY_PNG_SIZE, PlotRequest, history_chart, plot_vtu, write_history_png,
 };
+pub use crack::{CRACK_PNG_SIZE, Normalization, crack_charts, write_crack_png};
 pub use field::{FieldLayout, FieldPlot, Values, viridis};
 pub use line::{LineChart, LineStyle};
 pub use vtu::VtuGrid;
@@ -77,6 +79,14 @@ impl Image {
             height,
             rgb: vec![255; len],
         })
+    }
+
+    /// This image with `below` under it; `below` must be as wide.
+    pub fn above(mut self, below: Image) -> Image {
+        assert_eq!(self.width, below.width, "stacked images are equally wide");
+        self.height += below.height;
+        self.rgb.extend_from_slice(&below.rgb);
+        self
     }
 
     /// The pixel at column `x`, row `y` (from the top).

@@ -43,12 +43,14 @@ pub(super) fn snapshot_cuts(times: &[f64], c_ref: f64, solver: &mut PatchSolver)
                     .map_or_else(InterfaceValues::default, |s| InterfaceValues {
                         delta: s.delta,
                         slip: s.slip,
+                        damage: s.damage,
                         traction: s.traction,
                         eta: s.eta,
                         mode: match s.mode {
-                            Mode::Bonded | Mode::Stick => 0.0,
+                            Mode::Stick => 0.0,
                             Mode::Slip => 1.0,
                             Mode::Separation => 2.0,
+                            Mode::Bonded => 3.0,
                         },
                     })
             });
@@ -97,13 +99,13 @@ pub(super) fn csv(probes: &[Probe], samples: &mut [(usize, InterfaceSample)]) ->
     samples.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.time.total_cmp(&b.1.time)));
     let mut out = String::from(
         "t_s,x_m,y_m,tag,s_n_pa,s_t_pa,sI_n_pa,sI_t_pa,delta_m,slip_m,jump_vn_m_s,jump_vt_m_s,\
-         eta,gamma,mode\n",
+         eta,gamma,damage,mode\n",
     );
     for (i, s) in samples.iter() {
         let probe = &probes[*i];
         let _ = writeln!(
             out,
-            "{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{}",
+            "{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{}",
             s.time,
             probe.at[0],
             probe.at[1],
@@ -118,6 +120,7 @@ pub(super) fn csv(probes: &[Probe], samples: &mut [(usize, InterfaceSample)]) ->
             s.velocity_jump[1],
             s.eta,
             s.gamma,
+            s.damage,
             s.mode.name()
         );
     }

@@ -543,6 +543,7 @@ pub fn solve_job(
         threads: scheduler.threads,
         energy,
         interface,
+        loading: problem.loading,
         crack,
         error,
         snapshots: book.snapshots.written().to_vec(),
@@ -560,6 +561,15 @@ pub fn solve_job(
     solve.write_probes(&dir, &mut book)?;
     if let Some(csv) = crack_csv {
         write_atomic(&dir, "crack_tips.csv", csv.as_bytes())?;
+        if config.output.png {
+            let normalization = problem.loading.map(|l| plot::Normalization {
+                tau: l.scales.tau,
+                c_r: l.scales.c_r,
+                arrival: l.arrival_time,
+                end: t_end,
+            });
+            plot::write_crack_png(&dir, &csv, normalization);
+        }
     }
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;

@@ -99,6 +99,9 @@ pub struct RunSummary {
     pub energy: EnergySummary,
     /// Newton statistics of patches with contact faces.
     pub interface: InterfaceSummary,
+    /// The scales of `[loading]`, when configured.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub loading: Option<crate::problem::Loading>,
     /// Crack tips of cohesive interfaces (runs with a cohesive law).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub crack: Option<super::crack_output::CrackSummary>,
@@ -151,7 +154,7 @@ pub(super) fn state_hash(front: &Front, solution: &FrontSolution, size: usize) -
                 .iter()
                 .flatten()
                 .for_each(|&x| feed(x));
-            face.delta.iter().chain(&face.slip).for_each(|&x| feed(x));
+            face.coefficients.iter().flatten().for_each(|&x| feed(x));
         }
     }
     format!("{hash:016x}")

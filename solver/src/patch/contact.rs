@@ -19,7 +19,9 @@ use sdg_mesh::EdgeId;
 use crate::basis::Basis;
 use crate::crack::{self, Crossing, Level, Probe, SAMPLES};
 use crate::element::{FrontSolution, Geometry, SpacePoint};
-use crate::face::{FaceBasis, FaceGeometry, FaceState, MAX_FACE_BASIS, solve_dense};
+use crate::face::{
+    FaceBasis, FaceGeometry, FaceState, MAX_FACE_BASIS, STATE_COMPONENTS, solve_dense,
+};
 use crate::interface::{Contact, Targets, characteristics};
 use crate::quadrature::{self, Rule};
 use crate::ring::BlockSystem;
@@ -73,12 +75,13 @@ pub(super) struct ContactFace {
     phi_a: Vec<f64>,
     phi_b: Vec<f64>,
     /// The face system's constant part per component: `int psi_k dpsi_l/dtau +
-    /// int_bottom L psi_k psi_l`, and the bottom edge's inflow of the separation (normal
-    /// components, then slip components).
+    /// int_bottom L psi_k psi_l`, and the bottom edge's inflow of the interface state (normal
+    /// separation components, then slip, then damage).
     m0: Vec<f64>,
     inflow: Vec<f64>,
-    /// Coefficients of the separation: normal `delta`, then slip.
-    sep: [f64; 2 * MAX_FACE_BASIS],
+    /// Coefficients of the interface state, component after component (`nf` each): normal
+    /// `delta`, slip, and damage when the law evolves it.
+    sep: [f64; STATE_COMPONENTS * MAX_FACE_BASIS],
     /// The crack probe lines with the normal separation inherited from the faces below
     /// (cohesive faces).
     probes: [Probe; SAMPLES],
@@ -92,36 +95,37 @@ pub(super) struct ContactFace {
 impl ContactFace {
     /// The face's interface state for a face basis of `nf` functions.
     fn state(&self, nf: usize) -> FaceState {
-        let mut delta = [0.0; MAX_FACE_BASIS];
-        let mut slip = [0.0; MAX_FACE_BASIS];
-        delta[..nf].copy_from_slice(&self.sep[..nf]);
-        slip[..nf].copy_from_slice(&self.sep[nf..2 * nf]);
+        let mut coefficients = [[0.0; MAX_FACE_BASIS]; STATE_COMPONENTS];
+        for (c, out) in coefficients.iter_mut().enumerate() {
+            out[..nf].copy_from_slice(&self.sep[c * nf..(c + 1) * nf]);
+        }
         FaceState {
             geometry: self.geometry,
-            delta,
-            slip,
+            coefficients,
         }
     }
 
-    /// The separation (normal, slip; m) at quadrature point `p` for coefficients `d`.
-    fn separation_at(&self, nf: usize, p: usize, d: &[f64]) -> [f64; 2] {
+    /// The interface state (normal separation, slip: m; damage) at quadrature point `p` for
+    /// coefficients `d`.
+    fn separation_at(&self, nf: usize, p: usize, d: &[f64]) -> [f64; STATE_COMPONENTS] {
         let psi = &self.psi[p * nf..(p + 1) * nf];
-        [0, 1].map(|c| psi.iter().zip(&d[c * nf..]).map(|(a, b)| a * b).sum())
+        std::array::from_fn(|c| psi.iter().zip(&d[c * nf..]).map(|(a, b)| a * b).sum())
     }
 
-    /// `-G(d) = inflow - M0 d + int psi rate(sep) / c` of the face's separation system (both
-    /// components) at the coefficients `d` into `g` (length `2 nf`), and with `jacobian` its
-    /// derivative `M0 - int psi psi (d rate / d sep) / c` (row-major, `2 nf` square); returns
-    /// `|G|`.
+    /// `-G(d) = inflow - M0 d + int psi rate(state) / c` of the face's state system (the law's
+    /// components) at the coefficients `d` into `g` (length `ns nf`), and with `jacobian` its
+    /// derivative `M0 - int psi psi (d rate / d state) / c` (row-major, `ns nf` square);
+    /// returns `|G|`.
     fn separation_residual(
         &self,
         c: f64,
-        d: &[f64; 2 * MAX_FACE_BASIS],
+        d: &[f64; STATE_COMPONENTS * MAX_FACE_BASIS],
         g: &mut [f64],
         mut jacobian: Option<&mut [f64]>,
     ) -> f64 {
         let n2 = g.len();
-        let nf = n2 / 2;
+        let ns = self.law.components();
+        let nf = n2 / ns;
         for (row, gk) in g.iter_mut().enumerate() {
             let (comp, k) = (row / nf, row % nf);
             let md: f64 = (0..nf)
@@ -131,7 +135,7 @@ impl ContactFace {
         }
         if let Some(jac) = jacobian.as_deref_mut() {
             jac.fill(0.0);
-            for comp in 0..2 {
+            for comp in 0..ns {
                 for k in 0..nf {
                     let row = &mut jac[(comp * nf + k) * n2 + comp * nf..][..nf];
                     row.copy_from_slice(&self.m0[k * nf..(k + 1) * nf]);
@@ -144,13 +148,13 @@ impl ContactFace {
                 .law
                 .targets(self.w_a[p], self.w_b[p], self.separation_at(nf, p, d));
             let w = self.weights[p] / c;
-            for comp in 0..2 {
+            for comp in 0..ns {
                 for k in 0..nf {
                     g[comp * nf + k] += w * psi[k] * t.rate[comp];
                 }
             }
             if let Some(jac) = jacobian.as_deref_mut() {
-                for (comp, e) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                for (comp, e) in (0..ns).flat_map(|comp| (0..ns).map(move |e| (comp, e))) {
                     let r = w * t.rate_sep[comp][e];
                     if r == 0.0 {
                         continue;
@@ -344,6 +348,7 @@ impl ContactFaces {
                 r: [0.0; 2],
                 s: [0.0; 2],
                 cohesive: None,
+                damage: None,
             },
             normal: [1.0, 0.0],
             geometry: FaceGeometry::default(),
@@ -353,8 +358,8 @@ impl ContactFaces {
             phi_a: vec![0.0; points * n],
             phi_b: vec![0.0; points * n],
             m0: vec![0.0; nf * nf],
-            inflow: vec![0.0; 2 * nf],
-            sep: [0.0; 2 * MAX_FACE_BASIS],
+            inflow: vec![0.0; STATE_COMPONENTS * nf],
+            sep: [0.0; STATE_COMPONENTS * MAX_FACE_BASIS],
             probes: [Probe::default(); SAMPLES],
             w_a: vec![[0.0; 2]; points],
             w_b: vec![[0.0; 2]; points],
@@ -367,9 +372,12 @@ impl ContactFaces {
             count: 0,
             psi: vec![0.0; nf],
             grad: vec![[0.0; 2]; nf],
-            jacobian: vec![0.0; 4 * nf * nf],
-            columns: vec![0.0; 2 * nf * (2 * m).max(2)],
-            coupling: [vec![0.0; 2 * m * nf], vec![0.0; 2 * m * nf]],
+            jacobian: vec![0.0; (STATE_COMPONENTS * nf).pow(2)],
+            columns: vec![0.0; STATE_COMPONENTS * nf * (2 * m).max(2)],
+            coupling: [
+                vec![0.0; STATE_COMPONENTS * m * nf],
+                vec![0.0; STATE_COMPONENTS * m * nf],
+            ],
             outer: vec![0.0; n * n],
             block: vec![0.0; m * m],
             crossings: Vec::with_capacity(2 * SAMPLES * max_faces),
@@ -377,8 +385,9 @@ impl ContactFaces {
         }
     }
 
-    /// `(delta, slip)` (m) of face `f` at the point `x` of its plane, after [`Self::finish`].
-    pub(super) fn state_at(&mut self, f: usize, x: SpacePoint) -> (f64, f64) {
+    /// `[delta (m), slip (m), D]` of face `f` at the point `x` of its plane, after
+    /// [`Self::finish`].
+    pub(super) fn state_at(&mut self, f: usize, x: SpacePoint) -> [f64; STATE_COMPONENTS] {
         let state = self.faces[f].state(self.basis.len());
         state.evaluate(&self.basis, x, &mut self.psi)
     }
@@ -453,6 +462,8 @@ impl ContactFaces {
             }
         }
         face.inflow.fill(0.0);
+        let ns = law.components();
+        let initial = law.initial_state();
         for &(under, [p, q]) in shape.bottom() {
             let below = solution.face(under as usize);
             let length = (q[0] - p[0]).hypot(q[1] - p[1]);
@@ -463,17 +474,18 @@ impl ContactFaces {
                 .zip(&self.bottom_rule.weights)
             {
                 let x = [0, 1, 2].map(|i| p[i] + t[0] * (q[i] - p[i]));
-                let (delta, slip) = below
+                let state = below
                     .as_ref()
-                    .map_or((0.0, 0.0), |f| f.evaluate(basis, x, psi));
+                    .map_or(initial, |f| f.evaluate(basis, x, psi));
                 basis.eval(face.geometry.to_reference(x), psi);
                 let w = wg * length;
                 for k in 0..nf {
                     for l in 0..nf {
                         m0[k * nf + l] += w * psi[k] * psi[l];
                     }
-                    face.inflow[k] += w * psi[k] * delta;
-                    face.inflow[nf + k] += w * psi[k] * slip;
+                    for (c, value) in state[..ns].iter().enumerate() {
+                        face.inflow[c * nf + k] += w * psi[k] * value;
+                    }
                 }
             }
         }
@@ -487,19 +499,19 @@ impl ContactFaces {
                 *probe = Probe {
                     bottom,
                     top: a[2] + f * (b[2] - a[2]),
-                    under: below.map_or(0.0, |s| s.evaluate(basis, bottom, psi).0),
+                    under: below.map_or(0.0, |s| s.evaluate(basis, bottom, psi)[0]),
                 };
             }
         }
-        // First guess: the inherited separation carried up the face (no rate), `M0 d = inflow`.
-        let (guess, matrix) = (&mut self.columns[..2 * nf], &mut self.jacobian[..nf * nf]);
-        guess.copy_from_slice(&face.inflow);
+        // First guess: the inherited state carried up the face (no rate), `M0 d = inflow`.
+        let (guess, matrix) = (&mut self.columns[..ns * nf], &mut self.jacobian[..nf * nf]);
+        guess.copy_from_slice(&face.inflow[..ns * nf]);
         matrix.copy_from_slice(m0);
-        if !solve_dense(matrix, nf, guess, 2) {
+        if !solve_dense(matrix, nf, guess, ns) {
             guess.fill(0.0);
         }
-        face.sep = [0.0; 2 * MAX_FACE_BASIS];
-        face.sep[..2 * nf].copy_from_slice(guess);
+        face.sep = [0.0; STATE_COMPONENTS * MAX_FACE_BASIS];
+        face.sep[..ns * nf].copy_from_slice(guess);
         index
     }
 
@@ -560,11 +572,29 @@ impl ContactFaces {
             face.w_a[p] = w_a;
             face.w_b[p] = w_b;
         }
-        // Inner Newton on the face, G(d) = M0 d - inflow - int psi rate(sep) / c = 0, with a
+        // Inner Newton on the face, G(d) = M0 d - inflow - int psi rate(state) / c = 0, with a
         // backtracking line search on |G|: the area fractions saturate (flat rate beyond r_c and
         // r_s), where plain Newton steps can cycle.
+        let ns = face.law.components();
+        // Per component, a size of the values: the separation's (both components, at least
+        // the law's scale) and the damage's (at least 1).
         let scale = face.law.separation_scale();
-        let n2 = 2 * nf;
+        let sizes = |d: &[f64]| -> [f64; STATE_COMPONENTS] {
+            let largest = |range: std::ops::Range<usize>, floor: f64| {
+                d[range].iter().fold(floor, |m: f64, x| m.max(x.abs()))
+            };
+            let separation = largest(0..2 * nf, scale);
+            [separation, separation, largest(2 * nf..3 * nf, 1.0)]
+        };
+        // The largest step of any component relative to its size.
+        let relative = |step: &[f64], size: &[f64; STATE_COMPONENTS]| {
+            (0..ns).fold(0.0f64, |m, comp| {
+                step[comp * nf..(comp + 1) * nf]
+                    .iter()
+                    .fold(m, |m, s| m.max(s.abs() / size[comp]))
+            })
+        };
+        let n2 = ns * nf;
         let (g, rest) = self.columns.split_at_mut(n2);
         let trial_g = &mut rest[..n2];
         let jac = &mut self.jacobian[..n2 * n2];
@@ -575,13 +605,13 @@ impl ContactFaces {
             if !solve_dense(jac, n2, g, 1) {
                 return false;
             }
-            // Trust region: steps of at most half the law's scale or of the separation so far
-            // (the cohesive traction is not monotone; a long first step can land beyond its
-            // peak, in another basin of |G|).
-            let largest = g.iter().fold(0.0f64, |m, s| m.max(s.abs()));
-            let limit = 0.5 * face.sep.iter().fold(scale, |m, d| m.max(d.abs()));
-            if largest > limit {
-                g.iter_mut().for_each(|s| *s *= limit / largest);
+            // Trust region: steps of at most half the law's scale or of the state so far, per
+            // component (the cohesive traction is not monotone; a long first step can land
+            // beyond its peak, in another basin of |G|).
+            let size = sizes(&face.sep);
+            let largest = relative(g, &size);
+            if largest > 0.5 {
+                g.iter_mut().for_each(|s| *s *= 0.5 / largest);
             }
             let mut alpha = 1.0;
             let mut trial = face.sep;
@@ -595,15 +625,14 @@ impl ContactFaces {
                 }
                 alpha *= 0.5;
             }
-            let step = alpha * g.iter().fold(0.0f64, |m, s| m.max(s.abs()));
             face.sep = trial;
-            let size = face.sep.iter().fold(scale, |m, d| m.max(d.abs()));
+            let step = alpha * relative(g, &sizes(&face.sep));
             if !step.is_finite() {
                 return false;
             }
             norm = face.separation_residual(c, &face.sep, g, Some(jac));
             // Converged, or stalled at round-off (the step no longer halves).
-            if step <= 1e-12 * size || (step <= 1e-9 * size && step >= 0.5 * previous) {
+            if step <= 1e-12 || (step <= 1e-9 && step >= 0.5 * previous) {
                 converged = true;
                 break;
             }
@@ -644,13 +673,14 @@ impl ContactFaces {
     }
 
     /// Adds the Jacobian of face `f`'s `int phi F*` with respect to both sides' coefficients,
-    /// through the traces directly and through the face's separation.
+    /// through the traces directly and through the face's interface state.
     fn add_jacobian(&mut self, system: &System, f: usize, blocks: &mut BlockSystem) {
         let fields = system.fields();
         let c = system.c_ref();
         let nf = self.basis.len();
-        let n2 = 2 * nf;
         let face = &self.faces[f];
+        let ns = face.law.components();
+        let n2 = ns * nf;
         let n = face.phi_a.len() / face.weights.len();
         let m = n * fields;
         let z = face.law.z;
@@ -672,7 +702,7 @@ impl ContactFaces {
         columns.fill(0.0);
         let jac = &mut self.jacobian[..n2 * n2];
         jac.fill(0.0);
-        for comp in 0..2 {
+        for comp in 0..ns {
             for k in 0..nf {
                 jac[(comp * nf + k) * n2 + comp * nf..][..nf]
                     .copy_from_slice(&face.m0[k * nf..(k + 1) * nf]);
@@ -714,7 +744,7 @@ impl ContactFaces {
                 (&mut *coupling_a, &flux_a, ta, phi_a),
                 (&mut *coupling_b, &flux_b, tb, phi_b),
             ] {
-                for e in 0..2 {
+                for e in 0..ns {
                     let df: [f64; MAX_FIELDS] =
                         std::array::from_fn(|i| (0..4).map(|c| flux[c][i] * t.d_sep[c][e]).sum());
                     for (k, &ph) in phi.iter().enumerate() {
@@ -727,7 +757,7 @@ impl ContactFaces {
                     }
                 }
             }
-            for comp in 0..2 {
+            for comp in 0..ns {
                 let drate: [[f64; MAX_FIELDS]; 2] =
                     [(&ta.rate_wa[comp], &dwa), (&ta.rate_wb[comp], &dwb)]
                         .map(|(r, dw)| std::array::from_fn(|j| r[0] * dw[0][j] + r[1] * dw[1][j]));
@@ -741,7 +771,7 @@ impl ContactFaces {
                         }
                     }
                 }
-                for e in 0..2 {
+                for e in 0..ns {
                     let r = w / c * ta.rate_sep[comp][e];
                     if r == 0.0 {
                         continue;
@@ -831,7 +861,8 @@ impl ContactFaces {
                 let du = [ub[0] - ua[0], ub[1] - ua[1]];
                 let traced = [du[0] * m[0] + du[1] * m[1], -du[0] * m[1] + du[1] * m[0]];
                 let (at_traces, _) = law.traction(traced);
-                let (at_face, _) = law.traction(face.separation_at(nf, p, &face.sep));
+                let [delta, slip, _] = face.separation_at(nf, p, &face.sep);
+                let (at_face, _) = law.traction([delta, slip]);
                 let t = &face.targets_a[p];
                 let power: f64 = (0..2)
                     .map(|k| (at_face[k] - at_traces[k]) * t.rate[k])

@@ -116,6 +116,8 @@ pub struct InterfaceSample {
     pub delta: f64,
     /// Tangential slip, m.
     pub slip: f64,
+    /// Damage `D` in effect (the debonded fraction) with the damage law; 0 with other laws.
+    pub damage: f64,
     /// Jump of the target velocities `[[v*]]`, m/s.
     pub velocity_jump: [f64; 2],
     /// Contact area fraction.
@@ -890,21 +892,21 @@ impl PatchSolver {
             q[..fields].copy_from_slice(&self.values[..fields]);
             q
         });
-        let (delta, slip) = self.contact.state_at(f, point);
+        let state = self.contact.state_at(f, point);
         let (w_a, w_b) = crate::interface::characteristics(
             law.z,
             &self.system.frame(&qa, normal),
             &self.system.frame(&qb, normal),
         );
-        let sep = [delta, slip];
-        let (a, b) = (law.targets(w_a, w_b, sep), law.targets(w_b, w_a, sep));
+        let (a, b) = (law.targets(w_a, w_b, state), law.targets(w_b, w_a, state));
         let z_ref = self.system.z_ref();
         Some(InterfaceSample {
             time: point[2] / self.system.c_ref(),
             traction: a.star.s.map(|s| s * z_ref),
             bonded_traction: a.bonded_traction.map(|s| s * z_ref),
-            delta,
-            slip,
+            delta: state[0],
+            slip: state[1],
+            damage: if law.damage.is_some() { a.damage } else { 0.0 },
             // Side b's frame velocities flip with its normal.
             velocity_jump: [-b.star.v[0] - a.star.v[0], -b.star.v[1] - a.star.v[1]],
             eta: a.eta,
@@ -998,7 +1000,7 @@ impl PatchSolver {
                 let normal = [nrm[0], nrm[1]];
                 let a = system.frame(&own(x, phi), normal);
                 let star_trace = match (side.neighbour, law) {
-                    (Some(_), Some(Law::Contact(_) | Law::XuNeedleman(_))) => {
+                    (Some(_), Some(law)) if law.is_nonlinear() => {
                         contact.expect("contact faces are registered")[point].star
                     }
                     (Some(_), Some(Law::Free)) => {

@@ -1,0 +1,142 @@
+//! `crack_tips.png`: the extension and the speed of each crack tip over time, from
+//! `crack_tips.csv`; under a `[loading]`, in the seed's normalized units against the LEFM tip
+//! (as seed figures 2.6-2.8).
+
+use std::path::Path;
+
+use super::{Image, LineChart, LineStyle};
+use crate::error::EngineError;
+use crate::lefm;
+
+/// Size of `crack_tips.png`, pixels: two charts stacked.
+pub const CRACK_PNG_SIZE: (u32, u32) = (1000, 1200);
+
+/// The units of the seed's mode-I problem: `t' = (t - arrival) / tau`, `a' = a / (tau c_r)`,
+/// speeds over `c_r`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Normalization {
+    /// `tau'`, s.
+    pub tau: f64,
+    /// Rayleigh speed, m/s.
+    pub c_r: f64,
+    /// Time at which the load reaches the crack plane, s.
+    pub arrival: f64,
+    /// End time of the run, s: the LEFM curve is drawn up to it.
+    pub end: f64,
+}
+
+/// The points of one interface's tip, in the chart's units.
+struct TipSeries {
+    name: String,
+    extension: Vec<(f64, f64)>,
+    speed: Vec<(f64, f64)>,
+}
+
+/// The tip extension chart above the tip speed chart, for `crack_tips.csv`'s text `csv`; the
+/// LEFM reference is drawn when `normalization` is given.
+pub fn crack_charts(csv: &str, normalization: Option<Normalization>) -> Result<Image, EngineError> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| EngineError::Plot(format!("crack_tips.csv has no column {name}")))
+    };
+    let (t, tag, a, v) = (
+        column("t_s")?,
+        column("interface")?,
+        column("extension_m")?,
+        column("speed_m_s")?,
+    );
+    // x = (t - shift) * per_time, extension * per_length, speed * per_speed.
+    let (shift, per_time, per_length, per_speed) = match normalization {
+        Some(n) => (n.arrival, 1.0 / n.tau, 1.0 / (n.tau * n.c_r), 1.0 / n.c_r),
+        None => (0.0, 1e6, 1e3, 1.0),
+    };
+    // Per interface tag: its name, extension and speed series.
+    let mut tips: Vec<TipSeries> = Vec::new();
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        let get = |i: usize| {
+            f.get(i)
+                .and_then(|s| s.parse::<f64>().ok())
+                .unwrap_or(f64::NAN)
+        };
+        let name = f.get(tag).copied().unwrap_or("");
+        if tips.last().is_none_or(|l| l.name != name) {
+            tips.push(TipSeries {
+                name: name.to_string(),
+                extension: Vec::new(),
+                speed: Vec::new(),
+            });
+        }
+        let entry = tips.last_mut().expect("pushed");
+        let x = (get(t) - shift) * per_time;
+        entry.extension.push((x, get(a) * per_length));
+        entry.speed.push((x, get(v) * per_speed));
+    }
+    let (time, extension, speed) = match normalization {
+        Some(_) => (
+            "normalized time t' = (t - t0) / tau'",
+            "normalized extension a' = a / (tau' c_R)",
+            "tip speed / c_R",
+        ),
+        None => ("time (us)", "extension (mm)", "tip speed (m/s)"),
+    };
+    let mut position = LineChart::new("Crack tip extension", time, extension);
+    let mut velocity = LineChart::new("Crack tip speed", time, speed);
+    for tip in &tips {
+        let name = format!("sdg, {}", tip.name);
+        position = position.series(&name, &tip.extension, LineStyle::Solid);
+        velocity = velocity.series(&name, &tip.speed, LineStyle::Solid);
+    }
+    if let Some(n) = normalization {
+        let reference = lefm::tip_history((n.end - n.arrival) / n.tau, 400);
+        let a: Vec<(f64, f64)> = reference.iter().map(|r| (r.0, r.1)).collect();
+        let v: Vec<(f64, f64)> = reference.iter().map(|r| (r.0, r.2)).collect();
+        position = position.series("LEFM (seed 2.61, 2.63)", &a, LineStyle::Dashed);
+        velocity = velocity.series("LEFM (seed 2.61, 2.63)", &v, LineStyle::Dashed);
+    }
+    let half = (CRACK_PNG_SIZE.0, CRACK_PNG_SIZE.1 / 2);
+    Ok(position.render(half)?.above(velocity.render(half)?))
+}
+
+/// Draws `crack_tips.csv`'s text `csv` as `dir/crack_tips.png`; a picture that cannot be drawn
+/// is logged as a warning, never an error of the run.
+pub fn write_crack_png(dir: &Path, csv: &str, normalization: Option<Normalization>) {
+    let path = dir.join("crack_tips.png");
+    if let Err(e) = crack_charts(csv, normalization).and_then(|image| image.write_png(&path)) {
+        tracing::warn!("{}: {e}", path.display());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tips_and_the_reference_are_drawn() {
+        let mut csv =
+            String::from("t_s,interface,x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n");
+        for i in 0..50 {
+            let t = 1.6e-6 + 2e-8 * f64::from(i);
+            csv += &format!("{t:e},path,0,0,{:e},{:e},0\n", 5e-6 * f64::from(i), 250.0);
+        }
+        let n = Normalization {
+            tau: 6.5565e-7,
+            c_r: 938.0,
+            arrival: 5.74e-7,
+            end: 2.87e-6,
+        };
+        for normalization in [None, Some(n)] {
+            let image = crack_charts(&csv, normalization).unwrap();
+            assert_eq!((image.width, image.height), CRACK_PNG_SIZE);
+            let blue = image.rgb.chunks(3).filter(|p| p == &[31, 119, 180]).count();
+            let orange = image.rgb.chunks(3).filter(|p| p == &[255, 127, 14]).count();
+            assert!(blue > 500, "{blue}");
+            assert_eq!(orange > 300, normalization.is_some(), "{orange}");
+        }
+        assert!(crack_charts("t_s,x\n", None).is_err());
+    }
+}
