@@ -124,6 +124,45 @@ fn validate_accepts_the_shipped_configs() {
 }
 
 #[test]
+fn each_command_lists_only_its_options() {
+    let help = |command: &str| {
+        let out = sdg(&[command, "--help"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let job = [
+        "--output",
+        "--threads",
+        "--deterministic",
+        "--log-level",
+        "--log-format",
+    ];
+    for command in ["run", "mesh"] {
+        let text = help(command);
+        for option in ["<CONFIG>", "--set", "--quiet"].iter().chain(&job) {
+            assert!(
+                text.contains(option),
+                "{command}: {option} missing:\n{text}"
+            );
+        }
+    }
+    let text = help("validate");
+    for option in ["<CONFIG>", "--set", "--quiet"] {
+        assert!(text.contains(option), "validate: {option} missing:\n{text}");
+    }
+    for option in job {
+        assert!(!text.contains(option), "validate: {option} listed:\n{text}");
+    }
+    let text = help("plot");
+    for option in ["<VTU>", "--field", "--out ", "--edges", "--quiet"] {
+        assert!(text.contains(option), "plot: {option} missing:\n{text}");
+    }
+    for option in ["--set"].iter().chain(&job) {
+        assert!(!text.contains(option), "plot: {option} listed:\n{text}");
+    }
+}
+
+#[test]
 fn malformed_config() {
     let (_dir, config) = config_file(&format!("{CONFIG}\n[pitch\nsafety = 0.5\n"));
     expect_input_error(
