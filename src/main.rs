@@ -9,7 +9,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 
-use sdg_engine::{EngineError, LoadedConfig, Problem, RunOptions};
+use sdg_engine::{ConfigError, EngineError, LoadedConfig, Problem, RunOptions};
 
 /// Adaptive spacetime DG simulation of dynamic fracture on tent-pitched meshes.
 #[derive(Debug, Parser)]
@@ -121,8 +121,35 @@ fn main() -> ExitCode {
     }
 }
 
+/// Loads the config with its overrides and sets the problem up. The checks against the mesh
+/// (boundary sides, interface tags, probes) name the override that set their key, as the checks
+/// of the config alone do.
 fn setup(args: &ConfigArgs) -> Result<Problem, EngineError> {
-    Problem::setup(LoadedConfig::load(&args.config, &args.set)?)
+    let loaded = LoadedConfig::load(&args.config, &args.set)?;
+    Problem::setup(loaded).map_err(|e| match e {
+        EngineError::Config(e) => blame_override(e, &args.set).into(),
+        e => e,
+    })
+}
+
+/// `error` blamed on the last override that set its key, or a table or list holding it: its
+/// source becomes that `--set KEY=VALUE`. Errors of keys no override set keep naming the file.
+fn blame_override(mut error: ConfigError, overrides: &[String]) -> ConfigError {
+    let Some(key) = &error.key else {
+        return error;
+    };
+    // The key as an override spells it: `interface[0].tags` is `interface.0.tags`.
+    let key = key.replace('[', ".").replace(']', "");
+    let culprit = overrides.iter().rev().find(|spec| {
+        spec.split_once('=').is_some_and(|(path, _)| {
+            key.strip_prefix(path.trim())
+                .is_some_and(|rest| rest.is_empty() || rest.starts_with('.'))
+        })
+    });
+    if let Some(spec) = culprit {
+        error.file = format!("--set {spec}");
+    }
+    error
 }
 
 fn options(job: &JobArgs) -> RunOptions {

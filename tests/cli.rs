@@ -324,13 +324,11 @@ fn invalid_interface_settings() {
 }
 
 /// Where an error at `key` caused by the override `set` comes from: the override when it set
-/// that key (or a list holding it), else the config file (`interface.0.s_c` makes `s_s`
-/// invalid). Checks against the mesh, made when the problem is set up (interface tags, probes),
-/// name the file too.
+/// that key (or a list holding it), checks against the mesh (interface tags, probes) included,
+/// else the config file (`interface.0.s_c` makes `s_s` invalid).
 fn source_of(set: &str, key: &str) -> String {
     let path = set.split('=').next().unwrap().replace(".0.", "[0].");
-    let setup_checks = ["interface[0].tags", "output.interface_probes[0]"];
-    if key.starts_with(&path) && !setup_checks.contains(&key) {
+    if key.starts_with(&path) {
         format!("--set {set}")
     } else {
         "case.toml".into()
@@ -357,6 +355,36 @@ fn errors_name_the_override_or_the_file() {
 }
 
 #[test]
+fn checks_against_the_mesh_name_the_override() {
+    let (_dir, config) = config_file(&format!("{CONFIG}{CRACKED}"));
+    for (set, message) in [
+        (
+            r#"interface.0.tags=["crak"]"#,
+            "interface[0].tags: no interior edge is tagged `crak`",
+        ),
+        (
+            r#"boundary.0.sides=["left", "right", "bottom", "top", "middle"]"#,
+            "boundary[0].sides: no boundary side is tagged `middle`",
+        ),
+    ] {
+        let out = sdg(&["validate", &config, "--set", "mesh.nx=16", "--set", set]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        let expected = format!("error: --set {set}: {message}");
+        assert!(
+            err.starts_with(&expected),
+            "expected `{expected}`, got: {err}"
+        );
+    }
+    // The same side in the file names the file.
+    let (_dir, config) = config_file(&CONFIG.replace(r#""top"]"#, r#""top", "middle"]"#));
+    expect_input_error(
+        &["validate", &config, "--set", "mesh.nx=16"],
+        &["case.toml: boundary[0].sides: no boundary side is tagged `middle`"],
+    );
+}
+
+#[test]
 fn every_tag_must_be_named() {
     let (_dir, config) = config_file(CONFIG);
     expect_input_error(
@@ -376,7 +404,7 @@ fn every_tag_must_be_named() {
             "output.interface_probes=[[0.001, 0.001]]",
         ],
         &[
-            "case.toml",
+            "--set output.interface_probes=[[0.001, 0.001]]",
             "output.interface_probes[0]",
             "no interface edge",
         ],
@@ -400,7 +428,7 @@ fn every_tag_must_be_named() {
             r#"boundary.0.sides=["left", "right", "bottom", "top", "crack"]"#,
         ],
         &[
-            "case.toml",
+            r#"--set boundary.0.sides=["left", "right", "bottom", "top", "crack"]"#,
             "boundary[0].sides",
             "`crack` tags interior edges",
         ],
