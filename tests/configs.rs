@@ -136,7 +136,7 @@ fn solver_configs_match_stored_results() {
 /// `python3` with meshio: required under CI, skipped with a notice elsewhere.
 #[test]
 fn spacetime_mesh_opens_in_meshio() {
-    if !common::meshio_available() {
+    if !common::meshio_available("meshio reads spacetime.vtu") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -249,7 +249,7 @@ fn sdg_plot_reads_meshio_files_and_names_missing_fields() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("bogus.vtu"), "{err}");
 
-    if !common::meshio_available() {
+    if !common::meshio_available("sdg plot of meshio's VTU files") {
         return;
     }
     // meshio's encodings: zlib-compressed base64 (its default), uncompressed base64, ASCII.

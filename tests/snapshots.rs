@@ -70,7 +70,7 @@ fn snapshots_agree_with_the_exact_solution() {
 
 #[test]
 fn snapshots_open_in_meshio() {
-    if !common::meshio_available() {
+    if !common::meshio_available("meshio reads the snapshots") {
         return;
     }
     let text = std::fs::read_to_string(
@@ -110,7 +110,7 @@ fn snapshots_open_in_meshio() {
 
 #[test]
 fn interface_cuts_open_in_meshio() {
-    if !common::meshio_available() {
+    if !common::meshio_available("meshio reads the interface cuts") {
         return;
     }
     // Contact and separation to just after the wave closes the interface; p = 1 for speed.
