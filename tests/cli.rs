@@ -1,21 +1,13 @@
 //! The `sdg` command line: outputs, overrides, and exit codes with clear messages on bad input.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn sdg(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sdg"))
-        .args(args)
-        .output()
-        .expect("the sdg binary runs")
-}
+use std::path::{Path, PathBuf};
+
+use common::{sdg, stderr};
 
 fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
 const CONFIG: &str = r#"

@@ -1,11 +1,12 @@
 // Each test binary uses a different subset of these helpers.
 #![allow(dead_code)]
 
-//! Helpers shared by the integration tests: run a config text through the engine.
+//! Helpers shared by the integration tests: run configs through the engine or the `sdg`
+//! binary, read our files back with Python.
 
 use std::io::Write;
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::{Command, Output, Stdio};
 
 use sdg_engine::{Config, LoadedConfig, Problem, RunOptions, RunSummary};
 
@@ -202,4 +203,28 @@ pub fn meshio_available(check: &str) -> bool {
         std::io::stderr().write_all(notice.as_bytes()).unwrap();
     }
     ok
+}
+
+/// Runs the Python `script` with `args` (`sys.argv[1..]`); returns its standard output.
+pub fn python(script: &str, args: &[&Path]) -> String {
+    let out = Command::new("python3")
+        .args(["-c", script])
+        .args(args)
+        .output()
+        .expect("python3 runs");
+    assert!(out.status.success(), "{}", stderr(&out));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs the `sdg` binary with `args`.
+pub fn sdg(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sdg"))
+        .args(args)
+        .output()
+        .expect("the sdg binary runs")
+}
+
+/// The standard error of a finished command, as text.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
 }
