@@ -4,10 +4,10 @@
 
 use std::io::IsTerminal;
 use std::num::NonZeroUsize;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 
 use sdg_engine::{EngineError, LoadedConfig, Problem, RunOptions};
 
@@ -17,27 +17,72 @@ use sdg_engine::{EngineError, LoadedConfig, Problem, RunOptions};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Solve the configured problem to the end time.
+    Run(JobArgs),
+    /// Pitch tents to the end time without solving; write the summary and spacetime mesh.
+    Mesh(JobArgs),
+    /// Check a configuration and its mesh, then exit.
+    Validate(ConfigArgs),
+    /// Draw a field of a VTU file (a snapshot, or any triangle grid) as PNG.
+    Plot(PlotArgs),
+}
+
+// What every command that reads a config takes: all that `validate` takes.
+#[derive(Debug, Args)]
+struct ConfigArgs {
+    /// TOML configuration file.
+    config: PathBuf,
+    /// Override a config key, e.g. `--set mesh.nx=64` (repeatable, applied in order).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
+}
+
+// The options of the commands that pitch tents, `run` and `mesh`.
+#[derive(Debug, Args)]
+struct JobArgs {
+    #[command(flatten)]
+    config: ConfigArgs,
     /// Output folder (overrides `output.dir`).
-    #[arg(long, global = true, value_name = "DIR")]
+    #[arg(long, value_name = "DIR")]
     output: Option<PathBuf>,
     /// Worker threads (default: all available cores).
-    #[arg(long, global = true, value_name = "N")]
+    #[arg(long, value_name = "N")]
     threads: Option<NonZeroUsize>,
     /// Results independent of thread count and timing (sets `scheduler.deterministic`).
-    #[arg(long, global = true)]
+    #[arg(long)]
     deterministic: bool,
-    /// Print nothing but errors; no progress bar.
-    #[arg(long, global = true)]
-    quiet: bool,
     /// Log level on stderr: error, warn, info, debug or trace.
-    #[arg(long, global = true, value_name = "LEVEL", default_value = "warn")]
+    #[arg(long, value_name = "LEVEL", default_value = "warn")]
     log_level: tracing::Level,
     /// Log format: text, or json (one object per line, for job scripts).
-    #[arg(long, global = true, value_enum, default_value_t = LogFormat::Text)]
+    #[arg(long, value_enum, default_value_t = LogFormat::Text)]
     log_format: LogFormat,
-    /// Override a config key, e.g. `--set mesh.nx=64` (repeatable, applied in order).
-    #[arg(long = "set", global = true, value_name = "KEY=VALUE")]
-    set: Vec<String>,
+}
+
+#[derive(Debug, Args)]
+struct PlotArgs {
+    /// VTU file: ASCII, base64 binary or appended, uncompressed or zlib.
+    vtu: PathBuf,
+    /// Point or cell field: NAME (vectors: magnitude), NAME_x, NAME_xy, or von_mises
+    /// [default: velocity, i.e. its magnitude].
+    #[arg(long, value_name = "NAME")]
+    field: Option<String>,
+    /// PNG file [default: the VTU path with extension png].
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// Overlay the mesh edges.
+    #[arg(long)]
+    edges: bool,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -46,51 +91,28 @@ enum LogFormat {
     Json,
 }
 
-#[derive(Debug, Subcommand)]
-enum Command {
-    /// Solve the configured problem to the end time.
-    Run {
-        /// TOML configuration file.
-        config: PathBuf,
-    },
-    /// Pitch tents to the end time without solving; write the summary and spacetime mesh.
-    Mesh {
-        /// TOML configuration file.
-        config: PathBuf,
-    },
-    /// Check a configuration and its mesh, then exit.
-    Validate {
-        /// TOML configuration file.
-        config: PathBuf,
-    },
-    /// Draw a field of a VTU file (a snapshot, or any triangle grid) as PNG.
-    Plot {
-        /// VTU file: ASCII, base64 binary or appended, uncompressed or zlib.
-        vtu: PathBuf,
-        /// Point or cell field: NAME (vectors: magnitude), NAME_x, NAME_xy, or von_mises
-        /// [default: velocity, i.e. its magnitude].
-        #[arg(long, value_name = "NAME")]
-        field: Option<String>,
-        /// PNG file [default: the VTU path with extension png].
-        #[arg(long, value_name = "FILE")]
-        out: Option<PathBuf>,
-        /// Overlay the mesh edges.
-        #[arg(long)]
-        edges: bool,
-    },
-}
-
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let (level, format) = match &cli.command {
+        Command::Run(job) | Command::Mesh(job) => (job.log_level, job.log_format),
+        // No log options: warnings as text, should there be any.
+        Command::Validate(_) | Command::Plot(_) => (tracing::Level::WARN, LogFormat::Text),
+    };
     let logs = tracing_subscriber::fmt()
-        .with_max_level(cli.log_level)
+        .with_max_level(level)
         .with_ansi(std::io::stderr().is_terminal())
         .with_writer(std::io::stderr);
-    match cli.log_format {
+    match format {
         LogFormat::Text => logs.init(),
         LogFormat::Json => logs.json().init(),
     }
-    match execute(&cli) {
+    let result = match &cli.command {
+        Command::Run(job) => run(job),
+        Command::Mesh(job) => mesh(job),
+        Command::Validate(args) => validate(args),
+        Command::Plot(args) => plot(args),
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
@@ -99,102 +121,93 @@ fn main() -> ExitCode {
     }
 }
 
-fn execute(cli: &Cli) -> Result<(), EngineError> {
-    let (job, config) = match &cli.command {
-        Command::Run { config } => (Job::Run, config),
-        Command::Mesh { config } => (Job::Mesh, config),
-        Command::Validate { config } => (Job::Validate, config),
-        Command::Plot {
-            vtu,
-            field,
-            out,
-            edges,
-        } => {
-            let request = sdg_engine::plot::PlotRequest {
-                vtu: vtu.clone(),
-                field: field.clone(),
-                out: out.clone(),
-                edges: *edges,
-            };
-            let path = sdg_engine::plot::plot_vtu(&request)?;
-            if !cli.quiet {
-                println!("{}", path.display());
-            }
-            return Ok(());
-        }
-    };
-    config_command(cli, job, config)
+/// Loads the config with its overrides and sets the problem up. The checks against the mesh
+/// (boundary sides, interface tags, probes) name the override that set their key, as the checks
+/// of the config alone do.
+fn setup(args: &ConfigArgs) -> Result<Problem, EngineError> {
+    let loaded = LoadedConfig::load(&args.config, &args.set)?;
+    Problem::setup(loaded).map_err(|e| match e {
+        EngineError::Config(e) => sdg_engine::config::attribute(e, &args.set).into(),
+        e => e,
+    })
 }
 
-/// The commands that load a config.
-#[derive(Clone, Copy, Debug)]
-enum Job {
-    Run,
-    Mesh,
-    Validate,
-}
-
-fn config_command(cli: &Cli, job: Job, config: &Path) -> Result<(), EngineError> {
-    let problem = Problem::setup(LoadedConfig::load(config, &cli.set)?)?;
-    let options = RunOptions {
-        output_dir: cli.output.clone(),
-        threads: cli.threads.map(NonZeroUsize::get),
-        deterministic: cli.deterministic,
-        progress: !cli.quiet,
-    };
-    match job {
-        Job::Validate => {
-            if !cli.quiet {
-                println!(
-                    "{}: valid ({} vertices, {} triangles)",
-                    config.display(),
-                    problem.mesh.vertices().len(),
-                    problem.mesh.triangles().len()
-                );
-            }
-            Ok(())
-        }
-        Job::Mesh => {
-            let (summary, dir) = sdg_engine::mesh_job(&problem, &options)?;
-            if !cli.quiet {
-                println!(
-                    "{} tents, {} tetrahedra to t = {} s, max slope ratio {} (safety {}), \
-                     {:.3} s; outputs in {}",
-                    summary.tents,
-                    summary.tetrahedra,
-                    summary.final_time,
-                    summary.max_slope_ratio,
-                    summary.safety,
-                    summary.wall_time_s,
-                    dir.display()
-                );
-            }
-            Ok(())
-        }
-        Job::Run => {
-            let (summary, dir) = sdg_engine::solve_job(&problem, &options)?;
-            if !cli.quiet {
-                let error = summary.error.map_or(String::new(), |e| {
-                    format!(
-                        ", error: velocity {:.3e}, stress {:.3e}",
-                        e.velocity_l2_rel, e.stress_l2_rel
-                    )
-                });
-                println!(
-                    "{} patches (order {}, {:.0} dofs each) to t = {} s in {:.3} s on {} \
-                     threads ({}){error}; energy balance residual {:.1e}; outputs in {}",
-                    summary.patches,
-                    summary.order,
-                    summary.dofs_per_patch,
-                    summary.final_time,
-                    summary.wall_time_s,
-                    summary.threads,
-                    summary.mode,
-                    summary.energy.balance_residual_rel,
-                    dir.display()
-                );
-            }
-            Ok(())
-        }
+fn options(job: &JobArgs) -> RunOptions {
+    RunOptions {
+        output_dir: job.output.clone(),
+        threads: job.threads.map(NonZeroUsize::get),
+        deterministic: job.deterministic,
+        progress: !job.config.quiet,
     }
+}
+
+fn validate(args: &ConfigArgs) -> Result<(), EngineError> {
+    let problem = setup(args)?;
+    if !args.quiet {
+        println!(
+            "{}: valid ({} vertices, {} triangles)",
+            args.config.display(),
+            problem.mesh.vertices().len(),
+            problem.mesh.triangles().len()
+        );
+    }
+    Ok(())
+}
+
+fn mesh(job: &JobArgs) -> Result<(), EngineError> {
+    let (summary, dir) = sdg_engine::mesh_job(&setup(&job.config)?, &options(job))?;
+    if !job.config.quiet {
+        println!(
+            "{} tents, {} tetrahedra to t = {} s, max slope ratio {} (safety {}), \
+             {:.3} s; outputs in {}",
+            summary.tents,
+            summary.tetrahedra,
+            summary.final_time,
+            summary.max_slope_ratio,
+            summary.safety,
+            summary.wall_time_s,
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+fn run(job: &JobArgs) -> Result<(), EngineError> {
+    let (summary, dir) = sdg_engine::solve_job(&setup(&job.config)?, &options(job))?;
+    if !job.config.quiet {
+        let error = summary.error.map_or(String::new(), |e| {
+            format!(
+                ", error: velocity {:.3e}, stress {:.3e}",
+                e.velocity_l2_rel, e.stress_l2_rel
+            )
+        });
+        println!(
+            "{} patches (order {}, {:.0} dofs each) to t = {} s in {:.3} s on {} \
+             threads ({}){error}; energy balance residual {:.1e}; outputs in {}",
+            summary.patches,
+            summary.order,
+            summary.dofs_per_patch,
+            summary.final_time,
+            summary.wall_time_s,
+            summary.threads,
+            summary.mode,
+            summary.energy.balance_residual_rel,
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+fn plot(args: &PlotArgs) -> Result<(), EngineError> {
+    let request = sdg_engine::plot::PlotRequest {
+        vtu: args.vtu.clone(),
+        field: args.field.clone(),
+        out: args.out.clone(),
+        edges: args.edges,
+    };
+    let path = sdg_engine::plot::plot_vtu(&request)?;
+    if !args.quiet {
+        println!("{}", path.display());
+    }
+    Ok(())
 }

@@ -1,21 +1,13 @@
 //! The `sdg` command line: outputs, overrides, and exit codes with clear messages on bad input.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn sdg(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sdg"))
-        .args(args)
-        .output()
-        .expect("the sdg binary runs")
-}
+use std::path::{Path, PathBuf};
+
+use common::{sdg, stderr};
 
 fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
 const CONFIG: &str = r#"
@@ -120,6 +112,45 @@ fn validate_accepts_the_shipped_configs() {
         let path = entry.unwrap().path();
         let out = sdg(&["validate", path.to_str().unwrap()]);
         assert!(out.status.success(), "{}: {}", path.display(), stderr(&out));
+    }
+}
+
+#[test]
+fn each_command_lists_only_its_options() {
+    let help = |command: &str| {
+        let out = sdg(&[command, "--help"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let job = [
+        "--output",
+        "--threads",
+        "--deterministic",
+        "--log-level",
+        "--log-format",
+    ];
+    for command in ["run", "mesh"] {
+        let text = help(command);
+        for option in ["<CONFIG>", "--set", "--quiet"].iter().chain(&job) {
+            assert!(
+                text.contains(option),
+                "{command}: {option} missing:\n{text}"
+            );
+        }
+    }
+    let text = help("validate");
+    for option in ["<CONFIG>", "--set", "--quiet"] {
+        assert!(text.contains(option), "validate: {option} missing:\n{text}");
+    }
+    for option in job {
+        assert!(!text.contains(option), "validate: {option} listed:\n{text}");
+    }
+    let text = help("plot");
+    for option in ["<VTU>", "--field", "--out ", "--edges", "--quiet"] {
+        assert!(text.contains(option), "plot: {option} missing:\n{text}");
+    }
+    for option in ["--set"].iter().chain(&job) {
+        assert!(!text.contains(option), "plot: {option} listed:\n{text}");
     }
 }
 
@@ -285,13 +316,11 @@ fn invalid_interface_settings() {
 }
 
 /// Where an error at `key` caused by the override `set` comes from: the override when it set
-/// that key (or a list holding it), else the config file (`interface.0.s_c` makes `s_s`
-/// invalid). Checks against the mesh, made when the problem is set up (interface tags, probes),
-/// name the file too.
+/// that key (or a list holding it), checks against the mesh (interface tags, probes) included,
+/// else the config file (`interface.0.s_c` makes `s_s` invalid).
 fn source_of(set: &str, key: &str) -> String {
     let path = set.split('=').next().unwrap().replace(".0.", "[0].");
-    let setup_checks = ["interface[0].tags", "output.interface_probes[0]"];
-    if key.starts_with(&path) && !setup_checks.contains(&key) {
+    if key.starts_with(&path) {
         format!("--set {set}")
     } else {
         "case.toml".into()
@@ -318,6 +347,36 @@ fn errors_name_the_override_or_the_file() {
 }
 
 #[test]
+fn checks_against_the_mesh_name_the_override() {
+    let (_dir, config) = config_file(&format!("{CONFIG}{CRACKED}"));
+    for (set, message) in [
+        (
+            r#"interface.0.tags=["crak"]"#,
+            "interface[0].tags: no interior edge is tagged `crak`",
+        ),
+        (
+            r#"boundary.0.sides=["left", "right", "bottom", "top", "middle"]"#,
+            "boundary[0].sides: no boundary side is tagged `middle`",
+        ),
+    ] {
+        let out = sdg(&["validate", &config, "--set", "mesh.nx=16", "--set", set]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        let expected = format!("error: --set {set}: {message}");
+        assert!(
+            err.starts_with(&expected),
+            "expected `{expected}`, got: {err}"
+        );
+    }
+    // The same side in the file names the file.
+    let (_dir, config) = config_file(&CONFIG.replace(r#""top"]"#, r#""top", "middle"]"#));
+    expect_input_error(
+        &["validate", &config, "--set", "mesh.nx=16"],
+        &["case.toml: boundary[0].sides: no boundary side is tagged `middle`"],
+    );
+}
+
+#[test]
 fn every_tag_must_be_named() {
     let (_dir, config) = config_file(CONFIG);
     expect_input_error(
@@ -337,7 +396,7 @@ fn every_tag_must_be_named() {
             "output.interface_probes=[[0.001, 0.001]]",
         ],
         &[
-            "case.toml",
+            "--set output.interface_probes=[[0.001, 0.001]]",
             "output.interface_probes[0]",
             "no interface edge",
         ],
@@ -361,7 +420,7 @@ fn every_tag_must_be_named() {
             r#"boundary.0.sides=["left", "right", "bottom", "top", "crack"]"#,
         ],
         &[
-            "case.toml",
+            r#"--set boundary.0.sides=["left", "right", "bottom", "top", "crack"]"#,
             "boundary[0].sides",
             "`crack` tags interior edges",
         ],

@@ -137,7 +137,7 @@ fn solver_configs_match_stored_results() {
 /// `python3` with meshio: required under CI, skipped with a notice elsewhere.
 #[test]
 fn spacetime_mesh_opens_in_meshio() {
-    if !common::meshio_available() {
+    if !common::meshio_available("meshio reads spacetime.vtu") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -147,18 +147,7 @@ fn spacetime_mesh_opens_in_meshio() {
                   t = m.point_data['time']\n\
                   print(len(m.points), m.cells_dict['tetra'].shape[0], t.min(), t.max(), \
                   m.points[:, 2].max())";
-    let out = Command::new("python3")
-        .args(["-c", script])
-        .arg(dir.path().join("spacetime.vtu"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout).unwrap();
-    let fields: Vec<f64> = text
+    let fields: Vec<f64> = common::python(script, &[&dir.path().join("spacetime.vtu")])
         .split_whitespace()
         .map(|w| w.parse().unwrap())
         .collect();

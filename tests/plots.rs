@@ -5,8 +5,8 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
 
+use common::{sdg, stderr};
 use sdg_engine::plot::{FIELD_PNG_SIZE, FieldLayout, FieldPlot, HISTORY_PNG_SIZE, Values};
 
 /// A decoded 8-bit RGB PNG: width, height, pixels.
@@ -134,11 +134,7 @@ fn plane_wave_picture_has_stripes_at_the_wave_angle() {
         "--out",
     ];
     let out = sdg(&[&args[..], &[vx.to_str().unwrap()]].concat());
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let orientation = check_field_png(&vx, &lay).gradient_orientation(lay.field, 4);
     eprintln!("velocity_x: gradient orientation {orientation:.2} deg");
     assert!((orientation - angle).abs() < 1.0, "{orientation} deg");
@@ -170,13 +166,6 @@ fn pictures_only_when_asked() {
     assert_eq!(pngs, 0);
 }
 
-fn sdg(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sdg"))
-        .args(args)
-        .output()
-        .expect("the sdg binary runs")
-}
-
 #[test]
 fn sdg_plot_reads_meshio_files_and_names_missing_fields() {
     let problem = common::shipped(
@@ -205,11 +194,7 @@ fn sdg_plot_reads_meshio_files_and_names_missing_fields() {
 
     // Our own file through `sdg plot`: default field and output path, then a named field.
     let out = sdg(&["plot", snapshot.to_str().unwrap(), "--quiet"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     check_field_png(&snapshot.with_extension("png"), &lay);
     let von_mises = dir.path().join("von_mises.png");
     let out = sdg(&[
@@ -221,16 +206,12 @@ fn sdg_plot_reads_meshio_files_and_names_missing_fields() {
         "--out",
         von_mises.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     check_field_png(&von_mises, &lay);
 
     // A missing field: exit 2, naming the file and the field and listing those present.
     let out = sdg(&["plot", snapshot.to_str().unwrap(), "--field", "pressure"]);
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{err}");
     for needle in [
         "snapshot_0000.vtu",
@@ -245,11 +226,11 @@ fn sdg_plot_reads_meshio_files_and_names_missing_fields() {
     let bogus = dir.path().join("bogus.vtu");
     std::fs::write(&bogus, "not xml").unwrap();
     let out = sdg(&["plot", bogus.to_str().unwrap()]);
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("bogus.vtu"), "{err}");
 
-    if !common::meshio_available() {
+    if !common::meshio_available("sdg plot of meshio's VTU files") {
         return;
     }
     // meshio's encodings: zlib-compressed base64 (its default), uncompressed base64, ASCII.
@@ -259,35 +240,17 @@ fn sdg_plot_reads_meshio_files_and_names_missing_fields() {
                   meshio.write(sys.argv[2] + '/raw.vtu', m, compression=None)\n\
                   meshio.write(sys.argv[2] + '/ascii.vtu', m, binary=False)\n";
     let meshio_dir = tempfile::tempdir().unwrap();
-    let out = Command::new("python3")
-        .args(["-c", script])
-        .arg(&snapshot)
-        .arg(meshio_dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::python(script, &[&snapshot, meshio_dir.path()]);
     // The reference: our file alone in that folder (no pvd, no interfaces beside it).
     let ours = meshio_dir.path().join("ours.vtu");
     std::fs::copy(&snapshot, &ours).unwrap();
     let out = sdg(&["plot", ours.to_str().unwrap(), "--quiet"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let reference = Decoded::read(&ours.with_extension("png"));
     for name in ["zlib", "raw", "ascii"] {
         let vtu = meshio_dir.path().join(format!("{name}.vtu"));
         let out = sdg(&["plot", vtu.to_str().unwrap(), "--quiet"]);
-        assert!(
-            out.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
         let image = check_field_png(&vtu.with_extension("png"), &lay);
         // The same picture: binary copies are exact, ASCII ones round to 12 digits.
         let differ = image

@@ -4,7 +4,6 @@
 mod common;
 
 use std::path::Path;
-use std::process::Command;
 
 /// The values of the ASCII `DataArray` whose opening tag contains `marker`.
 fn data_array(text: &str, marker: &str) -> Vec<f64> {
@@ -70,7 +69,7 @@ fn snapshots_agree_with_the_exact_solution() {
 
 #[test]
 fn snapshots_open_in_meshio() {
-    if !common::meshio_available() {
+    if !common::meshio_available("meshio reads the snapshots") {
         return;
     }
     let text = std::fs::read_to_string(
@@ -87,18 +86,8 @@ fn snapshots_open_in_meshio() {
                   m = meshio.read(sys.argv[1])\n\
                   print(m.cells_dict['triangle'].shape[0], m.point_data['velocity'].shape[1], \
                   m.point_data['stress'].shape[1], m.point_data['strain_energy_density'].ndim)";
-    let out = Command::new("python3")
-        .args(["-c", script])
-        .arg(dir.path().join(&summary.snapshots[0].1))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let fields: Vec<usize> = String::from_utf8(out.stdout)
-        .unwrap()
+    let snapshot = dir.path().join(&summary.snapshots[0].1);
+    let fields: Vec<usize> = common::python(script, &[&snapshot])
         .split_whitespace()
         .map(|w| w.parse().unwrap())
         .collect();
@@ -110,7 +99,7 @@ fn snapshots_open_in_meshio() {
 
 #[test]
 fn interface_cuts_open_in_meshio() {
-    if !common::meshio_available() {
+    if !common::meshio_available("meshio reads the interface cuts") {
         return;
     }
     // Contact and separation to just after the wave closes the interface; p = 1 for speed.
@@ -128,18 +117,7 @@ fn interface_cuts_open_in_meshio() {
                   m = meshio.read(sys.argv[1])\n\
                   print(m.cells_dict['line'].shape[0], m.point_data['traction'].shape[1], \
                   m.point_data['delta'].ndim, int(m.point_data['mode'].max()))";
-    let out = Command::new("python3")
-        .args(["-c", script])
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let fields: Vec<usize> = String::from_utf8(out.stdout)
-        .unwrap()
+    let fields: Vec<usize> = common::python(script, &[&file])
         .split_whitespace()
         .map(|w| w.parse().unwrap())
         .collect();

@@ -1,9 +1,12 @@
 // Each test binary uses a different subset of these helpers.
 #![allow(dead_code)]
 
-//! Helpers shared by the integration tests: run a config text through the engine.
+//! Helpers shared by the integration tests: run configs through the engine or the `sdg`
+//! binary, read our files back with Python.
 
+use std::io::Write;
 use std::path::Path;
+use std::process::{Command, Output, Stdio};
 
 use sdg_engine::{Config, LoadedConfig, Problem, RunOptions, RunSummary};
 
@@ -184,16 +187,20 @@ pub fn solve_direct_with(
     }
 }
 
-/// True when `python3` can import meshio. Tests that read our files back with meshio skip with a
-/// notice without it, except under CI (`CI` set), which must install it.
-pub fn meshio_available() -> bool {
-    let ok = std::process::Command::new("python3")
+/// True when `python3` can import meshio. Tests that read our files back with meshio skip
+/// `check` without it, with a notice that shows even when the test passes, except under CI (`CI`
+/// set, as `.ci/run` does), where a missing meshio fails the test.
+pub fn meshio_available(check: &str) -> bool {
+    let ok = Command::new("python3")
         .args(["-c", "import meshio"])
+        .stderr(Stdio::null())
         .status()
         .is_ok_and(|s| s.success());
     if !ok {
         assert!(std::env::var_os("CI").is_none(), "CI must install meshio");
-        eprintln!("skipped: python3 with meshio is not available");
+        // Straight to stderr: the test harness captures `eprintln!` of passing tests.
+        let notice = format!("skipped: {check} (python3 cannot import meshio)\n");
+        std::io::stderr().write_all(notice.as_bytes()).unwrap();
     }
     ok
 }
@@ -217,4 +224,28 @@ pub fn csv_columns(path: &Path, names: &[&str]) -> Vec<Vec<f64>> {
                 .collect()
         })
         .collect()
+}
+
+/// Runs the Python `script` with `args` (`sys.argv[1..]`); returns its standard output.
+pub fn python(script: &str, args: &[&Path]) -> String {
+    let out = Command::new("python3")
+        .args(["-c", script])
+        .args(args)
+        .output()
+        .expect("python3 runs");
+    assert!(out.status.success(), "{}", stderr(&out));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs the `sdg` binary with `args`.
+pub fn sdg(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sdg"))
+        .args(args)
+        .output()
+        .expect("the sdg binary runs")
+}
+
+/// The standard error of a finished command, as text.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
 }

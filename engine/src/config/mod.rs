@@ -27,7 +27,8 @@ pub use settings::{
     AdaptConfig, OutputConfig, PitchConfig, SchedulerConfig, SolverConfig, TimeConfig, ZoneConfig,
 };
 
-use overrides::{apply_override, attribute};
+use overrides::apply_override;
+pub use overrides::attribute;
 
 /// A configuration error: where it came from, which key, and why.
 #[derive(Debug, thiserror::Error, PartialEq)]

@@ -36,7 +36,7 @@ pub(super) fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), C
 /// `error` (from the file after the overrides were applied) blamed on the last override that set
 /// its key, or a table or list containing it: its source becomes `--set KEY=VALUE`. Errors of
 /// keys no override set keep naming the file.
-pub(super) fn attribute(mut error: ConfigError, overrides: &[String]) -> ConfigError {
+pub fn attribute(mut error: ConfigError, overrides: &[String]) -> ConfigError {
     let Some(key) = error.key.clone() else {
         return error;
     };
