@@ -40,13 +40,14 @@ const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 3] = [
 ];
 
 /// Shipped configs checked against references by other tests: (file, test).
-const CHECKED_ELSEWHERE: [(&str, &str); 6] = [
+const CHECKED_ELSEWHERE: [(&str, &str); 7] = [
     ("contact_separation.toml", "tests/contact.rs"),
     ("stick_slip.toml", "tests/contact.rs"),
     ("cohesive_wave.toml", "tests/cohesive.rs"),
     ("decohesion.toml", "tests/cohesive.rs"),
     ("mode1_lefm.toml", "tests/cohesive.rs"),
     ("damage_interface.toml", "tests/damage.rs"),
+    ("damage_mode1.toml", "tests/damage.rs"),
 ];
 
 fn run_mesh(config: &str, out: &Path) -> serde_json::Value {

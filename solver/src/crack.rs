@@ -1,7 +1,10 @@
-//! Crack-tip tracking on cohesive faces (seed 2.4.2): where and when the normal separation
-//! first reaches the nominal crack-tip level `delta_c`, and the trailing-edge level `delta_T` of
-//! the cohesive process zone (the separation beyond `delta_c` at which the traction has fallen to
-//! 1% of the strength).
+//! Crack-tip tracking on cohesive and damage faces: where and when a component of the interface
+//! state first reaches the crack-tip level and the level of the process zone's other end.
+//! - Xu-Needleman (seed 2.4.2): the normal separation reaches the nominal crack-tip level
+//!   `delta_c`; the zone ends behind the tip at the trailing-edge level `delta_T` (the separation
+//!   beyond `delta_c` at which the traction has fallen to 1% of the strength).
+//! - Delayed damage (seed 4.2): the damage reaches `1 - eps` (fully debonded, the tip); the zone
+//!   ends ahead of the tip where the damage first reaches `eps`.
 //!
 //! Each cohesive face is probed on [`SAMPLES`] vertical lines above its edge, at the fractions
 //! `(k + 1/2) / SAMPLES` of the edge, a set that does not depend on which end the tent's pole
@@ -17,13 +20,23 @@ use crate::face::{FaceBasis, FaceState};
 /// Vertical probe lines per face.
 pub const SAMPLES: usize = 4;
 
-/// The levels of the separation tracked.
+/// The levels tracked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Level {
-    /// `delta = delta_c`: the nominal crack tip (the leading edge of the process zone).
+    /// The crack tip: `delta = delta_c` (Xu-Needleman), `D = 1 - eps` (damage).
     Tip,
-    /// `delta = delta_T`: the trailing edge of the process zone.
-    Trailing,
+    /// The process zone's other end: its trailing edge `delta = delta_T` (Xu-Needleman), its
+    /// leading edge `D = eps` (damage).
+    ZoneEnd,
+}
+
+/// What crack tracking follows on a law's faces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tracking {
+    /// The component of the interface state ([`crate::face::STATE_COMPONENTS`]).
+    pub component: usize,
+    /// The levels of that component (its units).
+    pub levels: [(Level, f64); 2],
 }
 
 /// A point of a cohesive interface where the normal separation reached a level.
@@ -46,35 +59,37 @@ pub fn sample_fraction(k: usize) -> f64 {
 
 /// One probe line of a face: vertical at `bottom`'s space point, from `bottom` (on the front
 /// below the face, scaled spacetime, m) to the scaled time `top` (m, on the face's top), with the
-/// normal separation `under` (m) the face inherits there from the face below.
+/// tracked component's value `under` the face inherits there from the face below.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Probe {
     /// Bottom of the line.
     pub bottom: [f64; 3],
     /// Scaled time of the line's top.
     pub top: f64,
-    /// Inherited normal separation at the bottom.
+    /// Inherited value of the tracked component at the bottom.
     pub under: f64,
 }
 
-/// Adds to `out` the crossings of `levels` (m) on the face `state` over `edge`, on its probe
-/// lines `probes`; `c_ref` converts the face's scaled time (m) to s, and `psi` is scratch of
-/// the face basis length.
+/// Adds to `out` the crossings of `tracking`'s levels on the face `state` over `edge`, on its
+/// probe lines `probes`; `c_ref` converts the face's scaled time (m) to s, and `psi` is scratch
+/// of the face basis length.
 pub fn find_crossings(
     state: &FaceState,
     basis: &FaceBasis,
     (edge, probes): (EdgeId, &[Probe; SAMPLES]),
-    levels: [(Level, f64); 2],
+    tracking: Tracking,
     c_ref: f64,
     psi: &mut [f64],
     out: &mut Vec<Crossing>,
 ) {
+    let component = tracking.component;
     for probe in probes {
         let bottom = probe.bottom;
-        let at =
-            |tau: f64, psi: &mut [f64]| state.evaluate(basis, [bottom[0], bottom[1], tau], psi)[0];
+        let at = |tau: f64, psi: &mut [f64]| {
+            state.evaluate(basis, [bottom[0], bottom[1], tau], psi)[component]
+        };
         let top_value = at(probe.top, psi);
-        for (level, value) in levels {
+        for (level, value) in tracking.levels {
             if !(probe.under < value && top_value >= value) {
                 continue;
             }
@@ -144,7 +159,10 @@ mod tests {
         let state = face(|x| 3.0 * x[1]);
         let mut out = Vec::new();
         let mut psi = vec![0.0; basis.len()];
-        let levels = [(Level::Tip, 1.0), (Level::Trailing, 2.5)];
+        let levels = Tracking {
+            component: 0,
+            levels: [(Level::Tip, 1.0), (Level::ZoneEnd, 2.5)],
+        };
         find_crossings(
             &state,
             &basis,
@@ -164,7 +182,7 @@ mod tests {
         // On the line at fraction f the top value is 3 (1 - f): 2.625, 1.875, 1.125, 0.375 for
         // f = 1/8 ... 7/8; three lines reach 1, one reaches 2.5.
         assert_eq!(out.iter().filter(|c| c.level == Level::Tip).count(), 3);
-        assert_eq!(out.iter().filter(|c| c.level == Level::Trailing).count(), 1);
+        assert_eq!(out.iter().filter(|c| c.level == Level::ZoneEnd).count(), 1);
         // Already above the level below: no new crossing.
         out.clear();
         find_crossings(
@@ -194,5 +212,34 @@ mod tests {
             let f = sample_fraction(k);
             assert!((c.point[0] - f).abs() < 1e-15 && (c.time - f / 2.0).abs() < 1e-15);
         }
+    }
+
+    #[test]
+    fn the_tracked_component_is_the_one_crossing() {
+        let basis = FaceBasis::new(1);
+        // The damage rises to 3 at the pole top (as the separation above); no separation.
+        let mut state = face(|x| 3.0 * x[1]);
+        state.coefficients[2] = state.coefficients[0];
+        state.coefficients[0] = [0.0; MAX_FACE_BASIS];
+        let mut psi = vec![0.0; basis.len()];
+        let count = |component: usize, psi: &mut [f64]| {
+            let mut out = Vec::new();
+            let tracking = Tracking {
+                component,
+                levels: [(Level::Tip, 1.0), (Level::ZoneEnd, 2.5)],
+            };
+            find_crossings(
+                &state,
+                &basis,
+                (7, &probes(0.0)),
+                tracking,
+                1.0,
+                psi,
+                &mut out,
+            );
+            out.len()
+        };
+        assert_eq!(count(2, &mut psi), 4);
+        assert_eq!(count(0, &mut psi), 0);
     }
 }

@@ -31,6 +31,7 @@
 
 use sdg_mesh::TagId;
 
+use crate::crack::{Level, Tracking};
 use crate::face::STATE_COMPONENTS;
 use crate::system::{FrameTrace, System};
 
@@ -587,6 +588,26 @@ impl Contact {
     /// Components of the interface state the law evolves: separation and slip, and damage.
     pub fn components(&self) -> usize {
         if self.damage.is_some() { 3 } else { 2 }
+    }
+
+    /// What crack tracking follows on the law's faces: the damage of a damage law (tip at
+    /// `1 - eps`, zone's leading edge at `eps`), the normal separation of a cohesive one (tip at
+    /// `delta_c`, trailing edge at `delta_T`); `None` for plain contact.
+    pub fn tracking(&self) -> Option<Tracking> {
+        if let Some(d) = &self.damage {
+            Some(Tracking {
+                component: 2,
+                levels: [(Level::Tip, 1.0 - d.eps), (Level::ZoneEnd, d.eps)],
+            })
+        } else {
+            self.cohesive.map(|c| Tracking {
+                component: 0,
+                levels: [
+                    (Level::Tip, c.delta_c),
+                    (Level::ZoneEnd, c.trailing_separation()),
+                ],
+            })
+        }
     }
 
     /// The state at t = 0 (before any face): no separation, the initial damage.

@@ -1,15 +1,17 @@
-//! Crack tips of cohesive interfaces over time (`crack_tips.csv`, `summary.json` `crack`).
+//! Crack tips of cohesive and damage interfaces over time (`crack_tips.csv`, `summary.json`
+//! `crack`).
 //!
-//! Patches report where their cohesive faces' normal separation crossed the nominal crack-tip
-//! level `delta_c` and the process zone's trailing-edge level `delta_T`
+//! Patches report where their faces crossed the crack-tip level (Xu-Needleman: the separation
+//! `delta_c`; damage: `D = 1 - eps`) and the level of the process zone's other end (the
+//! trailing edge `delta_T` behind the tip; the damage front `D = eps` ahead of it)
 //! ([`sdg_solver::crack`]). Per interface tag, each probe point keeps its first crossing of
-//! each level. The crack opens progressively, so in time order each first `delta_c` crossing is
-//! the tip at that time; the crack's origin is the first such crossing. At each tip state:
+//! each level. The crack opens progressively, so in time order each first tip crossing is the
+//! tip at that time; the crack's origin is the first such crossing. At each tip state:
 //! - `extension`: the distance from the origin to the farthest tip so far, m;
 //! - `speed`: the least-squares slope of the extension against time over the tip states within
 //!   [`SPEED_WINDOW`] states before and after, m/s;
-//! - `process_zone_length`: the distance from the tip to the latest trailing-edge crossing at or
-//!   before that time (to the origin while the zone has no trailing edge yet), m.
+//! - `process_zone_length`: the distance from the tip to the latest zone-end crossing at or
+//!   before that time (to the origin while a cohesive zone has no trailing edge yet), m.
 //!
 //! One tip per interface tag: a tag whose crack grows at two ends mixes them.
 
@@ -34,11 +36,11 @@ pub struct TipState {
     pub extension: f64,
     /// Tip speed, m/s.
     pub speed: f64,
-    /// Length of the cohesive process zone, m.
+    /// Length of the process zone, m.
     pub process_zone_length: f64,
 }
 
-/// Crack totals of a run for `summary.json`, over every cohesive interface.
+/// Crack totals of a run for `summary.json`, over every cohesive and damage interface.
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
 pub struct CrackSummary {
     /// Tip states recorded.
@@ -82,7 +84,7 @@ fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
 /// The tip states of one interface from its crossings (any order).
 pub fn tip_states(crossings: &[Crossing]) -> Vec<TipState> {
     let tips = first_crossings(crossings, Level::Tip);
-    let trailing = first_crossings(crossings, Level::Trailing);
+    let zone_ends = first_crossings(crossings, Level::ZoneEnd);
     let Some(origin) = tips.first().map(|c| c.point) else {
         return Vec::new();
     };
@@ -91,11 +93,11 @@ pub fn tip_states(crossings: &[Crossing]) -> Vec<TipState> {
     let mut behind = 0;
     for tip in &tips {
         extension = extension.max(distance(tip.point, origin));
-        while behind < trailing.len() && trailing[behind].time <= tip.time {
+        while behind < zone_ends.len() && zone_ends[behind].time <= tip.time {
             behind += 1;
         }
         let tail = if behind > 0 {
-            trailing[behind - 1].point
+            zone_ends[behind - 1].point
         } else {
             origin
         };
@@ -127,7 +129,7 @@ fn slope(points: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
     if sxx > 0.0 { sxy / sxx } else { 0.0 }
 }
 
-/// `crack_tips.csv` and the summary from the crossings of every cohesive interface, with the
+/// `crack_tips.csv` and the summary from the crossings of every cracking interface, with the
 /// tag name of each crossing; `c_r` is the Rayleigh speed, m/s.
 pub fn write(crossings: &[(String, Crossing)], c_r: f64) -> (String, CrackSummary) {
     let mut by_tag: BTreeMap<&str, Vec<Crossing>> = BTreeMap::new();
@@ -179,7 +181,7 @@ mod tests {
             let t = 1e-6 + (x - 1.0) / 300.0;
             list.push(crossing(x, t, Level::Tip));
             list.push(crossing(x, t + 0.3e-6, Level::Tip));
-            list.push(crossing(x, t + 2.05e-4 / 300.0, Level::Trailing));
+            list.push(crossing(x, t + 2.05e-4 / 300.0, Level::ZoneEnd));
         }
         let states = tip_states(&list);
         assert_eq!(states.len(), 40);
@@ -208,9 +210,9 @@ mod tests {
         let list = [
             crossing(0.0, 0.0, Level::Tip),
             crossing(1.0, 1.0, Level::Tip),
-            crossing(0.0, 1.5, Level::Trailing),
+            crossing(0.0, 1.5, Level::ZoneEnd),
             crossing(2.0, 2.0, Level::Tip),
-            crossing(0.5, 2.5, Level::Trailing),
+            crossing(0.5, 2.5, Level::ZoneEnd),
             crossing(3.0, 3.0, Level::Tip),
         ];
         let pz: Vec<f64> = tip_states(&list)

@@ -17,7 +17,7 @@
 use sdg_mesh::EdgeId;
 
 use crate::basis::Basis;
-use crate::crack::{self, Crossing, Level, Probe, SAMPLES};
+use crate::crack::{self, Crossing, Probe, SAMPLES};
 use crate::element::{FrontSolution, Geometry, SpacePoint};
 use crate::face::{
     FaceBasis, FaceGeometry, FaceState, MAX_FACE_BASIS, STATE_COMPONENTS, solve_dense,
@@ -489,7 +489,8 @@ impl ContactFaces {
                 }
             }
         }
-        if law.cohesive.is_some() {
+        if let Some(tracking) = law.tracking() {
+            let component = tracking.component;
             let [a, b] = shape.top;
             for (k, probe) in face.probes.iter_mut().enumerate() {
                 let f = crack::sample_fraction(k);
@@ -499,7 +500,9 @@ impl ContactFaces {
                 *probe = Probe {
                     bottom,
                     top: a[2] + f * (b[2] - a[2]),
-                    under: below.map_or(0.0, |s| s.evaluate(basis, bottom, psi)[0]),
+                    under: below.map_or(initial[component], |s| {
+                        s.evaluate(basis, bottom, psi)[component]
+                    }),
                 };
             }
         }
@@ -819,17 +822,14 @@ impl ContactFaces {
         self.crossings.clear();
         let nf = self.basis.len();
         for face in &self.faces[..self.count] {
-            let Some(law) = face.law.cohesive else {
+            let Some(tracking) = face.law.tracking() else {
                 continue;
             };
             crack::find_crossings(
                 &face.state(nf),
                 &self.basis,
                 (face.edge, &face.probes),
-                [
-                    (Level::Tip, law.delta_c),
-                    (Level::Trailing, law.trailing_separation()),
-                ],
+                tracking,
                 c_ref,
                 &mut self.psi,
                 &mut self.crossings,
