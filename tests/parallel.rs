@@ -62,6 +62,10 @@ fn asynchronous_mode_is_as_accurate_as_a_serial_run() {
     assert!(parallel.energy.balance_residual_rel.abs() < 1e-10);
 }
 
+/// At p = 2 (the shipped config has p = 3): determinism does not depend on the order, and at
+/// p = 2 the run has more refinements (measured 584 against 498) and Newton patches (260 against
+/// 171) and takes 2.6 times less time (9,722 patches in 8.8 s on one thread against 6,480 in
+/// 23.2 s).
 #[test]
 fn deterministic_mode_is_bitwise_identical_with_contact_and_adaptivity() {
     let problem = common::shipped(
@@ -70,6 +74,7 @@ fn deterministic_mode_is_bitwise_identical_with_contact_and_adaptivity() {
             "mesh.nx=8",
             "mesh.ny=8",
             "time.end=1e-6",
+            "solver.order=2",
             "adapt.enabled=true",
             "adapt.tol=1e-2",
             "adapt.min_edge=1.25e-4",
@@ -87,7 +92,11 @@ fn deterministic_mode_is_bitwise_identical_with_contact_and_adaptivity() {
         reference.interface.nonlinear_patches,
         expected.iter().map(|f| &f.0).collect::<Vec<_>>()
     );
-    assert!(reference.refinements > 0 && reference.interface.nonlinear_patches > 0);
+    assert!(
+        reference.refinements > 0
+            && reference.coarsenings > 0
+            && reference.interface.nonlinear_patches > 0
+    );
     assert_eq!(
         expected.len(),
         11,
