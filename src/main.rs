@@ -68,13 +68,15 @@ struct JobArgs {
 
 #[derive(Debug, Args)]
 struct PlotArgs {
-    /// VTU file: ASCII, base64 binary or appended, uncompressed or zlib.
-    vtu: PathBuf,
+    /// A VTU file (ASCII, base64 binary or appended, uncompressed or zlib); or one or more
+    /// runs' crack_tips.csv, whose tips are drawn together, each named by its run's folder.
+    #[arg(required = true, value_name = "FILE")]
+    inputs: Vec<PathBuf>,
     /// Point or cell field: NAME (vectors: magnitude), NAME_x, NAME_xy, or von_mises
     /// [default: velocity, i.e. its magnitude].
     #[arg(long, value_name = "NAME")]
     field: Option<String>,
-    /// PNG file [default: the VTU path with extension png].
+    /// PNG file [default: the VTU path with extension png; required for crack_tips.csv].
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
     /// Overlay the mesh edges.
@@ -199,8 +201,29 @@ fn run(job: &JobArgs) -> Result<(), EngineError> {
 }
 
 fn plot(args: &PlotArgs) -> Result<(), EngineError> {
+    let is_csv = |p: &PathBuf| p.extension().is_some_and(|e| e == "csv");
+    if args.inputs.iter().any(is_csv) {
+        let usage = |reason: &str| Err(EngineError::Input(reason.into()));
+        if !args.inputs.iter().all(is_csv) {
+            return usage("give either one VTU file or crack_tips.csv files, not both");
+        }
+        if args.field.is_some() || args.edges {
+            return usage("--field and --edges apply to a VTU file");
+        }
+        let Some(out) = &args.out else {
+            return usage("--out FILE is required to draw crack_tips.csv");
+        };
+        sdg_engine::plot::plot_tips(&args.inputs, out)?;
+        if !args.quiet {
+            println!("{}", out.display());
+        }
+        return Ok(());
+    }
+    let [vtu] = &args.inputs[..] else {
+        return Err(EngineError::Input("draw one VTU file at a time".into()));
+    };
     let request = sdg_engine::plot::PlotRequest {
-        vtu: args.vtu.clone(),
+        vtu: vtu.clone(),
         field: args.field.clone(),
         out: args.out.clone(),
         edges: args.edges,

@@ -1,13 +1,15 @@
 //! Pictures: `output.png` writes a PNG per snapshot and `history.png`; the plane wave's picture
 //! has its stripes at the wave's angle; `sdg plot` reads VTU files written by meshio and names
-//! a missing field.
+//! a missing field, and draws several runs' crack tips together.
 
 mod common;
 
 use std::path::Path;
 
 use common::{sdg, stderr};
-use sdg_engine::plot::{FIELD_PNG_SIZE, FieldLayout, FieldPlot, HISTORY_PNG_SIZE, Values};
+use sdg_engine::plot::{
+    CRACK_PNG_SIZE, FIELD_PNG_SIZE, FieldLayout, FieldPlot, HISTORY_PNG_SIZE, Values,
+};
 
 /// A decoded 8-bit RGB PNG: width, height, pixels.
 struct Decoded {
@@ -269,4 +271,61 @@ fn sdg_plot_reads_meshio_files_and_names_missing_fields() {
             "{name}: {differ} bytes differ from our file's picture"
         );
     }
+}
+
+#[test]
+fn sdg_plot_draws_several_runs_tips_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = "t_s,interface,x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n";
+    let mut files = Vec::new();
+    for (run, speed) in [("xu_needleman", 400.0), ("damage", 700.0)] {
+        let folder = dir.path().join(run);
+        std::fs::create_dir(&folder).unwrap();
+        let mut csv = String::from(header);
+        for i in 0..40 {
+            let t = 1e-6 + 2e-8 * f64::from(i);
+            let a = speed * 2e-8 * f64::from(i);
+            csv += &format!("{t:e},path,{a:e},1.2e-3,{a:e},{speed:e},0\n");
+        }
+        let file = folder.join("crack_tips.csv");
+        std::fs::write(&file, csv).unwrap();
+        files.push(file.to_str().unwrap().to_string());
+    }
+    let png = dir.path().join("tips.png");
+    let out = sdg(&["plot", &files[0], &files[1], "--out", png.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let image = Decoded::read(&png);
+    assert_eq!((image.width, image.height), CRACK_PNG_SIZE);
+    // One colour per run (the palette's first two).
+    let count = |rgb: [u8; 3]| image.rgb.chunks(3).filter(|p| *p == rgb).count();
+    assert!(count([31, 119, 180]) > 500, "first run not drawn");
+    assert!(count([255, 127, 14]) > 500, "second run not drawn");
+    // Bad requests exit 2 and say why.
+    let vtu = dir.path().join("snapshot.vtu");
+    for (args, needle) in [
+        (vec!["plot", &files[0]], "--out"),
+        (
+            vec!["plot", &files[0], vtu.to_str().unwrap(), "--out", "x.png"],
+            "not both",
+        ),
+        (
+            vec!["plot", &files[0], "--field", "speed", "--out", "x.png"],
+            "--field",
+        ),
+    ] {
+        let out = sdg(&args);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+    // A file without the tip columns is named.
+    let other = dir.path().join("other.csv");
+    std::fs::write(&other, "t_s,x\n1,2\n").unwrap();
+    let out = sdg(&["plot", other.to_str().unwrap(), "--out", "x.png"]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("other.csv") && err.contains("interface"),
+        "{err}"
+    );
 }

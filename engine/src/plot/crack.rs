@@ -1,8 +1,8 @@
 //! `crack_tips.png`: the extension and the speed of each crack tip over time, from
 //! `crack_tips.csv`; under a `[loading]`, in the seed's normalized units against the LEFM tip
-//! (as seed figures 2.6-2.8).
+//! (as seed figures 2.6-2.8). `sdg plot` draws several runs' tips together.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::{Image, LineChart, LineStyle};
 use crate::error::EngineError;
@@ -32,50 +32,24 @@ struct TipSeries {
     speed: Vec<(f64, f64)>,
 }
 
-/// The tip extension chart above the tip speed chart, for `crack_tips.csv`'s text `csv`; the
-/// LEFM reference is drawn when `normalization` is given.
-pub fn crack_charts(csv: &str, normalization: Option<Normalization>) -> Result<Image, EngineError> {
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-    let column = |name: &str| {
-        header
-            .iter()
-            .position(|h| *h == name)
-            .ok_or_else(|| EngineError::Plot(format!("crack_tips.csv has no column {name}")))
-    };
-    let (t, tag, a, v) = (
-        column("t_s")?,
-        column("interface")?,
-        column("extension_m")?,
-        column("speed_m_s")?,
-    );
-    // x = (t - shift) * per_time, extension * per_length, speed * per_speed.
-    let (shift, per_time, per_length, per_speed) = match normalization {
-        Some(n) => (n.arrival, 1.0 / n.tau, 1.0 / (n.tau * n.c_r), 1.0 / n.c_r),
-        None => (0.0, 1e6, 1e3, 1.0),
-    };
-    // Per interface tag: its name, extension and speed series.
+/// The tip extension chart above the tip speed chart, for the texts of one or more runs'
+/// `crack_tips.csv`, each with a label naming its series; the LEFM reference is drawn when
+/// `normalization` is given.
+pub fn crack_charts(
+    runs: &[(&str, &str)],
+    normalization: Option<Normalization>,
+) -> Result<Image, EngineError> {
+    // Per run and interface tag: the series' name, extension and speed.
     let mut tips: Vec<TipSeries> = Vec::new();
-    for line in lines {
-        let f: Vec<&str> = line.split(',').collect();
-        let get = |i: usize| {
-            f.get(i)
-                .and_then(|s| s.parse::<f64>().ok())
-                .unwrap_or(f64::NAN)
-        };
-        let name = f.get(tag).copied().unwrap_or("");
-        if tips.last().is_none_or(|l| l.name != name) {
-            tips.push(TipSeries {
-                name: name.to_string(),
-                extension: Vec::new(),
-                speed: Vec::new(),
-            });
-        }
-        let entry = tips.last_mut().expect("pushed");
-        let x = (get(t) - shift) * per_time;
-        entry.extension.push((x, get(a) * per_length));
-        entry.speed.push((x, get(v) * per_speed));
+    for &(label, csv) in runs {
+        tip_series((label, "crack_tips.csv"), csv, normalization, &mut tips)?;
     }
+    render(&tips, normalization)
+}
+
+/// The extension chart above the speed chart of `tips`, with the LEFM reference under a
+/// `normalization`.
+fn render(tips: &[TipSeries], normalization: Option<Normalization>) -> Result<Image, EngineError> {
     let (time, extension, speed) = match normalization {
         Some(_) => (
             "normalized time t' = (t - t0) / tau'",
@@ -86,10 +60,9 @@ pub fn crack_charts(csv: &str, normalization: Option<Normalization>) -> Result<I
     };
     let mut position = LineChart::new("Crack tip extension", time, extension);
     let mut velocity = LineChart::new("Crack tip speed", time, speed);
-    for tip in &tips {
-        let name = format!("sdg, {}", tip.name);
-        position = position.series(&name, &tip.extension, LineStyle::Solid);
-        velocity = velocity.series(&name, &tip.speed, LineStyle::Solid);
+    for tip in tips {
+        position = position.series(&tip.name, &tip.extension, LineStyle::Solid);
+        velocity = velocity.series(&tip.name, &tip.speed, LineStyle::Solid);
     }
     if let Some(n) = normalization {
         let reference = lefm::tip_history((n.end - n.arrival) / n.tau, 400);
@@ -102,13 +75,82 @@ pub fn crack_charts(csv: &str, normalization: Option<Normalization>) -> Result<I
     Ok(position.render(half)?.above(velocity.render(half)?))
 }
 
+/// Appends the series of the `crack_tips.csv` text `csv` to `tips`, one per interface tag,
+/// named `label, tag`; errors name the `source` file.
+fn tip_series(
+    (label, source): (&str, &str),
+    csv: &str,
+    normalization: Option<Normalization>,
+    tips: &mut Vec<TipSeries>,
+) -> Result<(), EngineError> {
+    let first = tips.len();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| EngineError::Input(format!("{source}: no column {name}")))
+    };
+    let (t, tag, a, v) = (
+        column("t_s")?,
+        column("interface")?,
+        column("extension_m")?,
+        column("speed_m_s")?,
+    );
+    // x = (t - shift) * per_time, extension * per_length, speed * per_speed.
+    let (shift, per_time, per_length, per_speed) = match normalization {
+        Some(n) => (n.arrival, 1.0 / n.tau, 1.0 / (n.tau * n.c_r), 1.0 / n.c_r),
+        None => (0.0, 1e6, 1e3, 1.0),
+    };
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        let get = |i: usize| {
+            f.get(i)
+                .and_then(|s| s.parse::<f64>().ok())
+                .unwrap_or(f64::NAN)
+        };
+        let name = format!("{label}, {}", f.get(tag).copied().unwrap_or(""));
+        if tips[first..].last().is_none_or(|l| l.name != name) {
+            tips.push(TipSeries {
+                name,
+                extension: Vec::new(),
+                speed: Vec::new(),
+            });
+        }
+        let entry = tips.last_mut().expect("pushed");
+        let x = (get(t) - shift) * per_time;
+        entry.extension.push((x, get(a) * per_length));
+        entry.speed.push((x, get(v) * per_speed));
+    }
+    Ok(())
+}
+
 /// Draws `crack_tips.csv`'s text `csv` as `dir/crack_tips.png`; a picture that cannot be drawn
 /// is logged as a warning, never an error of the run.
 pub fn write_crack_png(dir: &Path, csv: &str, normalization: Option<Normalization>) {
     let path = dir.join("crack_tips.png");
-    if let Err(e) = crack_charts(csv, normalization).and_then(|image| image.write_png(&path)) {
+    let charts = crack_charts(&[("sdg", csv)], normalization);
+    if let Err(e) = charts.and_then(|image| image.write_png(&path)) {
         tracing::warn!("{}: {e}", path.display());
     }
+}
+
+/// `sdg plot` of one or more runs' `crack_tips.csv` files: their tips drawn together, each run
+/// named by its folder, into `out`. Errors name the file that cannot be read or lacks a column.
+pub fn plot_tips(files: &[PathBuf], out: &Path) -> Result<(), EngineError> {
+    let mut tips = Vec::new();
+    for file in files {
+        let source = file.display().to_string();
+        let text = std::fs::read_to_string(file)
+            .map_err(|e| EngineError::Input(format!("{source}: {e}")))?;
+        let label = file
+            .parent()
+            .and_then(Path::file_name)
+            .map_or_else(|| source.clone(), |n| n.to_string_lossy().into_owned());
+        tip_series((&label, &source), &text, None, &mut tips)?;
+    }
+    render(&tips, None)?.write_png(out)
 }
 
 #[cfg(test)]
@@ -130,13 +172,13 @@ mod tests {
             end: 2.87e-6,
         };
         for normalization in [None, Some(n)] {
-            let image = crack_charts(&csv, normalization).unwrap();
+            let image = crack_charts(&[("sdg", &csv)], normalization).unwrap();
             assert_eq!((image.width, image.height), CRACK_PNG_SIZE);
             let blue = image.rgb.chunks(3).filter(|p| p == &[31, 119, 180]).count();
             let orange = image.rgb.chunks(3).filter(|p| p == &[255, 127, 14]).count();
             assert!(blue > 500, "{blue}");
             assert_eq!(orange > 300, normalization.is_some(), "{orange}");
         }
-        assert!(crack_charts("t_s,x\n", None).is_err());
+        assert!(crack_charts(&[("sdg", "t_s,x\n")], None).is_err());
     }
 }
