@@ -1,6 +1,6 @@
 //! Physics of the spacetime DG method for 2D linear elastodynamics: materials, the scaled
-//! first-order system, Riemann solutions, boundary data histories, exact solutions, and the
-//! patch solver.
+//! first-order system, Riemann solutions, boundary data histories, exact solutions, the
+//! nucleation criteria, and the patch solver.
 //!
 //! Units are SI throughout: Pa, kg/m^3, m/s, m, s.
 
@@ -14,6 +14,7 @@ pub mod history;
 pub mod interface;
 pub mod material;
 pub mod norms;
+pub mod nucleation;
 pub mod patch;
 pub mod quadrature;
 pub mod riemann;
