@@ -2,11 +2,13 @@
 //! front and the pitcher's budgets, with the refinement that changes all four together.
 //!
 //! Refinement bisects front triangles (newest-vertex bisection with its conforming closure) in
-//! place. A child triangle lies on the top face of the element under its parent, so it keeps
+//! place, or splits one refinement edge at any point ([`Frontier::split_at`], for crack
+//! alignment). A child triangle lies on the top face of the element under its parent, so it keeps
 //! that element (its inflow is the parent element's trace on the child: nothing is projected),
-//! and a new vertex gets the front's time at its position, the mean of its edge's end times: the
-//! front surface does not move. A split is allowed only when the pitcher can keep the children
-//! causal ([`Pitcher::may_bisect`]).
+//! an edge half keeps its edge's interface face, and a new vertex gets the front's time at its
+//! position, its edge's end times interpolated linearly (the mean for a bisection): the front
+//! surface does not move. A split is allowed only when the pitcher can keep the children causal
+//! ([`Pitcher::may_bisect`], [`Pitcher::may_split_at`]). A vertex split off its edge's midpoint is never coarsened.
 //!
 //! Coarsening undoes a bisection once the elements around its vertex `m` are calm: the
 //! coarsening patch ([`PatchSolver::solve_coarsening`]) fills the spacetime between the four (or
@@ -17,7 +19,9 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use sdg_mesh::{Front, Merge, Mesh, Pitcher, Point, Split, TriangleId, VertexId};
+use sdg_mesh::{
+    AllowSplit, Front, Merge, Mesh, Pitcher, Point, Split, SplitError, TriangleId, VertexId,
+};
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::face::FaceState;
 
@@ -173,6 +177,54 @@ impl Frontier {
         initial_energy: &dyn Fn([Point; 3]) -> f64,
         refined: &mut Refined,
     ) {
+        self.apply_splits(
+            min_edge,
+            max_star,
+            initial_energy,
+            refined,
+            |mesh, allow, splits| {
+                mesh.bisect(t, &mut |mesh, done, u| allow(mesh, done, u, 0.5), splits)
+            },
+        );
+    }
+
+    /// [`Frontier::refine`] with the refinement edge of `t` split at `fraction` of its length
+    /// from its smaller-id end ([`Mesh::split_at`]) instead of its midpoint; the closure still
+    /// bisects. Every split must keep the front causal ([`Pitcher::may_bisect`] for
+    /// bisections, [`Pitcher::may_split_at`] for other fractions), leave no piece of an edge
+    /// shorter than `min_edge` (m) and no star above `max_star` triangles.
+    /// Returns whether `t` was split; on an error (bad `t` or `fraction`, degenerate children)
+    /// nothing changed.
+    pub(crate) fn split_at(
+        &mut self,
+        t: TriangleId,
+        fraction: f64,
+        min_edge: f64,
+        max_star: usize,
+        initial_energy: &dyn Fn([Point; 3]) -> f64,
+        refined: &mut Refined,
+    ) -> Result<bool, SplitError> {
+        self.apply_splits(
+            min_edge,
+            max_star,
+            initial_energy,
+            refined,
+            |mesh, allow, splits| mesh.split_at(t, fraction, allow, splits),
+        )
+    }
+
+    /// Runs the mesh refinement `split` with the frontier's test for each step (see
+    /// [`Frontier::split_at`]) and carries the steps done over to the front, the solution and
+    /// the pitcher: a new vertex gets the front's own time at its place on its edge
+    /// ([`Split::interpolate`]), a child keeps its parent's element and an edge half its face.
+    fn apply_splits<R>(
+        &mut self,
+        min_edge: f64,
+        max_star: usize,
+        initial_energy: &dyn Fn([Point; 3]) -> f64,
+        refined: &mut Refined,
+        split: impl FnOnce(&mut Mesh, &mut AllowSplit, &mut Vec<Split>) -> R,
+    ) -> R {
         let Self {
             mesh,
             front,
@@ -184,18 +236,24 @@ impl Frontier {
         let mut splits: Vec<Split> = Vec::new();
         // Triangles asked about that still carry initial data: (step, corners, apex corner).
         let mut initial_parents: Vec<(usize, [VertexId; 3], usize)> = Vec::new();
-        let mut allow = |mesh: &Mesh, done: &[Split], t: TriangleId| {
+        let mut allow = |mesh: &Mesh, done: &[Split], t: TriangleId, fraction: f64| {
             let time = |v: VertexId| front.time_after(done, v);
             let corners = mesh.triangles()[t as usize];
             let r = mesh.refinement_edge(t);
             if !solved(solution, done, t) {
                 initial_parents.push((done.len(), corners, r));
             }
-            refinement_edge_length(mesh, t) >= 2.0 * min_edge
+            // Bisections keep the test refinement has always used, so that runs reproduce.
+            let causal = if fraction == 0.5 {
+                pitcher.may_bisect(mesh, time, t)
+            } else {
+                pitcher.may_split_at(mesh, time, t, fraction)
+            };
+            fraction.min(1.0 - fraction) * refinement_edge_length(mesh, t) >= min_edge
                 && mesh.vertex_triangles(corners[r]).len() < max_star
-                && pitcher.may_bisect(mesh, time, t)
+                && causal
         };
-        mesh.bisect(t, &mut allow, &mut splits);
+        let result = split(mesh, &mut allow, &mut splits);
         // A step was done when its index is below the number of splits.
         for (step, corners, r) in initial_parents {
             if let Some(split) = splits.get(step) {
@@ -208,11 +266,11 @@ impl Frontier {
             }
         }
         for split in &splits {
-            let t_mid = 0.5 * (front.time(split.ends[0]) + front.time(split.ends[1]));
-            let v = front.push(t_mid);
+            let t_new = split.interpolate(split.ends.map(|w| front.time(w)));
+            let v = front.push(t_new);
             insist.push(AtomicBool::new(false));
             debug_assert_eq!(v, split.vertex, "vertices are appended in split order");
-            refined.vertices.push((v, t_mid));
+            refined.vertices.push((v, t_new));
             refined.touched.extend(split.ends);
             for &(kept, new) in &split.halves {
                 *calm[kept as usize].get_mut() = false;
@@ -233,6 +291,7 @@ impl Frontier {
                 .iter()
                 .flat_map(|s| s.halves.iter().flat_map(|&(kept, new)| [kept, new])),
         );
+        result
     }
 }
 

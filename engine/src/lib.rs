@@ -19,5 +19,7 @@ pub use config::{Config, ConfigError, LoadedConfig};
 pub use error::EngineError;
 pub use problem::Problem;
 pub use run::{MeshSummary, RunOptions, mesh_job, pitch_to_end};
+#[doc(hidden)]
+pub use solve::{Live, solve_job_with};
 pub use solve::{RunSummary, solve_job};
 pub use spacetime::SpacetimeMesh;

@@ -1,6 +1,7 @@
 //! Coarsening: newest-vertex bisection undone. A vertex that [`Mesh::bisect`] created at the
 //! midpoint of an edge `ab` is removed and the one or two triangles `(z, a, b)` it split are
-//! restored, with `ab` as their refinement edge. Ids stay dense: freed ids are filled by moving
+//! restored, with `ab` as their refinement edge. A vertex that [`Mesh::split_at`] put elsewhere
+//! on its edge is never removed: coarsening restores bisections only. Ids stay dense: freed ids are filled by moving
 //! the last vertex, triangle or edge into them, as [`Vec::swap_remove`] does.
 
 use std::cmp::Reverse;
@@ -10,7 +11,8 @@ use crate::mesh::{Edge, EdgeId, Mesh, TriangleId, VertexId};
 use crate::refine::{midpoint, sort_pair};
 
 /// Largest distance between a removable vertex and the midpoint of the restored edge, relative
-/// to the edge's length. Bisection puts the vertex exactly at the midpoint.
+/// to the edge's length. Bisection puts the vertex exactly at the midpoint; a vertex split off
+/// it ([`Mesh::split_at`]) stays.
 const MIDPOINT_TOLERANCE: f64 = 1e-12;
 
 /// One coarsening: vertex `vertex`, the midpoint of edge `ends`, removed by undoing its
@@ -118,8 +120,9 @@ impl Mesh {
     /// [`Mesh::new`]); every triangle of the star of `m` has `m` opposite
     /// its refinement edge; the star has four triangles around `m` (interior) or two (boundary)
     /// that pair up as `(m, z, a)`, `(m, b, z)` around the two (or one) apexes `z`, restoring
-    /// `(z, a, b)`; `m` is the midpoint of `ab` (relative tolerance 1e-12) and `ab` is not an
-    /// edge yet; the halves `am`, `mb` carry the same tag and the edges `zm` none.
+    /// `(z, a, b)`; `m` is the midpoint of `ab` (relative tolerance 1e-12, so a vertex of
+    /// [`Mesh::split_at`] off the midpoint never qualifies) and `ab` is not an edge yet; the
+    /// halves `am`, `mb` carry the same tag and the edges `zm` none.
     ///
     /// When both diagonals of an interior star qualify (`m` the midpoint of both, as in right
     /// isosceles meshes), the pairing whose apexes are of the later generation wins: a triangle
@@ -704,5 +707,23 @@ mod tests {
         }];
         refine_and_coarsen_back(&square(3, Diagonal::Right, 0.0), 0x9E37_79B9_7F4A_7C15);
         refine_and_coarsen_back(&cracked, 12345);
+    }
+
+    #[test]
+    fn only_midpoint_splits_are_coarsenable() {
+        for (fraction, coarsenable) in [(0.5, true), (0.3, false), (0.5 + 1e-9, false)] {
+            for t in [0, 2] {
+                let mut m = square(2, Diagonal::Right, 0.0).build().unwrap();
+                let mut splits = Vec::new();
+                let mut allow = |_: &Mesh, _: &[crate::Split], _: TriangleId, _: f64| true;
+                assert_eq!(m.split_at(t, fraction, &mut allow, &mut splits), Ok(true));
+                let v = splits.last().unwrap().vertex;
+                assert_eq!(m.coarsenable(v).is_some(), coarsenable, "{fraction} {t}");
+                if !coarsenable {
+                    assert!(m.coarsen(v).is_none());
+                    m.validate().unwrap();
+                }
+            }
+        }
     }
 }

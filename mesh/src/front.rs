@@ -74,14 +74,15 @@ impl Front {
     }
 
     /// Time (s) of `v`, which may be a vertex that the splits `done` created and that is not on
-    /// the front yet: split `k` created vertex `len() + k`, at the mean of its ends' times (the
-    /// front's own value there, so bisection does not move the front).
+    /// the front yet: split `k` created vertex `len() + k`, at its ends' times interpolated
+    /// linearly ([`Split::interpolate`]: the front's own value there, so a split does not move
+    /// the front; the mean for a bisection).
     pub fn time_after(&self, done: &[Split], v: VertexId) -> f64 {
         match (v as usize).checked_sub(self.times.len()) {
             None => self.time(v),
             Some(k) => {
-                let [a, b] = done[k].ends;
-                0.5 * (self.time_after(done, a) + self.time_after(done, b))
+                let split = &done[k];
+                split.interpolate(split.ends.map(|w| self.time_after(done, w)))
             }
         }
     }

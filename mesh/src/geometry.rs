@@ -8,6 +8,16 @@ pub fn signed_area2(a: Point, b: Point, c: Point) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
+/// True when a triangle is too flat for a mesh: twice its area is at most `1e-14` times its
+/// longest edge squared (its corners are collinear to round-off). [`crate::Mesh::new`] rejects
+/// such triangles.
+pub fn is_degenerate(p: [Point; 3]) -> bool {
+    let scale = (0..3)
+        .map(|i| distance(p[i], p[(i + 1) % 3]))
+        .fold(0.0, f64::max);
+    signed_area2(p[0], p[1], p[2]).abs() <= 1e-14 * scale * scale
+}
+
 /// Euclidean distance between two points.
 pub fn distance(a: Point, b: Point) -> f64 {
     (b[0] - a[0]).hypot(b[1] - a[1])

@@ -21,5 +21,5 @@ pub use geometry::Point;
 pub use gmsh::{GmshError, read_msh};
 pub use mesh::{Edge, EdgeId, Mesh, MeshError, TagId, TriangleId, VertexId};
 pub use rectangle::{Diagonal, GridSegment, Rectangle, RectangleError};
-pub use refine::Split;
+pub use refine::{AllowSplit, Split, SplitError};
 pub use tent::{PitchError, Pitcher, Tent};

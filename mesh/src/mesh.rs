@@ -127,17 +127,14 @@ impl Mesh {
                 });
             }
             let p = tri.map(|v| vertices[v as usize]);
-            let area2 = geometry::signed_area2(p[0], p[1], p[2]);
-            let scale = (0..3)
-                .map(|i| geometry::distance(p[i], p[(i + 1) % 3]))
-                .fold(0.0, f64::max);
-            if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
+            if tri[0] == tri[1]
+                || tri[1] == tri[2]
+                || tri[0] == tri[2]
+                || geometry::is_degenerate(p)
+            {
                 return Err(MeshError::DegenerateTriangle { triangle: t });
             }
-            if area2.abs() <= 1e-14 * scale * scale {
-                return Err(MeshError::DegenerateTriangle { triangle: t });
-            }
-            if area2 < 0.0 {
+            if geometry::signed_area2(p[0], p[1], p[2]) < 0.0 {
                 tri.swap(1, 2);
             }
         }
@@ -295,7 +292,7 @@ impl Mesh {
     }
 
     /// The corner of triangle `t` opposite its refinement edge (0, 1 or 2): the edge that
-    /// [`Mesh::bisect`] splits at its midpoint.
+    /// [`Mesh::bisect`] splits at its midpoint and [`Mesh::split_at`] at any point.
     pub fn refinement_edge(&self, t: TriangleId) -> usize {
         self.refinement_edge[t as usize] as usize
     }

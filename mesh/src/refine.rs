@@ -5,6 +5,9 @@
 //! refinement edge opposite the newest vertex `m` at corner 0. With the longest-edge marking of
 //! [`Mesh::new`] the descendants of a triangle fall into at most four similarity classes, so
 //! angles stay bounded away from zero.
+//!
+//! [`Mesh::split_at`] splits a refinement edge at any interior point instead (crack alignment):
+//! the same closure and the same children, with the new vertex where the caller wants it.
 
 use std::collections::HashMap;
 
@@ -14,13 +17,22 @@ use crate::mesh::{Edge, EdgeId, Mesh, TriangleId, VertexId};
 /// Levels of bisection explored by [`Mesh::bisection_width_ratio`].
 pub const WIDTH_RATIO_DEPTH: u32 = 6;
 
-/// One edge bisection: edge `ends` split at its midpoint, the new vertex `vertex`.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// The test [`Mesh::split_at`] asks before each step: `allow(mesh, done, u, fraction)` is true
+/// when triangle `u` of `mesh` may be split at `fraction` of its refinement edge from the
+/// smaller-id end, after the steps `done` of the call.
+pub type AllowSplit<'a> = dyn FnMut(&Mesh, &[Split], TriangleId, f64) -> bool + 'a;
+
+/// One edge split: edge `ends` split at `fraction` of its length from `ends[0]`, the new vertex
+/// `vertex`.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Split {
-    /// The new vertex at the midpoint of `ends`.
+    /// The new vertex, at `ends[0] + fraction (ends[1] - ends[0])`.
     pub vertex: VertexId,
     /// End vertices of the split edge, smaller id first.
     pub ends: [VertexId; 2],
+    /// Where the new vertex lies on the edge, from `ends[0]` (0) to `ends[1]` (1): exactly 1/2
+    /// for a bisection, anything in (0, 1) for [`Mesh::split_at`].
+    pub fraction: f64,
     /// One `(kept, new)` entry per split triangle: one on a boundary edge, two inside. Both
     /// children lie inside the old triangle `kept`: for its old corners `(z, a, b)` with
     /// refinement edge `ab`, `kept` keeps its id and becomes `(vertex, z, a)`, and `new` is a
@@ -29,6 +41,30 @@ pub struct Split {
     /// The halves of the split edge: the one at `ends[0]` keeps the edge's id, the one at
     /// `ends[1]` is freshly appended; both keep its tag.
     pub edges: [EdgeId; 2],
+}
+
+impl Split {
+    /// The value at the new vertex of the function linear along the edge that takes the values
+    /// `at_ends` at `ends`: `(1 - fraction) at_ends[0] + fraction at_ends[1]`. For a bisection
+    /// this is the mean of the two, to the last bit. The mesh places the new vertex by this
+    /// rule, and front times follow it, so that the front does not move.
+    pub fn interpolate(&self, at_ends: [f64; 2]) -> f64 {
+        lerp(at_ends[0], at_ends[1], self.fraction)
+    }
+}
+
+/// Why [`Mesh::split_at`] cannot split an edge.
+#[derive(Clone, Debug, thiserror::Error, PartialEq)]
+pub enum SplitError {
+    #[error("triangle {triangle} does not exist: the mesh has {count} triangles")]
+    Triangle { triangle: TriangleId, count: usize },
+    #[error("the split fraction must be strictly between 0 and 1, got {0}")]
+    Fraction(f64),
+    #[error(
+        "splitting the refinement edge of triangle {triangle} at fraction {fraction} leaves a \
+         degenerate child: the point is too close to an end of the edge"
+    )]
+    Degenerate { triangle: TriangleId, fraction: f64 },
 }
 
 impl Mesh {
@@ -53,7 +89,79 @@ impl Mesh {
         allow: &mut dyn FnMut(&Mesh, &[Split], TriangleId) -> bool,
         splits: &mut Vec<Split>,
     ) -> bool {
-        // Triangles waiting for the one above them to be bisected; the last is handled next.
+        self.refine_edge(t, 0.5, &mut |mesh, done, u, _| allow(mesh, done, u), splits)
+    }
+
+    /// Splits the refinement edge of triangle `t` at the point `p + fraction (q - p)`, where `p`
+    /// and `q` are its end vertices, smaller id first (as in [`Edge::vertices`] and
+    /// [`Split::ends`]), after the closure [`Mesh::bisect`] does: neighbours are bisected at
+    /// midpoints as needed, and only the last step, which splits `t` and the triangle across its
+    /// refinement edge, uses `fraction`. That step's children, ids, tags and refinement edges
+    /// are those of a bisection (see [`Split`]); with `fraction = 1/2` the call is exactly
+    /// [`Mesh::bisect`].
+    ///
+    /// `allow(mesh, done, u, fraction)` is asked before each step about every triangle `u` the
+    /// step would split, with the step's fraction (1/2 for the closure); a refusal stops
+    /// refinement there, as in [`Mesh::bisect`]. Returns `Ok(true)` when `t` was split,
+    /// `Ok(false)` when a step was refused (the steps done are in `splits`, the mesh is
+    /// conforming).
+    ///
+    /// Errors, with the mesh unchanged: `t` is not a triangle, `fraction` is not strictly between
+    /// 0 and 1, or a child of the last step would be degenerate (flatter than [`Mesh::new`]
+    /// accepts, or not counter-clockwise after rounding the new point).
+    ///
+    /// Children of an off-midpoint split leave the similarity classes of newest-vertex
+    /// bisection: their descendants' angles are bounded by theirs, not by the initial mesh's,
+    /// and [`Mesh::bisection_width_ratio`] does not cover them. A vertex not at the midpoint of
+    /// its edge is never removed by [`Mesh::coarsen`].
+    pub fn split_at(
+        &mut self,
+        t: TriangleId,
+        fraction: f64,
+        allow: &mut AllowSplit,
+        splits: &mut Vec<Split>,
+    ) -> Result<bool, SplitError> {
+        let count = self.triangles.len();
+        if t as usize >= count {
+            return Err(SplitError::Triangle { triangle: t, count });
+        }
+        if !(fraction > 0.0 && fraction < 1.0) {
+            return Err(SplitError::Fraction(fraction));
+        }
+        let e = self.refinement_edge_id(t);
+        let [p, q] = self.edges[e as usize].vertices;
+        let m = lerp_point(self.vertex(p), self.vertex(q), fraction);
+        // The closure leaves `t` as it is and bisects the triangle across its refinement edge
+        // at most once, if that edge is not its own refinement edge: the child that then lies
+        // across has that midpoint as its apex.
+        for u in self.edges[e as usize].triangles.into_iter().flatten() {
+            let apex = if self.refinement_edge_id(u) == e {
+                self.vertex(self.opposite(u, e))
+            } else {
+                let [x, y] = self.edges[self.refinement_edge_id(u) as usize].vertices;
+                midpoint(self.vertex(x), self.vertex(y))
+            };
+            let (a, b) = self.oriented_ends(u, e);
+            let [a, b] = [a, b].map(|v| self.vertex(v));
+            if !([[m, apex, a], [m, b, apex]].into_iter()).all(is_valid_triangle) {
+                return Err(SplitError::Degenerate {
+                    triangle: t,
+                    fraction,
+                });
+            }
+        }
+        Ok(self.refine_edge(t, fraction, allow, splits))
+    }
+
+    /// [`Mesh::split_at`] without its checks: `fraction` is in (0, 1) and gives valid children.
+    fn refine_edge(
+        &mut self,
+        t: TriangleId,
+        fraction: f64,
+        allow: &mut AllowSplit,
+        splits: &mut Vec<Split>,
+    ) -> bool {
+        // Triangles waiting for the one above them to be split; the last is handled next.
         let mut pending = vec![t];
         let first = splits.len();
         while let Some(&s) = pending.last() {
@@ -69,26 +177,31 @@ impl Mesh {
                     continue;
                 }
             }
+            // Only `t`'s own edge, the last step, is split off its midpoint.
+            let step = if pending.len() == 1 { fraction } else { 0.5 };
             let mut allowed = true;
             for u in triangles.into_iter().flatten() {
-                allowed &= allow(self, &splits[first..], u);
+                allowed &= allow(self, &splits[first..], u, step);
             }
             if !allowed {
                 return false;
             }
-            splits.push(self.split_edge(e));
+            splits.push(self.split_edge(e, step));
             pending.pop();
         }
         true
     }
 
-    /// The two children that bisecting `t` would create, as counter-clockwise corner points in
-    /// metres: first the one that keeps the id `t`, then the new one (see [`Split::halves`]).
-    pub fn bisection_children(&self, t: TriangleId) -> [[Point; 3]; 2] {
+    /// The two children that splitting the refinement edge of `t` at `fraction` (from its
+    /// smaller-id end, as in [`Mesh::split_at`]; 1/2 for a bisection) would create, as
+    /// counter-clockwise corner points in metres: first the one that keeps the id `t`, then the
+    /// new one (see [`Split::halves`]).
+    pub fn split_children(&self, t: TriangleId, fraction: f64) -> [[Point; 3]; 2] {
         let r = self.refinement_edge(t);
-        let p = self.triangle_points(t);
-        let (z, a, b) = (p[r], p[(r + 1) % 3], p[(r + 2) % 3]);
-        let m = midpoint(a, b);
+        let tri = self.triangles[t as usize];
+        let (z, a, b) = (tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]);
+        let m = lerp_point(self.vertex(a.min(b)), self.vertex(a.max(b)), fraction);
+        let [z, a, b] = [z, a, b].map(|v| self.vertex(v));
         [[m, z, a], [m, b, z]]
     }
 
@@ -194,9 +307,24 @@ impl Mesh {
         self.triangle_edges[t as usize][self.refinement_edge(t)]
     }
 
-    /// Splits edge `e` at its midpoint in every triangle that contains it; each must have `e` as
-    /// its refinement edge.
-    fn split_edge(&mut self, e: EdgeId) -> Split {
+    /// The corner of triangle `t` opposite its edge `e`.
+    fn opposite(&self, t: TriangleId, e: EdgeId) -> VertexId {
+        let i = self.triangle_edges[t as usize].iter().position(|&f| f == e);
+        self.triangles[t as usize][i.expect("the triangle has the edge")]
+    }
+
+    /// The ends `(a, b)` of edge `e` of triangle `t` in the triangle's counter-clockwise order,
+    /// so that `t` is `(z, a, b)` with `z` opposite `e`.
+    fn oriented_ends(&self, t: TriangleId, e: EdgeId) -> (VertexId, VertexId) {
+        let i = self.triangle_edges[t as usize].iter().position(|&f| f == e);
+        let i = i.expect("the triangle has the edge");
+        let tri = self.triangles[t as usize];
+        (tri[(i + 1) % 3], tri[(i + 2) % 3])
+    }
+
+    /// Splits edge `e` at `fraction` of its length from its smaller-id end in every triangle
+    /// that contains it; each must have `e` as its refinement edge.
+    fn split_edge(&mut self, e: EdgeId, fraction: f64) -> Split {
         let old = self.edges[e as usize];
         let [p, q] = old.vertices;
         let m = next_id(self.vertices.len());
@@ -206,7 +334,8 @@ impl Mesh {
             .max()
             .expect("an edge has a triangle");
         self.generation.push(generation + 1);
-        self.vertices.push(midpoint(self.vertex(p), self.vertex(q)));
+        self.vertices
+            .push(lerp_point(self.vertex(p), self.vertex(q), fraction));
         self.vertex_triangles.push(Vec::new());
         self.vertex_neighbors.push(vec![p, q]);
         let eq = next_id(self.edges.len());
@@ -265,6 +394,7 @@ impl Mesh {
         Split {
             vertex: m,
             ends: [p, q],
+            fraction,
             halves,
             edges: [e, eq],
         }
@@ -274,6 +404,23 @@ impl Mesh {
 /// Midpoint of segment `ab`; symmetric in `a` and `b` to the last bit.
 pub(crate) fn midpoint(a: Point, b: Point) -> Point {
     [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
+}
+
+/// `(1 - f) a + f b`. At `f = 1/2` both products are exact halvings, so the one rounding of the
+/// sum gives the midpoint `0.5 (a + b)` to the last bit (no intermediate is subnormal for
+/// coordinates and times).
+pub(crate) fn lerp(a: f64, b: f64, f: f64) -> f64 {
+    (1.0 - f) * a + f * b
+}
+
+/// [`lerp`] of each coordinate: the point at `fraction` of segment `ab` from `a`.
+fn lerp_point(a: Point, b: Point, fraction: f64) -> Point {
+    [0, 1].map(|i| lerp(a[i], b[i], fraction))
+}
+
+/// True when corners `p` form a counter-clockwise triangle that [`Mesh::new`] accepts.
+fn is_valid_triangle(p: [Point; 3]) -> bool {
+    geometry::signed_area2(p[0], p[1], p[2]) > 0.0 && !geometry::is_degenerate(p)
 }
 
 /// The id of the next item of a list of length `len`.
@@ -350,13 +497,14 @@ mod tests {
     fn bisecting_an_interior_refinement_edge_splits_both_triangles() {
         let mut m = square(2, Diagonal::Right, 0.0).build().unwrap();
         assert_eq!(counts(&m), [9, 8, 16]);
-        let predicted = [m.bisection_children(0), m.bisection_children(1)];
+        let predicted = [m.split_children(0, 0.5), m.split_children(1, 0.5)];
         let splits = refine(&mut m, 0);
         assert_eq!(
             splits,
             vec![Split {
                 vertex: 9,
                 ends: [0, 4],
+                fraction: 0.5,
                 halves: vec![(0, 8), (1, 9)],
                 edges: splits[0].edges,
             }]
@@ -629,5 +777,196 @@ mod tests {
         }
         let mut mirrored = mirrored;
         refine(&mut mirrored, 0);
+    }
+
+    /// Twice the signed area of corners `p`.
+    fn area2(p: [Point; 3]) -> f64 {
+        geometry::signed_area2(p[0], p[1], p[2])
+    }
+
+    /// Triangles of a refined, perturbed mesh whose refinement edges are interior with a shared
+    /// refinement edge, interior needing the closure, and on the boundary.
+    fn split_cases() -> (Mesh, Vec<TriangleId>) {
+        let mut m = square(4, Diagonal::Alternate, 0.2).build().unwrap();
+        refine_randomly(&mut m, 30, 7);
+        let kind = |m: &Mesh, t: TriangleId| {
+            let e = m.refinement_edge_id(t);
+            match m.edges()[e as usize].triangles {
+                [_, None] => 0,
+                [Some(a), Some(b)] => {
+                    let u = if a == t { b } else { a };
+                    1 + usize::from(m.refinement_edge_id(u) != e)
+                }
+                [None, _] => unreachable!("an edge has a first triangle"),
+            }
+        };
+        let cases = (0..3)
+            .map(|k| {
+                (0..m.triangles().len() as TriangleId)
+                    .find(|&t| kind(&m, t) == k)
+                    .unwrap()
+            })
+            .collect();
+        (m, cases)
+    }
+
+    #[test]
+    fn split_at_any_fraction_puts_the_vertex_on_the_edge_and_keeps_the_mesh_conforming() {
+        let (base, cases) = split_cases();
+        for fraction in [0.1, 0.3, 0.5, 0.77] {
+            for &t in &cases {
+                let mut m = base.clone();
+                let e = m.refinement_edge_id(t);
+                let [p, q] = m.edges()[e as usize].vertices;
+                let [pp, pq] = [p, q].map(|v| m.vertex(v));
+                let predicted = m.split_children(t, fraction);
+                let tag = m.edges()[e as usize].tag;
+                // Per triangle `allow` is asked about: the step, the triangle, twice its area
+                // and the step's fraction.
+                let mut asked = Vec::new();
+                let mut splits = Vec::new();
+                let mut allow = |mesh: &Mesh, done: &[Split], u: TriangleId, f: f64| {
+                    asked.push((done.len(), u, area2(mesh.triangle_points(u)), f));
+                    true
+                };
+                assert_eq!(m.split_at(t, fraction, &mut allow, &mut splits), Ok(true));
+                m.validate().unwrap();
+                let last = splits.last().unwrap();
+                assert!(splits[..splits.len() - 1].iter().all(|s| s.fraction == 0.5));
+                let parents: Vec<(TriangleId, f64)> = asked
+                    .iter()
+                    .filter(|a| a.0 == splits.len() - 1)
+                    .map(|&(_, u, twice, f)| {
+                        assert_eq!(f, fraction);
+                        (u, twice)
+                    })
+                    .collect();
+                assert!(asked.iter().all(|a| a.0 == splits.len() - 1 || a.3 == 0.5));
+                assert_eq!((last.ends, last.fraction), ([p, q], fraction));
+                let x = m.vertex(last.vertex);
+                let want = [0, 1].map(|i| (1.0 - fraction) * pp[i] + fraction * pq[i]);
+                assert_eq!(x, want, "{fraction} {t}");
+                // On the segment to round-off, at the asked fraction of its length.
+                let length = geometry::distance(pp, pq);
+                let along = geometry::distance(pp, x) / length;
+                assert!((along - fraction).abs() < 1e-14, "{along} vs {fraction}");
+                assert!(area2([pp, x, pq]).abs() < 1e-14 * length * length);
+                let halves = last.edges.map(|h| m.edges()[h as usize]);
+                assert_eq!(
+                    halves.map(|h| h.vertices),
+                    [[p, last.vertex], [q, last.vertex]]
+                );
+                assert!(halves.iter().all(|h| h.tag == tag));
+                assert_eq!(parents.len(), last.halves.len());
+                for (&(kept, new), &(parent, twice)) in last.halves.iter().zip(&parents) {
+                    assert_eq!(kept, parent);
+                    let children = [kept, new].map(|c| area2(m.triangle_points(c)));
+                    assert!(children.iter().all(|&a| a > 0.0), "counter-clockwise");
+                    assert!((children[0] + children[1] - twice).abs() < 1e-14 * twice);
+                    // Each child has the share of the parent's area of its half of the edge.
+                    let mut shares = children.map(|c| c / twice);
+                    shares.sort_by(f64::total_cmp);
+                    let mut expected = [fraction, 1.0 - fraction];
+                    expected.sort_by(f64::total_cmp);
+                    assert!((shares[0] - expected[0]).abs() < 1e-12, "{shares:?}");
+                    // Refinement edges opposite the new vertex, as for a bisection.
+                    for c in [kept, new] {
+                        let r = m.refinement_edge(c);
+                        assert_eq!(m.triangles()[c as usize][r], last.vertex);
+                    }
+                }
+                let (kept, new) = last.halves.iter().find(|h| h.0 == t).copied().unwrap();
+                assert_eq!(m.triangle_points(kept), predicted[0]);
+                assert_eq!(m.triangle_points(new), predicted[1]);
+                assert!((total_area(&m) - 1.0).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn split_at_the_midpoint_is_bisection_to_the_last_bit() {
+        let (base, cases) = split_cases();
+        for &t in &cases {
+            let (mut bisected, mut split) = (base.clone(), base.clone());
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            assert!(bisected.bisect(t, &mut allow_all, &mut a));
+            assert_eq!(
+                split.split_at(t, 0.5, &mut |_, _, _, _| true, &mut b),
+                Ok(true)
+            );
+            assert_eq!(a, b);
+            let bits = |m: &Mesh| -> Vec<[u64; 2]> {
+                m.vertices().iter().map(|p| p.map(f64::to_bits)).collect()
+            };
+            assert_eq!(bits(&bisected), bits(&split));
+            assert_eq!(bisected.triangles(), split.triangles());
+            assert_eq!(bisected.edges(), split.edges());
+        }
+        let mut rng = XorShift(5);
+        for _ in 0..1000 {
+            let [x, y] = [0, 1].map(|_| rng.below(1 << 30) as f64 * 1.37e-9 - 0.7);
+            let split = Split {
+                vertex: 0,
+                ends: [0, 1],
+                fraction: 0.5,
+                halves: Vec::new(),
+                edges: [0, 1],
+            };
+            assert_eq!(split.interpolate([x, y]), 0.5 * (x + y));
+            assert_eq!(midpoint([x, y], [y, x]), lerp_point([x, y], [y, x], 0.5));
+        }
+    }
+
+    #[test]
+    fn split_at_rejects_bad_input_and_leaves_the_mesh_unchanged() {
+        let (base, cases) = split_cases();
+        let mut m = base.clone();
+        let mut splits = Vec::new();
+        let mut allow = |_: &Mesh, _: &[Split], _: TriangleId, _: f64| true;
+        for bad in [0.0, 1.0, -0.2, 1.5, f64::NAN, f64::INFINITY] {
+            let e = m.split_at(cases[0], bad, &mut allow, &mut splits);
+            assert!(matches!(e, Err(SplitError::Fraction(_))), "{bad}: {e:?}");
+        }
+        let count = m.triangles().len();
+        let e = m.split_at(count as TriangleId, 0.5, &mut allow, &mut splits);
+        assert_eq!(
+            e,
+            Err(SplitError::Triangle {
+                triangle: count as TriangleId,
+                count
+            })
+        );
+        // So close to an end that a child is flat at round-off, with and without closure.
+        for &t in &cases {
+            for f in [1e-15, 1.0 - 1e-15] {
+                let e = m.split_at(t, f, &mut allow, &mut splits);
+                assert!(matches!(e, Err(SplitError::Degenerate { .. })), "{e:?}");
+            }
+        }
+        assert!(splits.is_empty());
+        assert_eq!(counts(&m), counts(&base));
+        assert_eq!(m.triangles(), base.triangles());
+    }
+
+    #[test]
+    fn refused_last_step_keeps_the_closure_done() {
+        let (base, cases) = split_cases();
+        let t = cases[2];
+        let mut m = base.clone();
+        let mut splits = Vec::new();
+        let done = m.split_at(t, 0.3, &mut |_, _, _, f| f == 0.5, &mut splits);
+        assert_eq!(done, Ok(false));
+        m.validate().unwrap();
+        assert!(!splits.is_empty() && splits.iter().all(|s| s.fraction == 0.5));
+        assert_eq!(m.triangles()[t as usize], base.triangles()[t as usize]);
+        // Asking again finds the closure done: one step, at the fraction.
+        let mut again = Vec::new();
+        assert_eq!(
+            m.split_at(t, 0.3, &mut |_, _, _, _| true, &mut again),
+            Ok(true)
+        );
+        assert_eq!(again.len(), 1);
+        assert_eq!(again[0].fraction, 0.3);
+        m.validate().unwrap();
     }
 }

@@ -37,6 +37,7 @@ use crate::coarsen::Merge;
 use crate::front::Front;
 use crate::geometry;
 use crate::mesh::{Mesh, TriangleId, VertexId};
+use crate::refine::lerp;
 
 /// Relative margin under the safety factor that absorbs rounding in times and gradients.
 pub const GUARD: f64 = 1e-9;
@@ -123,20 +124,62 @@ impl Pitcher {
 
     /// True when bisecting front triangle `t` keeps the front causal for every later tent: its
     /// time spread (vertex times from `time`, s) is at most `s (1 - GUARD) / c` times the
-    /// smallest altitude of either child. Pitching never widens a spread beyond
-    /// `max(B_T, current spread)` with `B_T <= s (1 - GUARD) h_T / c`, so children that pass keep
-    /// every later facet causal; with [`Self::for_refinement`] every triangle within its budget
-    /// passes.
+    /// smallest altitude of either child. A child's spread is at most its parent's (its corners
+    /// are the parent's and a midpoint), and pitching never widens a spread beyond
+    /// `max(B_T, current spread)` with `B_T <= s (1 - GUARD) h_T / c`, so children that pass
+    /// keep every later facet causal; with [`Self::for_refinement`] every triangle within its
+    /// budget passes. Adaptive refinement judges bisections by this test.
     pub fn may_bisect(&self, mesh: &Mesh, time: impl Fn(VertexId) -> f64, t: TriangleId) -> bool {
-        let times = mesh.triangles()[t as usize].map(time);
-        let spread = times.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
-            - times.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        let spread = spread(mesh.triangles()[t as usize].map(time));
         let width = mesh
-            .bisection_children(t)
+            .split_children(t, 0.5)
             .into_iter()
             .flat_map(geometry::altitudes)
             .fold(f64::INFINITY, f64::min);
         spread <= self.causal_width_factor() * width
+    }
+
+    /// True when splitting the refinement edge of front triangle `t` at `fraction` (from its
+    /// smaller-id end, as [`Mesh::split_at`] takes it) keeps the front causal for every later
+    /// tent: each child ([`Mesh::split_children`]) has a time spread at most `s (1 - GUARD) / c`
+    /// times its own smallest altitude, with vertex times from `time` (s) and the new vertex at
+    /// the front's own time there ([`crate::Split::interpolate`]). That is invariant (I*) on the
+    /// children, which pitching keeps (it never widens a spread beyond `max(B_T, current
+    /// spread)`). It allows whatever [`Self::may_bisect`] allows at the midpoint, which bounds
+    /// both children's spreads by their parent's.
+    ///
+    /// A split near an end of the edge makes a thin child (smallest altitude about
+    /// `min(fraction, 1 - fraction)` times the parent's, or less), which passes only where the
+    /// front is nearly flat over it; [`Self::for_refinement`] guarantees bisections only. A
+    /// refused split changes nothing: the caller keeps the mesh as it is and may ask again after
+    /// later tents have changed the times over `t` (the spread varies as its corners are pitched
+    /// in turn), or split nearer the middle of the edge.
+    pub fn may_split_at(
+        &self,
+        mesh: &Mesh,
+        time: impl Fn(VertexId) -> f64,
+        t: TriangleId,
+        fraction: f64,
+    ) -> bool {
+        let r = mesh.refinement_edge(t);
+        let tri = mesh.triangles()[t as usize];
+        let [z, a, b] = [0, 1, 2].map(|i| time(tri[(r + i) % 3]));
+        let [lo, hi] = if tri[(r + 1) % 3] < tri[(r + 2) % 3] {
+            [a, b]
+        } else {
+            [b, a]
+        };
+        let m = lerp(lo, hi, fraction);
+        let children = mesh.split_children(t, fraction);
+        [[m, z, a], [m, b, z]]
+            .into_iter()
+            .zip(children)
+            .all(|(times, points)| {
+                let width = geometry::altitudes(points)
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min);
+                spread(times) <= self.causal_width_factor() * width
+            })
     }
 
     /// Follows a coarsening of `mesh` (already applied): drops the removed children's budgets,
@@ -177,9 +220,9 @@ impl Pitcher {
             })
     }
 
-    /// `s (1 - GUARD) / c`: a triangle of minimum width `h` whose time spread is at most `h`
-    /// times this has a causal facet.
-    fn causal_width_factor(&self) -> f64 {
+    /// `s (1 - GUARD) / c`, s/m: a triangle of minimum width `h` whose time spread is at most
+    /// `h` times this has a causal facet; the pitcher keeps every front triangle so.
+    pub fn causal_width_factor(&self) -> f64 {
         self.safety * (1.0 - GUARD) / self.c_max
     }
 
@@ -246,6 +289,12 @@ impl Pitcher {
     }
 }
 
+/// `max - min` of three times, s.
+fn spread(times: [f64; 3]) -> f64 {
+    times.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+        - times.iter().fold(f64::INFINITY, |a, &b| a.min(b))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -307,5 +356,62 @@ mod tests {
             PitchError::Safety(1.0)
         );
         assert!(Pitcher::new(&m, 1.0, 0.9, f64::NAN).is_err());
+    }
+
+    #[test]
+    fn splits_near_an_edge_end_need_a_flat_front_over_the_thin_child() {
+        let m = mesh();
+        let p = Pitcher::new(&m, 2.0, 0.5, 10.0).unwrap();
+        let f = p.causal_width_factor();
+        // Triangle 0 is (0, 1, 4) with refinement edge 0-4 opposite corner 1; at 0.1 the thin
+        // child is (m, 0, 1), near vertex 0.
+        assert_eq!((m.triangles()[0], m.refinement_edge(0)), ([0, 1, 4], 1));
+        let widths = |fraction: f64| {
+            m.split_children(0, fraction).map(|c| {
+                geometry::altitudes(c)
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min)
+            })
+        };
+        let [big, thin] = widths(0.1);
+        let half = widths(0.5)[0].min(widths(0.5)[1]);
+        assert!(thin < 0.3 * half && big > half, "{thin} {half} {big}");
+
+        // Apex 1 raised: both children span the whole spread, the thin one is refused.
+        let spread = 0.5 * f * half;
+        let apex = |v: VertexId| if v == 1 { spread } else { 0.0 };
+        assert!(p.may_bisect(&m, apex, 0));
+        assert!(p.may_split_at(&m, apex, 0, 0.5));
+        assert!(p.may_split_at(&m, apex, 0, 0.3));
+        assert!(!p.may_split_at(&m, apex, 0, 0.1));
+        assert!(
+            p.may_split_at(&m, |_| 1.0, 0, 0.01),
+            "a flat front allows any split"
+        );
+
+        // Vertex 4 raised: the thin child at vertex 0 spans a tenth of the spread only, so the
+        // split at 0.1 passes where the parent's spread over the thin child's width would not.
+        let spread = 0.9 * f * half;
+        let far = |v: VertexId| if v == 4 { spread } else { 0.0 };
+        assert!(spread > f * thin);
+        assert!(p.may_bisect(&m, far, 0));
+        assert!(p.may_split_at(&m, far, 0, 0.1));
+        assert!(
+            !p.may_split_at(&m, far, 0, 0.9),
+            "the thin child at vertex 4 spans it all"
+        );
+
+        // The new vertex's time is the front's own value at its fraction of the edge.
+        let mut split_mesh = m.clone();
+        let mut splits = Vec::new();
+        let mut allow = |_: &Mesh, _: &[crate::Split], _: TriangleId, _: f64| true;
+        split_mesh
+            .split_at(0, 0.3, &mut allow, &mut splits)
+            .unwrap();
+        let front = Front::flat(m.vertices().len(), 0.0);
+        front.set_time(4, 1.0);
+        let v = splits[0].vertex;
+        assert_eq!(splits[0].ends, [0, 4]);
+        assert_eq!(front.time_after(&splits, v), 0.3);
     }
 }

@@ -3,7 +3,7 @@
 
 use std::sync::atomic::Ordering;
 
-use sdg_mesh::TriangleId;
+use sdg_mesh::{SplitError, TriangleId};
 use sdg_scheduler::{Changed, VertexId};
 use sdg_solver::patch::{PatchReport, PatchSolver};
 
@@ -202,6 +202,44 @@ impl Solve<'_> {
         {
             state.insist(v);
         }
+        if here {
+            refined.touched.push(v);
+            refined.touched.extend(state.mesh.vertex_neighbors(v));
+        }
+        self.count_refined(refined)
+    }
+
+    /// Splits the refinement edge of triangle `t` at `fraction` of its length from its
+    /// smaller-id end, after bisecting what the closure needs, within the limits of refinement
+    /// (`adapt.min_edge` for every piece of an edge, none without adaptivity; the patch solvers'
+    /// star capacity; the pitcher's causality, [`sdg_mesh::Pitcher::may_split_at`] off the
+    /// midpoint, [`sdg_mesh::Pitcher::may_bisect`] at it), and books
+    /// the new vertices like refinement does. Returns whether `t` was split (a refused step
+    /// leaves `t` whole and keeps the closure's bisections done before it) and what changed for
+    /// the scheduler. Runs as an event: `state` is held exclusively.
+    pub(super) fn split_at(
+        &self,
+        state: &mut Frontier,
+        t: TriangleId,
+        fraction: f64,
+    ) -> Result<(bool, Changed), SplitError> {
+        let min_edge = self.adapt.as_ref().map_or(0.0, |adapt| adapt.min_edge);
+        let mut refined = Refined::default();
+        let split = state.split_at(
+            t,
+            fraction,
+            min_edge,
+            self.max_star,
+            &|corners| self.initial_energy(corners),
+            &mut refined,
+        )?;
+        Ok((split, self.count_refined(refined)))
+    }
+
+    /// Books what a refinement changed (new vertices, the initial energy's correction) and
+    /// returns it for the scheduler: the touched vertices, sorted, and the new ones below the
+    /// end time.
+    fn count_refined(&self, refined: Refined) -> Changed {
         let t_end = self.problem.loaded.config.time.end;
         let mut book = self.book.lock();
         book.refinements += refined.vertices.len() as u64;
@@ -211,10 +249,6 @@ impl Solve<'_> {
             book.progress.grow(t_end - t);
         }
         let mut touched = refined.touched;
-        if here {
-            touched.push(v);
-            touched.extend(state.mesh.vertex_neighbors(v));
-        }
         touched.extend(refined.vertices.iter().map(|&(w, _)| w));
         touched.sort_unstable();
         touched.dedup();

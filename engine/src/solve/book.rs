@@ -36,13 +36,23 @@ pub(super) struct Milestones {
 pub(super) enum Milestone {
     History,
     Snapshot,
+    /// The change of [`super::solve_job_with`] is due.
+    Intervention,
 }
 
 impl Milestones {
-    pub(super) fn new(vertices: usize, t_end: f64, snapshots: &[f64]) -> Self {
+    /// Milestones for a front of `vertices` vertices at time 0: the history rows up to `t_end`
+    /// (s), the snapshot times and the intervention time, if any (s).
+    pub(super) fn new(
+        vertices: usize,
+        t_end: f64,
+        snapshots: &[f64],
+        intervention: Option<f64>,
+    ) -> Self {
         let mut times: Vec<(f64, Milestone)> = (1..HISTORY_ROWS)
             .map(|k| (t_end * k as f64 / HISTORY_ROWS as f64, Milestone::History))
             .chain(snapshots.iter().map(|&t| (t, Milestone::Snapshot)))
+            .chain(intervention.map(|t| (t, Milestone::Intervention)))
             .collect();
         times.sort_by(|a, b| a.0.total_cmp(&b.0));
         let below = times
@@ -275,7 +285,7 @@ mod tests {
 
     #[test]
     fn milestones_pass_when_every_vertex_has() {
-        let mut m = Milestones::new(2, 1.0, &[0.0, 0.5]);
+        let mut m = Milestones::new(2, 1.0, &[0.0, 0.5], None);
         let mut passed = Vec::new();
         m.advance(0.0, 0.3, &mut passed);
         assert_eq!(passed, [(0.0, Milestone::Snapshot)], "t = 0 passes at once");

@@ -35,11 +35,14 @@ mod adaptivity;
 mod book;
 mod crack_output;
 mod interface_output;
+mod live;
 mod summary;
 
 use adaptivity::refine_to_max_edge;
 use book::{Book, Milestone, Milestones};
 pub use crack_output::CrackSummary;
+use live::Intervention;
+pub use live::{Live, solve_job_with};
 use summary::state_hash;
 pub use summary::{EnergySummary, ErrorSummary, InterfaceSummary, RunSummary};
 
@@ -55,6 +58,8 @@ struct Solve<'a> {
     /// Basis of every element (each worker's solver has the same).
     basis: sdg_solver::basis::Basis,
     book: Mutex<Book>,
+    /// The change [`solve_job_with`] applies once, until its milestone passes.
+    intervention: Mutex<Option<Intervention>>,
 }
 
 /// The scaled initial state at `x`.
@@ -317,6 +322,9 @@ impl<'a> Work<'a> for Solve<'a> {
                 Changed::default()
             }));
         }
+        if passed.iter().any(|p| p.1 == Milestone::Intervention) {
+            events.push(Box::new(move |state: &mut Frontier| self.intervene(state)));
+        }
         passed.clear();
         book.passed = passed;
         Ok(())
@@ -329,6 +337,16 @@ pub fn solve_job(
     problem: &Problem,
     options: &RunOptions,
 ) -> Result<(RunSummary, PathBuf), EngineError> {
+    run_job(problem, options, None)
+}
+
+/// [`solve_job`], with `intervention` (its time and change) applied once mid-run.
+fn run_job(
+    problem: &Problem,
+    options: &RunOptions,
+    intervention: Option<(f64, Intervention)>,
+) -> Result<(RunSummary, PathBuf), EngineError> {
+    let (after, intervention) = intervention.unzip();
     let config = &problem.loaded.config;
     let mesh = &problem.mesh;
     let system = &problem.system;
@@ -418,6 +436,7 @@ pub fn solve_job(
                 state.mesh.vertices().len(),
                 t_end,
                 &config.output.snapshot_times,
+                after,
             ),
             passed: Vec::new(),
             history: String::from(
@@ -430,6 +449,7 @@ pub fn solve_job(
             geometry: Geometry::default(),
             coefficients: vec![0.0; basis.len() * width],
         }),
+        intervention: Mutex::new(intervention),
     };
     solve.history_row(&state, &mut solve.book.lock());
     let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
