@@ -50,6 +50,8 @@ pub struct Crossing {
     pub time: f64,
     /// Which level.
     pub level: Level,
+    /// Length of the edge, m: the scale to which the crossing places a crack tip.
+    pub edge_length: f64,
 }
 
 /// The edge fraction of probe line `k` (from either end).
@@ -112,6 +114,7 @@ pub fn find_crossings(
                 point: [bottom[0], bottom[1]],
                 time: hi / c_ref,
                 level,
+                edge_length: state.geometry.length(),
             });
         }
     }
