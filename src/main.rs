@@ -27,7 +27,8 @@ enum Command {
     Mesh(JobArgs),
     /// Check a configuration and its mesh, then exit.
     Validate(ConfigArgs),
-    /// Draw a field of a VTU file (a snapshot, or any triangle grid) as PNG.
+    /// Draw a field of a VTU file (a snapshot, or any triangle grid) as PNG, or the crack tips of
+    /// one or more runs.
     Plot(PlotArgs),
 }
 

@@ -146,7 +146,7 @@ fn each_command_lists_only_its_options() {
         assert!(!text.contains(option), "validate: {option} listed:\n{text}");
     }
     let text = help("plot");
-    for option in ["<VTU>", "--field", "--out ", "--edges", "--quiet"] {
+    for option in ["<FILE>...", "--field", "--out ", "--edges", "--quiet"] {
         assert!(text.contains(option), "plot: {option} missing:\n{text}");
     }
     for option in ["--set"].iter().chain(&job) {
