@@ -1,13 +1,15 @@
 //! The patch solve allocates nothing: all scratch memory lives in the `PatchSolver`.
 //!
-//! This binary holds a single test, so the counting allocator sees only its allocations.
+//! The counting allocator counts per thread: the test harness's own threads allocate while the
+//! test runs (at any moment, depending on scheduling), and the patch solve runs on the test's
+//! thread alone.
 
 // A counting global allocator is the standard way to observe heap allocations; it forwards to the
 // system allocator unchanged.
 #![allow(unsafe_code)]
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
 use sdg_mesh::{Diagonal, Front, Pitcher, Rectangle};
 use sdg_solver::boundary::{Boundary, Condition};
@@ -20,12 +22,21 @@ use sdg_solver::{Material, Plane};
 
 struct Counting;
 
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+thread_local! {
+    /// Allocations made by this thread (a const-initialized `Cell`: reading it never allocates).
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+/// Allocations made by the calling thread so far.
+fn allocations() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
 
 // SAFETY: every call forwards to `System` with the caller's arguments.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // A thread being torn down has no counter left; its allocations are not the test's.
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
         // SAFETY: same contract as ours.
         unsafe { System.alloc(layout) }
     }
@@ -80,7 +91,7 @@ fn patch_solves_do_not_allocate() {
         let v = (0..mesh.vertices().len() as u32)
             .min_by(|&a, &b| front.time(a).total_cmp(&front.time(b)))
             .unwrap();
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let before = allocations();
         let tent = pitcher.pitch(&mesh, &front, v).unwrap();
         solver
             .solve(
@@ -93,7 +104,7 @@ fn patch_solves_do_not_allocate() {
             )
             .unwrap();
         solver.commit(&solution);
-        counts.push(ALLOCATIONS.load(Ordering::Relaxed) - before);
+        counts.push(allocations() - before);
     }
     // The very first solve of the process may allocate once inside the linear algebra library
     // (lazy initialisation of its kernel dispatch); every later patch must allocate nothing.
