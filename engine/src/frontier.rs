@@ -25,6 +25,8 @@ use sdg_mesh::{
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::face::FaceState;
 
+use crate::fracture::Tip;
+
 /// The space mesh, its front, the elements under the front and the pitcher.
 #[derive(Debug)]
 pub(crate) struct Frontier {
@@ -37,6 +39,10 @@ pub(crate) struct Frontier {
     insist: Vec<AtomicBool>,
     /// Per triangle: the element under it was accepted below the lower tolerance.
     calm: Vec<AtomicBool>,
+    /// Per vertex: the crack tip at it, if any (changed by events only).
+    pub(crate) tips: Vec<Option<Tip>>,
+    /// The id the next crack branch takes.
+    pub(crate) next_branch: u32,
 }
 
 impl sdg_scheduler::State for Frontier {
@@ -66,6 +72,14 @@ pub(crate) struct Coarsening {
     pub(crate) calm: bool,
 }
 
+/// How far refinement may go: no piece of an edge shorter than `min_edge` (m), no vertex star
+/// above `max_star` triangles.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Limits {
+    pub(crate) min_edge: f64,
+    pub(crate) max_star: usize,
+}
+
 /// What a refinement changed.
 #[derive(Debug, Default)]
 pub(crate) struct Refined {
@@ -83,6 +97,8 @@ impl Frontier {
     pub(crate) fn new(mesh: Mesh, front: Front, solution: FrontSolution, pitcher: Pitcher) -> Self {
         let flags = |n: usize| (0..n).map(|_| AtomicBool::new(false)).collect();
         Self {
+            tips: vec![None; mesh.vertices().len()],
+            next_branch: 0,
             insist: flags(mesh.vertices().len()),
             calm: flags(mesh.triangles().len()),
             mesh,
@@ -147,6 +163,7 @@ impl Frontier {
         }
         self.pitcher.remove(&self.mesh, &merge);
         merge.apply_to_vertices(&mut self.insist);
+        merge.apply_to_vertices(&mut self.tips);
         merge.apply_to_triangles(&mut self.calm);
         for &parent in &parents {
             *self.calm[parent as usize].get_mut() = c.calm;
@@ -188,28 +205,31 @@ impl Frontier {
         );
     }
 
-    /// [`Frontier::refine`] with the refinement edge of `t` split at `fraction` of its length
-    /// from its smaller-id end ([`Mesh::split_at`]) instead of its midpoint; the closure still
-    /// bisects. Every split must keep the front causal ([`Pitcher::may_bisect`] for
-    /// bisections, [`Pitcher::may_split_at`] for other fractions), leave no piece of an edge
-    /// shorter than `min_edge` (m) and no star above `max_star` triangles.
-    /// Returns whether `t` was split; on an error (bad `t` or `fraction`, degenerate children)
-    /// nothing changed.
+    /// [`Frontier::refine`] with an edge of `t` split at `fraction` of its length from its
+    /// smaller-id end instead of a bisection: its refinement edge ([`Mesh::split_at`]) or, with
+    /// `corner`, the edge opposite that corner, whose new vertex is then joined to the corner
+    /// ([`Mesh::split_toward`]); the closure still bisects. Every split must keep the front
+    /// causal ([`Pitcher::may_bisect`] for bisections, [`Pitcher::may_split_at`] for other
+    /// fractions) and stay within `limits`. Returns whether `t` was split; on an error (bad
+    /// `t`, `corner` or `fraction`, degenerate children) nothing changed.
     pub(crate) fn split_at(
         &mut self,
         t: TriangleId,
+        corner: Option<usize>,
         fraction: f64,
-        min_edge: f64,
-        max_star: usize,
+        limits: Limits,
         initial_energy: &dyn Fn([Point; 3]) -> f64,
         refined: &mut Refined,
     ) -> Result<bool, SplitError> {
         self.apply_splits(
-            min_edge,
-            max_star,
+            limits.min_edge,
+            limits.max_star,
             initial_energy,
             refined,
-            |mesh, allow, splits| mesh.split_at(t, fraction, allow, splits),
+            |mesh, allow, splits| match corner {
+                None => mesh.split_at(t, fraction, allow, splits),
+                Some(c) => mesh.split_toward(t, c, fraction, allow, splits),
+            },
         )
     }
 
@@ -232,6 +252,8 @@ impl Frontier {
             pitcher,
             insist,
             calm,
+            tips,
+            ..
         } = self;
         let mut splits: Vec<Split> = Vec::new();
         // Triangles asked about that still carry initial data: (step, corners, apex corner).
@@ -269,6 +291,7 @@ impl Frontier {
             let t_new = split.interpolate(split.ends.map(|w| front.time(w)));
             let v = front.push(t_new);
             insist.push(AtomicBool::new(false));
+            tips.push(None);
             debug_assert_eq!(v, split.vertex, "vertices are appended in split order");
             refined.vertices.push((v, t_new));
             refined.touched.extend(split.ends);

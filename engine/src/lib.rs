@@ -4,6 +4,7 @@
 mod adapt;
 pub mod config;
 pub mod error;
+pub mod fracture;
 mod frontier;
 pub mod lefm;
 pub mod output;

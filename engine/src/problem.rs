@@ -14,6 +14,7 @@ use crate::config::{
     ProfileName, WaveName, rectangle_key,
 };
 use crate::error::EngineError;
+use crate::fracture::Fracture;
 
 /// Everything a run needs that is derived from the configuration.
 #[derive(Clone, Debug)]
@@ -36,6 +37,8 @@ pub struct Problem {
     pub exact: Option<PlaneWave>,
     /// The scales of `[loading]`, if configured.
     pub loading: Option<Loading>,
+    /// Crack propagation, if `[fracture]` is configured.
+    pub fracture: Option<Fracture>,
 }
 
 /// The mode-I load of `[loading]` on the mesh.
@@ -81,7 +84,7 @@ impl Problem {
             file: file.clone(),
             ..e
         })?;
-        let mesh = match config.mesh.kind {
+        let mut mesh = match config.mesh.kind {
             MeshKind::Rectangle => config
                 .rectangle()
                 .build()
@@ -120,9 +123,18 @@ impl Problem {
                 .map_err(|err| invalid(("exact".into(), err.to_string())))
             })
             .transpose()?;
+        let fracture = config.fracture.as_ref().map(|f| {
+            Fracture::new(f, &mut mesh, |name| {
+                let entry = config
+                    .interface
+                    .iter()
+                    .find(|i| i.tags.iter().any(|t| t == name));
+                entry.and_then(|i| i.to_law().ok()).unwrap_or(Law::Bonded)
+            })
+        });
         let sites = TagSites::of(&mesh);
         let boundary = conditions(config, &mesh, &sites).map_err(invalid)?;
-        let interfaces = laws(config, &mesh, &sites).map_err(invalid)?;
+        let interfaces = laws(config, &mesh, &sites, fracture.as_ref()).map_err(invalid)?;
         all_named(&mesh, &sites, &boundary, &interfaces).map_err(invalid)?;
         let probes = probes(&config.output.interface_probes, &mesh).map_err(invalid)?;
         let loading = config
@@ -133,6 +145,7 @@ impl Problem {
                 arrival_time: arrival_distance(config, &mesh) / material.c_d(),
             });
         Ok(Self {
+            fracture,
             loading,
             system: System::new(&material),
             boundary: Boundary::new(boundary, exact.clone()),
@@ -247,14 +260,23 @@ fn conditions(
     Ok(by_tag)
 }
 
-/// The `[[interface]]` laws by tag id; each tag must tag interior edges only.
-fn laws(config: &Config, mesh: &Mesh, sites: &TagSites) -> Result<Vec<Option<Law>>, Invalid> {
+/// The `[[interface]]` laws by tag id; each tag must tag interior edges only, and be on some
+/// edge unless it is the tag of new crack edges.
+fn laws(
+    config: &Config,
+    mesh: &Mesh,
+    sites: &TagSites,
+    fracture: Option<&Fracture>,
+) -> Result<Vec<Option<Law>>, Invalid> {
     let mut by_tag = vec![None; mesh.tag_names().len()];
     for (i, entry) in config.interface.iter().enumerate() {
         let key = || format!("interface[{i}].tags");
         let law = entry.to_law().expect("validated law");
         for name in &entry.tags {
-            let tag = sites.find(mesh, name).ok_or_else(|| {
+            let new_cracks = fracture
+                .map(|f| f.tag)
+                .filter(|&t| mesh.tag_id(name) == Some(t));
+            let tag = sites.find(mesh, name).or(new_cracks).ok_or_else(|| {
                 let known = TagSites::names(mesh, &sites.interior);
                 (
                     key(),

@@ -266,6 +266,32 @@ impl Mesh {
             .map(|i| i as TagId)
     }
 
+    /// The id of tag `name`, added to [`Mesh::tag_names`] if no edge set is named so yet.
+    pub fn add_tag(&mut self, name: &str) -> TagId {
+        self.tag_id(name).unwrap_or_else(|| {
+            self.tag_names.push(name.to_string());
+            (self.tag_names.len() - 1) as TagId
+        })
+    }
+
+    /// Sets the tag of edge `e` (turning an interior edge into an interface, or back). Panics if
+    /// `e` is not an edge or `tag` is not a tag id.
+    pub fn set_tag(&mut self, e: EdgeId, tag: Option<TagId>) {
+        assert!(tag.is_none_or(|t| (t as usize) < self.tag_names.len()));
+        self.edges[e as usize].tag = tag;
+    }
+
+    /// The edge joining vertices `a` and `b`, if any.
+    pub fn edge_between(&self, a: VertexId, b: VertexId) -> Option<EdgeId> {
+        self.vertex_triangles[a as usize]
+            .iter()
+            .flat_map(|&t| self.triangle_edges[t as usize])
+            .find(|&e| {
+                let [p, q] = self.edges[e as usize].vertices;
+                (p == a && q == b) || (p == b && q == a)
+            })
+    }
+
     /// Position of vertex `v`.
     pub fn vertex(&self, v: VertexId) -> Point {
         self.vertices[v as usize]

@@ -65,6 +65,8 @@ pub enum SplitError {
          degenerate child: the point is too close to an end of the edge"
     )]
     Degenerate { triangle: TriangleId, fraction: f64 },
+    #[error("a triangle has corners 0, 1 and 2, got corner {0}")]
+    Corner(usize),
 }
 
 impl Mesh {
@@ -151,6 +153,75 @@ impl Mesh {
             }
         }
         Ok(self.refine_edge(t, fraction, allow, splits))
+    }
+
+    /// Splits the edge of triangle `t` opposite its corner `corner` (0, 1 or 2) at `fraction` of
+    /// its length from its smaller-id end, so that the new vertex is joined to that corner: the
+    /// crack-alignment step, where the corner is a crack tip and the new edge runs in a wanted
+    /// direction. `t` first takes that edge as its refinement edge (newest-vertex labels may be
+    /// chosen freely: the closure only needs them to form no cycle), then [`Mesh::split_at`]
+    /// splits it; the triangle across is bisected first when the edge is not its own
+    /// refinement edge.
+    ///
+    /// Returns `Ok(false)` with the mesh unchanged when the new label would make the closure's
+    /// chain of refinement edges come back to `t`, or when the first step is refused; a later
+    /// refusal keeps the steps done, as [`Mesh::split_at`] does, and `t` keeps its new label.
+    /// Errors as [`Mesh::split_at`], and a corner out of range is a [`SplitError::Corner`]; the
+    /// mesh is unchanged on every error. A relabelled triangle's children are never coarsened
+    /// into it, and the triangle itself no longer into its former parent.
+    pub fn split_toward(
+        &mut self,
+        t: TriangleId,
+        corner: usize,
+        fraction: f64,
+        allow: &mut AllowSplit,
+        splits: &mut Vec<Split>,
+    ) -> Result<bool, SplitError> {
+        let count = self.triangles.len();
+        if t as usize >= count {
+            return Err(SplitError::Triangle { triangle: t, count });
+        }
+        if corner > 2 {
+            return Err(SplitError::Corner(corner));
+        }
+        let label = self.refinement_edge[t as usize];
+        self.refinement_edge[t as usize] = corner as u8;
+        if self.closure_returns_to(t) {
+            self.refinement_edge[t as usize] = label;
+            return Ok(false);
+        }
+        let before = splits.len();
+        let result = self.split_at(t, fraction, allow, splits);
+        if result.is_err() || splits.len() == before {
+            self.refinement_edge[t as usize] = label;
+        }
+        result
+    }
+
+    /// True when the chain the closure of a split of `t`'s refinement edge follows (the
+    /// triangle across an edge that is not its refinement edge, then across that one, ...)
+    /// comes back to `t` or does not end.
+    fn closure_returns_to(&self, t: TriangleId) -> bool {
+        let mut s = t;
+        for _ in 0..self.triangles.len() {
+            let e = self.refinement_edge_id(s);
+            let Some(u) = self.edges[e as usize]
+                .triangles
+                .into_iter()
+                .flatten()
+                .find(|&u| u != s)
+            else {
+                return false;
+            };
+            if self.refinement_edge_id(u) == e {
+                return false;
+            }
+            if u == t {
+                return true;
+            }
+            s = u;
+        }
+        true
     }
 
     /// [`Mesh::split_at`] without its checks: `fraction` is in (0, 1) and gives valid children.
@@ -946,6 +1017,70 @@ mod tests {
         assert!(splits.is_empty());
         assert_eq!(counts(&m), counts(&base));
         assert_eq!(m.triangles(), base.triangles());
+    }
+
+    #[test]
+    fn split_toward_joins_the_corner_to_a_point_of_the_opposite_edge() {
+        let (base, cases) = split_cases();
+        for &t in &cases {
+            for corner in 0..3 {
+                let mut m = base.clone();
+                let tri = m.triangles()[t as usize];
+                let e = m.triangle_edges(t)[corner];
+                let [p, q] = m.edges()[e as usize].vertices;
+                let mut splits = Vec::new();
+                let done = m.split_toward(t, corner, 0.37, &mut |_, _, _, _| true, &mut splits);
+                assert_eq!(done, Ok(true), "{t} {corner}");
+                m.validate().unwrap();
+                let last = splits.last().unwrap();
+                assert_eq!((last.ends, last.fraction), ([p, q], 0.37));
+                assert!(m.edge_between(tri[corner], last.vertex).is_some());
+                let [pp, pq] = [p, q].map(|v| m.vertex(v));
+                let want = [0, 1].map(|i| 0.63 * pp[i] + 0.37 * pq[i]);
+                assert_eq!(m.vertex(last.vertex), want);
+                assert!((total_area(&m) - 1.0).abs() < 1e-12);
+            }
+        }
+        // Refused at the first step, or bad input: nothing changes, labels included.
+        let t = cases[2];
+        let mut m = base.clone();
+        let corner = (m.refinement_edge(t) + 1) % 3;
+        let mut splits = Vec::new();
+        let refuse = &mut |_: &Mesh, _: &[Split], _: TriangleId, _: f64| false;
+        assert_eq!(
+            m.split_toward(t, corner, 0.4, refuse, &mut splits),
+            Ok(false)
+        );
+        assert_eq!(
+            m.split_toward(t, 3, 0.4, &mut |_, _, _, _| true, &mut splits),
+            Err(SplitError::Corner(3))
+        );
+        let e = m.split_toward(t, corner, 1e-15, &mut |_, _, _, _| true, &mut splits);
+        assert!(matches!(e, Err(SplitError::Degenerate { .. })), "{e:?}");
+        assert!(splits.is_empty());
+        assert_eq!(m.refinement_edge(t), base.refinement_edge(t));
+        assert_eq!(m.triangles(), base.triangles());
+    }
+
+    #[test]
+    fn repeated_splits_toward_corners_keep_the_mesh_valid() {
+        let mut m = square(4, Diagonal::Alternate, 0.2).build().unwrap();
+        let mut rng = XorShift(11);
+        let (mut done, mut refused) = (0, 0);
+        for _ in 0..300 {
+            let t = rng.below(m.triangles().len());
+            let corner = rng.below(3) as usize;
+            let fraction = 0.25 + 0.5 * f64::from(rng.below(1000)) / 1000.0;
+            let mut splits = Vec::new();
+            match m.split_toward(t, corner, fraction, &mut |_, _, _, _| true, &mut splits) {
+                Ok(true) => done += 1,
+                Ok(false) => refused += 1,
+                Err(e) => panic!("{e}"),
+            }
+            m.validate().unwrap();
+        }
+        assert!((total_area(&m) - 1.0).abs() < 1e-12);
+        assert!(done > 250, "{done} done, {refused} refused");
     }
 
     #[test]

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 mod conditions;
+mod fracture;
 mod loading;
 mod material;
 mod mesh;
@@ -19,6 +20,7 @@ pub use conditions::{
     BoundaryConfig, BoundaryKind, ExactConfig, ExactKind, HistoryConfig, HistoryKind,
     InterfaceConfig, LawName, ProfileName, WaveName,
 };
+pub use fracture::FractureConfig;
 pub use loading::{LoadScales, LoadingConfig};
 pub use material::{MaterialConfig, PlaneName};
 pub(crate) use mesh::rectangle_key;
@@ -78,6 +80,9 @@ pub struct Config {
     /// A mode-I load given by its load ratio: transmitting conditions on its sides.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loading: Option<LoadingConfig>,
+    /// Crack propagation from the tips of existing cracks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fracture: Option<FractureConfig>,
     /// An exact solution: initial data, `exact` boundaries and the error at the end time.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub exact: Option<ExactConfig>,

@@ -26,6 +26,7 @@ impl Config {
         }
         self.validate_physics()?;
         self.validate_adapt()?;
+        self.validate_fracture()?;
         let m = &self.mesh;
         let rectangle_keys = [
             ("mesh.width", m.width.is_some()),

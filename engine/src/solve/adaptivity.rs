@@ -10,7 +10,7 @@ use sdg_solver::patch::{PatchReport, PatchSolver};
 use super::{InterfaceRecords, Outcome, Solve};
 use crate::adapt::Adapt;
 use crate::error::EngineError;
-use crate::frontier::{Coarsening, Frontier, Refined, refinement_edge_length};
+use crate::frontier::{Coarsening, Frontier, Limits, Refined, refinement_edge_length};
 
 impl Solve<'_> {
     /// The indicator of a patch with `report` over spacetime volume `volume` (m^2 s): the larger
@@ -209,31 +209,36 @@ impl Solve<'_> {
         self.count_refined(refined)
     }
 
-    /// Splits the refinement edge of triangle `t` at `fraction` of its length from its
-    /// smaller-id end, after bisecting what the closure needs, within the limits of refinement
-    /// (`adapt.min_edge` for every piece of an edge, none without adaptivity; the patch solvers'
-    /// star capacity; the pitcher's causality, [`sdg_mesh::Pitcher::may_split_at`] off the
-    /// midpoint, [`sdg_mesh::Pitcher::may_bisect`] at it), and books
-    /// the new vertices like refinement does. Returns whether `t` was split (a refused step
-    /// leaves `t` whole and keeps the closure's bisections done before it) and what changed for
-    /// the scheduler. Runs as an event: `state` is held exclusively.
+    /// Splits an edge of triangle `t` at `fraction` of its length from its smaller-id end (its
+    /// refinement edge, or with `corner` the edge opposite that corner: see
+    /// [`Frontier::split_at`]), after bisecting what the closure needs, within the limits of
+    /// refinement (`adapt.min_edge` for every piece of an edge, none without adaptivity; the
+    /// patch solvers' star capacity; the pitcher's causality), and books the new vertices like
+    /// refinement does. Returns whether `t` was split (a refused step leaves `t` whole and
+    /// keeps the closure's bisections done before it), what changed for the scheduler and the
+    /// new vertices. Runs as an event: `state` is held exclusively.
     pub(super) fn split_at(
         &self,
         state: &mut Frontier,
         t: TriangleId,
+        corner: Option<usize>,
         fraction: f64,
-    ) -> Result<(bool, Changed), SplitError> {
-        let min_edge = self.adapt.as_ref().map_or(0.0, |adapt| adapt.min_edge);
+    ) -> Result<(bool, Changed, Vec<VertexId>), SplitError> {
+        let limits = Limits {
+            min_edge: self.adapt.as_ref().map_or(0.0, |adapt| adapt.min_edge),
+            max_star: self.max_star,
+        };
         let mut refined = Refined::default();
         let split = state.split_at(
             t,
+            corner,
             fraction,
-            min_edge,
-            self.max_star,
+            limits,
             &|corners| self.initial_energy(corners),
             &mut refined,
         )?;
-        Ok((split, self.count_refined(refined)))
+        let new: Vec<VertexId> = refined.vertices.iter().map(|&(v, _)| v).collect();
+        Ok((split, self.count_refined(refined), new))
     }
 
     /// Books what a refinement changed (new vertices, the initial energy's correction) and

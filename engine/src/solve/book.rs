@@ -113,6 +113,8 @@ pub(super) struct Book {
     pub(super) samples: Vec<(usize, InterfaceSample)>,
     /// Crack-tracking crossings of cohesive faces with the tag of their edge.
     pub(super) crossings: Vec<(Option<TagId>, Crossing)>,
+    /// Crack nucleation, extension, branching and arrest, in the order they happened.
+    pub(super) fracture_events: Vec<super::propagation::FractureEvent>,
     pub(super) nonlinear_patches: u64,
     pub(super) newton_iterations: u64,
     pub(super) newton_max: usize,

@@ -109,7 +109,7 @@ impl Live<'_> {
     /// a step was refused (the steps before it stay done). Errors (bad `t` or `fraction`, a
     /// degenerate child) change nothing.
     pub fn split_at(&mut self, t: TriangleId, fraction: f64) -> Result<bool, SplitError> {
-        let (split, changed) = self.solve.split_at(self.state, t, fraction)?;
+        let (split, changed, _) = self.solve.split_at(self.state, t, None, fraction)?;
         self.changed.offer.extend(changed.offer);
         self.changed.below_end += changed.below_end;
         Ok(split)

@@ -36,6 +36,7 @@ mod book;
 mod crack_output;
 mod interface_output;
 mod live;
+mod propagation;
 mod summary;
 
 use adaptivity::refine_to_max_edge;
@@ -43,6 +44,8 @@ use book::{Book, Milestone, Milestones};
 pub use crack_output::CrackSummary;
 use live::Intervention;
 pub use live::{Live, solve_job_with};
+use propagation::Extension;
+pub use propagation::FractureSummary;
 use summary::state_hash;
 pub use summary::{EnergySummary, ErrorSummary, InterfaceSummary, RunSummary};
 
@@ -101,6 +104,8 @@ enum Outcome {
         t_new: f64,
         report: PatchReport,
         interface: InterfaceRecords,
+        /// The crack tip at the vertex extends.
+        extension: Option<Extension>,
     },
     /// The indicator rejected the patch: nothing advanced; these star triangles (with their
     /// corners, to notice a change) are to be bisected.
@@ -248,11 +253,16 @@ impl<'a> Work<'a> for Solve<'a> {
         }
         solver.commit(&state.solution);
         front.set_time(v, t_new);
+        let extension =
+            self.problem.fracture.as_ref().and_then(|fracture| {
+                self.extension(fracture, state, solver, v, [tent.t_old, t_new])
+            });
         let outcome = Outcome::Accepted {
             t_old: tent.t_old,
             t_new,
             report,
             interface: self.interface_records(mesh, solver),
+            extension,
         };
         Ok((t_new, outcome))
     }
@@ -270,9 +280,15 @@ impl<'a> Work<'a> for Solve<'a> {
                 t_new,
                 report,
                 interface,
+                extension,
             } => {
                 if !interface.is_empty() {
                     interface.add_to(&mut self.book.lock());
+                }
+                if let Some(extension) = extension {
+                    events.push(Box::new(move |state: &mut Frontier| {
+                        self.extend(state, v, &extension)
+                    }));
                 }
                 (t_old, t_new, report)
             }
@@ -359,7 +375,9 @@ fn run_job(
     let scheduler = options.scheduler(problem);
 
     let adapt = Adapt::new(&config.adapt, mesh, c_max, rho);
-    let pitcher = if adapt.is_some() {
+    // Crack alignment splits edges as refinement does.
+    let splits = adapt.is_some() || problem.fracture.is_some();
+    let pitcher = if splits {
         pitcher.for_refinement(mesh)
     } else {
         pitcher
@@ -370,7 +388,7 @@ fn run_job(
         .unwrap_or(0);
     // Bisection adds triangles to stars; the solvers are sized once, and refinement never
     // grows a star beyond them.
-    let max_star = if adapt.is_some() {
+    let max_star = if splits {
         (2 * initial_star).max(12)
     } else {
         initial_star
@@ -399,6 +417,10 @@ fn run_job(
         // Energies of the initial data are taken on the refined front below.
         refine_to_max_edge(&mut state, adapt, max_star)?;
     }
+    if let Some(fracture) = &problem.fracture {
+        state.tips = fracture.initial_tips(&state.mesh);
+        state.next_branch = state.tips.iter().flatten().count() as u32;
+    }
     let energy0 = front_energy(
         &state.mesh,
         &state.front,
@@ -422,6 +444,7 @@ fn run_job(
             coarsenings: 0,
             samples: Vec::new(),
             crossings: Vec::new(),
+            fracture_events: Vec::new(),
             nonlinear_patches: 0,
             newton_iterations: 0,
             newton_max: 0,
@@ -565,6 +588,10 @@ fn run_job(
         interface,
         loading: problem.loading,
         crack,
+        fracture: problem
+            .fracture
+            .as_ref()
+            .map(|_| propagation::summary(&book.fracture_events, &state)),
         error,
         snapshots: book.snapshots.written().to_vec(),
         refinements: book.refinements,
@@ -590,6 +617,18 @@ fn run_job(
             });
             plot::write_crack_png(&dir, &csv, normalization);
         }
+    }
+    if let Some(fracture) = &problem.fracture {
+        let events = propagation::events_csv(&book.fracture_events);
+        write_atomic(&dir, "events.csv", events.as_bytes())?;
+        let cracks =
+            propagation::cracks_csv(mesh, solution, fracture, config.solver.order, |tag| {
+                match problem.interfaces.law(tag) {
+                    sdg_solver::interface::Law::Damage(d) => d.initial,
+                    _ => 1.0,
+                }
+            });
+        write_atomic(&dir, "cracks.csv", cracks.as_bytes())?;
     }
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;

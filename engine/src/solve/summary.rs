@@ -105,6 +105,9 @@ pub struct RunSummary {
     /// Crack tips of cohesive interfaces (runs with a cohesive law).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub crack: Option<super::crack_output::CrackSummary>,
+    /// Crack propagation (runs with `[fracture]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fracture: Option<super::propagation::FractureSummary>,
     /// Errors against `[exact]`, when configured.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<ErrorSummary>,

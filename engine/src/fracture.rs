@@ -1,0 +1,412 @@
+//! Crack propagation (seed 4.3.2) on the space mesh: which vertices are crack tips, which
+//! directions a tip extends along under a given stress, and where such a direction meets the
+//! opposite edge of the tip's star (the point a crack-aligned split puts a vertex at).
+//!
+//! A tip extends along the directions where the effective traction (seed 4.10, mixity factor
+//! `beta` of the crack's damage law) is a tensile local maximum above the threshold `sigma0_d`,
+//! in the forward half of its direction of travel, and at least the shield angle `theta_S` from
+//! every crack edge at the tip and from each other (the stronger of two close directions wins).
+//! Angles are in radians, counterclockwise from the x axis; stresses in Pa.
+
+use std::f64::consts::PI;
+
+use sdg_mesh::{EdgeId, Mesh, TagId, TriangleId, VertexId, geometry};
+use sdg_solver::interface::Law;
+use sdg_solver::nucleation::{effective_traction, tensile_maxima};
+
+use crate::config::FractureConfig;
+
+/// The propagation settings of `[fracture]` on the mesh's tags.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fracture {
+    /// The tag new crack edges take (a damage law starting bonded).
+    pub tag: TagId,
+    /// Tags of crack edges: `tag` and `[fracture] from`.
+    pub cracks: Vec<TagId>,
+    /// `sigma0_d`, Pa.
+    pub threshold: f64,
+    /// `theta_S`, radians.
+    pub shield: f64,
+    /// Crossings nearer than this fraction of an edge to its end take the edge to that end.
+    pub snap: f64,
+    /// Mixity factor `beta` of the damage law of `tag`.
+    pub beta: f64,
+}
+
+/// A crack tip: the crack arrives at its vertex travelling in `direction` (radians); `branch`
+/// names the crack branch it ends.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tip {
+    pub direction: f64,
+    pub branch: u32,
+}
+
+/// Where a direction from a vertex leaves its star: across the edge `edge` of triangle
+/// `triangle` opposite the vertex (its corner `corner`), at `fraction` of the edge from its
+/// smaller-id end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crossing {
+    pub triangle: TriangleId,
+    pub corner: usize,
+    pub edge: EdgeId,
+    pub fraction: f64,
+}
+
+impl Fracture {
+    /// The settings of `config` on `mesh`, whose tag list gains `config.tag` if no edge has it
+    /// yet; `law` gives the law of a tag name (validated: `config.tag`'s is a damage law).
+    pub fn new(config: &FractureConfig, mesh: &mut Mesh, law: impl Fn(&str) -> Law) -> Self {
+        let tag = mesh.add_tag(&config.tag);
+        let Law::Damage(damage) = law(&config.tag) else {
+            unreachable!("validated: fracture.tag has a damage law")
+        };
+        let mut cracks = vec![tag];
+        cracks.extend(config.from.iter().filter_map(|name| mesh.tag_id(name)));
+        Self {
+            tag,
+            cracks,
+            threshold: config.threshold,
+            shield: config.shield_angle.to_radians(),
+            snap: config.snap,
+            beta: damage.beta,
+        }
+    }
+
+    /// True when an edge with `tag` is a crack edge.
+    pub fn is_crack(&self, tag: Option<TagId>) -> bool {
+        tag.is_some_and(|t| self.cracks.contains(&t))
+    }
+
+    /// The crack edges at vertex `v`.
+    pub fn crack_edges(&self, mesh: &Mesh, v: VertexId) -> Vec<EdgeId> {
+        let mut edges: Vec<EdgeId> = vertex_edges(mesh, v)
+            .filter(|&e| self.is_crack(mesh.edges()[e as usize].tag))
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        edges
+    }
+
+    /// The tips of the cracks on `mesh`, per vertex: an interior vertex on exactly one crack
+    /// edge, travelling along it; branches numbered in vertex order from 0.
+    pub fn initial_tips(&self, mesh: &Mesh) -> Vec<Option<Tip>> {
+        let mut branch = 0;
+        (0..mesh.vertices().len() as VertexId)
+            .map(|v| {
+                let edges = self.crack_edges(mesh, v);
+                if edges.len() != 1 || on_boundary(mesh, v) {
+                    return None;
+                }
+                let tip = Tip {
+                    direction: angle_of(mesh, other_end(mesh, edges[0], v), v),
+                    branch,
+                };
+                branch += 1;
+                Some(tip)
+            })
+            .collect()
+    }
+
+    /// The directions (radians) `tip` at vertex `v` extends along, unused entries NaN.
+    /// `stress(t)` is the in-plane stress `[sxx, syy, sxy]` (Pa) at `v` in star triangle `t`.
+    ///
+    /// The effective traction along a direction is taken with the stress of the star triangle
+    /// that contains it, so that elements beside the crack faces (whose normal stress
+    /// vanishes) do not blur the field ahead of the tip: around the tip it is smooth in each
+    /// triangle's sector, with jumps at the star's edges. Its local maxima are the tensile
+    /// maxima inside a sector ([`tensile_maxima`] on the sector's stress) and the star edges
+    /// towards which the traction grows on both sides; a jump alone makes no maximum.
+    pub fn directions(
+        &self,
+        mesh: &Mesh,
+        v: VertexId,
+        tip: Tip,
+        stress: impl Fn(TriangleId) -> [f64; 3],
+    ) -> [f64; 2] {
+        let sectors = sectors(mesh, v, stress);
+        let traction = |sector: &Sector, d: f64| {
+            let (eff, normal) = effective_traction(sector.stress, self.beta, d + 0.5 * PI);
+            if normal > 0.0 { eff } else { 0.0 }
+        };
+        let mut found: Vec<(f64, f64)> = Vec::with_capacity(4);
+        for sector in &sectors {
+            let centre = sector.start + 0.5 * sector.width;
+            let window = Some((centre + 0.5 * PI, 0.5 * sector.width));
+            let (planes, n) = tensile_maxima(sector.stress, self.beta, window, self.threshold);
+            for &th in &planes[..n] {
+                let d = th - 0.5 * PI;
+                found.push((d, traction(sector, d)));
+            }
+            // The sector's first edge, with the sector that ends there.
+            let edge = sector.start;
+            let Some(before) = sectors
+                .iter()
+                .find(|s| angle_between(s.start + s.width, edge) < 1e-12)
+            else {
+                continue;
+            };
+            let (here, back) = (traction(before, edge), traction(sector, edge));
+            if here > traction(before, edge - EDGE_STEP)
+                && back > traction(sector, edge + EDGE_STEP)
+                && here.min(back) > self.threshold
+            {
+                found.push((edge, here.min(back)));
+            }
+        }
+        let crack_edges: Vec<f64> = vertex_edges(mesh, v)
+            .filter(|&e| self.is_crack(mesh.edges()[e as usize].tag))
+            .map(|e| angle_of(mesh, v, other_end(mesh, e, v)))
+            .collect();
+        found.retain(|&(d, _)| {
+            (d - tip.direction).cos() > 1e-9
+                && crack_edges
+                    .iter()
+                    .all(|&c| angle_between(d, c) >= self.shield)
+        });
+        // The strongest first; a weaker one within the shield angle of a kept one goes.
+        found.sort_by(|p, q| q.1.total_cmp(&p.1).then(p.0.total_cmp(&q.0)));
+        let mut out = [f64::NAN; 2];
+        let mut kept = 0;
+        for (d, _) in found {
+            if kept < 2
+                && out[..kept]
+                    .iter()
+                    .all(|&o| angle_between(o, d) >= self.shield)
+            {
+                out[kept] = d;
+                kept += 1;
+            }
+        }
+        out
+    }
+}
+
+impl Fracture {
+    /// True when the crack wanting direction `d` (radians) at `tip` (vertex `v`) may take the
+    /// existing edge from `v` to its neighbour `w` instead: the edge points forward, within half
+    /// the shield angle of `d`, and at least the shield angle from every crack edge at `v`.
+    pub fn may_take(&self, mesh: &Mesh, v: VertexId, tip: Tip, d: f64, w: VertexId) -> bool {
+        let along = angle_of(mesh, v, w);
+        (along - tip.direction).cos() > 0.0
+            && angle_between(along, d) <= 0.5 * self.shield
+            && vertex_edges(mesh, v)
+                .filter(|&e| self.is_crack(mesh.edges()[e as usize].tag))
+                .all(|e| {
+                    angle_between(along, angle_of(mesh, v, other_end(mesh, e, v))) >= self.shield
+                })
+    }
+}
+
+/// Angle (radians) by which the traction beside a star edge is compared with its value on the
+/// edge, to tell whether it grows towards the edge.
+const EDGE_STEP: f64 = 1e-6;
+
+/// The angular sector of a star triangle at its vertex, with the stress in it.
+struct Sector {
+    /// Direction of the sector's first edge (radians) and its counterclockwise width.
+    start: f64,
+    width: f64,
+    stress: [f64; 3],
+}
+
+/// The sectors of the star triangles of `v`.
+fn sectors(mesh: &Mesh, v: VertexId, stress: impl Fn(TriangleId) -> [f64; 3]) -> Vec<Sector> {
+    let x = mesh.vertex(v);
+    mesh.vertex_triangles(v)
+        .iter()
+        .map(|&t| {
+            let tri = mesh.triangles()[t as usize];
+            let corner = tri.iter().position(|&w| w == v).expect("star triangle");
+            let [a, b] = [1, 2].map(|k| {
+                let p = mesh.vertex(tri[(corner + k) % 3]);
+                (p[1] - x[1]).atan2(p[0] - x[0])
+            });
+            Sector {
+                start: a,
+                width: (b - a).rem_euclid(2.0 * PI),
+                stress: stress(t),
+            }
+        })
+        .collect()
+}
+
+/// The triangle of `v`'s star that the ray from `v` in `direction` (radians) enters, and where
+/// it crosses that triangle's edge opposite `v`; `None` when no triangle of the star contains
+/// the direction (a boundary vertex pointing out of the domain).
+pub fn crossing(mesh: &Mesh, v: VertexId, direction: f64) -> Option<Crossing> {
+    let x = mesh.vertex(v);
+    let u = [direction.cos(), direction.sin()];
+    mesh.vertex_triangles(v).iter().find_map(|&t| {
+        let tri = mesh.triangles()[t as usize];
+        let corner = tri.iter().position(|&w| w == v)?;
+        let (a, b) = (tri[(corner + 1) % 3], tri[(corner + 2) % 3]);
+        let [pa, pb] = [a, b].map(|w| mesh.vertex(w));
+        let to_a = [pa[0] - x[0], pa[1] - x[1]];
+        let to_b = [pb[0] - x[0], pb[1] - x[1]];
+        if cross(to_a, u) < 0.0 || cross(u, to_b) < 0.0 {
+            return None;
+        }
+        let w = [pb[0] - pa[0], pb[1] - pa[1]];
+        let r = (cross(to_a, u) / cross(u, w)).clamp(0.0, 1.0);
+        let edge = mesh.triangle_edges(t)[corner];
+        let fraction = if mesh.edges()[edge as usize].vertices[0] == a {
+            r
+        } else {
+            1.0 - r
+        };
+        Some(Crossing {
+            triangle: t,
+            corner,
+            edge,
+            fraction,
+        })
+    })
+}
+
+/// True when vertex `v` is on the boundary of the domain.
+pub fn on_boundary(mesh: &Mesh, v: VertexId) -> bool {
+    vertex_edges(mesh, v).any(|e| mesh.edges()[e as usize].is_boundary())
+}
+
+/// The edges at vertex `v`, an interior one twice.
+fn vertex_edges(mesh: &Mesh, v: VertexId) -> impl Iterator<Item = EdgeId> + '_ {
+    mesh.vertex_triangles(v).iter().flat_map(move |&t| {
+        mesh.triangle_edges(t)
+            .into_iter()
+            .filter(move |&e| mesh.edges()[e as usize].vertices.contains(&v))
+    })
+}
+
+/// The end of edge `e` that is not `v`.
+fn other_end(mesh: &Mesh, e: EdgeId, v: VertexId) -> VertexId {
+    let [p, q] = mesh.edges()[e as usize].vertices;
+    if p == v { q } else { p }
+}
+
+/// The angle (radians) of the direction from vertex `from` to vertex `to`.
+fn angle_of(mesh: &Mesh, from: VertexId, to: VertexId) -> f64 {
+    let [a, b] = [from, to].map(|w| mesh.vertex(w));
+    (b[1] - a[1]).atan2(b[0] - a[0])
+}
+
+/// The angle between two directions, in [0, pi].
+fn angle_between(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(2.0 * PI);
+    if d > PI { 2.0 * PI - d } else { d }
+}
+
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// Length (m) of the segment from vertex `a` to vertex `b`.
+pub fn distance(mesh: &Mesh, a: VertexId, b: VertexId) -> f64 {
+    geometry::distance(mesh.vertex(a), mesh.vertex(b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sdg_mesh::{Diagonal, GridSegment, Rectangle};
+
+    /// A unit square in 4 x 4 cells with a notch from the left side to its centre.
+    fn notched() -> (Mesh, Fracture) {
+        let mut mesh = Rectangle {
+            width: 1.0,
+            height: 1.0,
+            nx: 4,
+            ny: 4,
+            diagonal: Diagonal::Alternate,
+            interfaces: vec![GridSegment {
+                from: [0.0, 0.5],
+                to: [0.5, 0.5],
+                tag: "notch".into(),
+            }],
+            perturb: 0.0,
+            seed: 1,
+        }
+        .build()
+        .unwrap();
+        let tag = mesh.add_tag("crack");
+        let notch = mesh.tag_id("notch").unwrap();
+        let fracture = Fracture {
+            tag,
+            cracks: vec![tag, notch],
+            threshold: 1.0,
+            shield: 35f64.to_radians(),
+            snap: 0.2,
+            beta: 1.0,
+        };
+        (mesh, fracture)
+    }
+
+    fn vertex_at(mesh: &Mesh, x: [f64; 2]) -> VertexId {
+        (0..mesh.vertices().len() as VertexId)
+            .find(|&v| geometry::distance(mesh.vertex(v), x) < 1e-12)
+            .unwrap()
+    }
+
+    #[test]
+    fn the_notch_end_is_the_only_tip_and_travels_along_the_notch() {
+        let (mesh, fracture) = notched();
+        let tips = fracture.initial_tips(&mesh);
+        let centre = vertex_at(&mesh, [0.5, 0.5]);
+        let found: Vec<_> = (0..tips.len()).filter(|&v| tips[v].is_some()).collect();
+        assert_eq!(found, [centre as usize]);
+        let tip = tips[centre as usize].unwrap();
+        assert!(tip.direction.abs() < 1e-12 && tip.branch == 0, "{tip:?}");
+    }
+
+    #[test]
+    fn mode_one_tension_extends_straight_ahead_and_compression_not_at_all() {
+        let (mesh, fracture) = notched();
+        let v = vertex_at(&mesh, [0.5, 0.5]);
+        let tip = fracture.initial_tips(&mesh)[v as usize].unwrap();
+        let d = fracture.directions(&mesh, v, tip, |_| [0.0, 10.0, 0.0]);
+        assert!(d[0].abs() < 1e-12 && d[1].is_nan(), "{d:?}");
+        let d = fracture.directions(&mesh, v, tip, |_| [0.0, -10.0, 0.0]);
+        assert!(d.iter().all(|x| x.is_nan()), "{d:?}");
+        // Below the threshold: nothing.
+        let d = fracture.directions(&mesh, v, tip, |_| [0.0, 0.5, 0.0]);
+        assert!(d.iter().all(|x| x.is_nan()), "{d:?}");
+    }
+
+    #[test]
+    fn two_maxima_branch_when_the_shield_angle_allows_and_the_stronger_wins_otherwise() {
+        let (mesh, mut fracture) = notched();
+        let v = vertex_at(&mesh, [0.5, 0.5]);
+        let tip = fracture.initial_tips(&mesh)[v as usize].unwrap();
+        // Equal biaxial tension with beta = 2: the stationary point c* = p / (q (beta^2 - 1))
+        // gives two planes symmetric about the principal one.
+        fracture.beta = 2.0;
+        let stress = [4.0, 10.0, 0.0];
+        let d = fracture.directions(&mesh, v, tip, |_| stress);
+        assert!(d.iter().all(|x| x.is_finite()), "{d:?}");
+        assert!(
+            (d[0] + d[1]).abs() < 1e-12,
+            "symmetric about the x axis: {d:?}"
+        );
+        let spread = angle_between(d[0], d[1]);
+        fracture.shield = spread + 0.01;
+        let d = fracture.directions(&mesh, v, tip, |_| stress);
+        assert!(d[0].is_finite() && d[1].is_nan(), "{d:?}");
+    }
+
+    #[test]
+    fn a_direction_crosses_the_opposite_edge_where_the_geometry_says() {
+        let (mesh, _) = notched();
+        let v = vertex_at(&mesh, [0.5, 0.5]);
+        for k in 0..64 {
+            let d = -PI + (k as f64 + 0.5) * PI / 32.0;
+            let c = crossing(&mesh, v, d).unwrap();
+            let [p, q] = mesh.edges()[c.edge as usize]
+                .vertices
+                .map(|w| mesh.vertex(w));
+            let x = [0, 1].map(|i| p[i] + c.fraction * (q[i] - p[i]));
+            let o = mesh.vertex(v);
+            let along = (x[1] - o[1]).atan2(x[0] - o[0]);
+            assert!(angle_between(along, d) < 1e-12, "{d} {along}");
+            assert_eq!(mesh.triangles()[c.triangle as usize][c.corner], v);
+        }
+    }
+}

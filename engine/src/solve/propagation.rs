@@ -1,0 +1,309 @@
+//! Crack propagation in a run (seed 4.3.2; the criteria are in [`crate::fracture`]).
+//!
+//! The tent at a crack tip evaluates the stress at the middle of its pole, once the patch is
+//! accepted: the mean of the patch elements' stresses there, weighted by their angles at the tip
+//! (the average over a small disc around it). When the tip has directions to extend along, an
+//! event extends it: per direction, the crack takes the existing edge of the tip's star when the
+//! direction crosses the opposite edge near one of its ends (`snap`) and that edge keeps to the
+//! rules ([`Fracture::may_take`]), and otherwise splits that edge where the direction crosses it
+//! ([`Frontier::split_at`] towards the tip). The new edge
+//! takes the crack tag (a damage interface, bonded at first: nothing on the front changes) and
+//! its far end becomes a tip, unless it lies on the boundary or on another crack (the crack
+//! arrests there). A crossing of a crack edge arrests the tip. Two directions make a branch:
+//! the first keeps the tip's branch id, the second takes a new one.
+
+use std::fmt::Write as _;
+
+use sdg_mesh::{Mesh, TriangleId, VertexId};
+use sdg_scheduler::Changed;
+use sdg_solver::element::{FrontSolution, evaluate};
+use sdg_solver::face::{FaceBasis, STATE_COMPONENTS};
+use sdg_solver::patch::PatchSolver;
+use serde::Serialize;
+
+use super::Solve;
+use crate::fracture::{self, Fracture, Tip};
+use crate::frontier::Frontier;
+
+/// Scratch size for one element's basis values and fields at a point.
+const SCRATCH: usize = 64;
+
+/// A tip's directions to extend along, found by the tent at its vertex.
+#[derive(Debug)]
+pub(super) struct Extension {
+    /// The tip's position (m), to notice renumbering.
+    at: [f64; 2],
+    /// Directions (radians), unused entries NaN.
+    directions: [f64; 2],
+}
+
+/// One line of `events.csv`.
+#[derive(Clone, Debug)]
+pub(super) struct FractureEvent {
+    /// Front time at the tip, s.
+    time: f64,
+    kind: &'static str,
+    branch: u32,
+    /// Where it happened and, for an extension, the new edge's far end (m).
+    from: [f64; 2],
+    to: [f64; 2],
+}
+
+/// `fracture` in `summary.json`.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FractureSummary {
+    /// Crack edges added.
+    pub extensions: u64,
+    /// Tips that extended along two directions at once.
+    pub branchings: u64,
+    /// Tips that stopped on a crack or the boundary.
+    pub arrests: u64,
+    /// Extensions the mesh could not make yet (the split was refused); the tip tries again.
+    pub refused: u64,
+    /// Crack branches: the initial tips and every branching's new one.
+    pub branches: u32,
+    /// Tips still active at the end.
+    pub active_tips: usize,
+    /// Length of the crack edges added, m.
+    pub total_length: f64,
+    /// Time of the first branching, s.
+    pub first_branching_time: Option<f64>,
+}
+
+impl Solve<'_> {
+    /// The extension of the tip at `v` after its patch (of the tent from `t_old` to `t_new`, s)
+    /// was accepted, if it has directions to extend along.
+    pub(super) fn extension(
+        &self,
+        fracture: &Fracture,
+        state: &Frontier,
+        solver: &PatchSolver,
+        v: VertexId,
+        times: [f64; 2],
+    ) -> Option<Extension> {
+        let tip = state.tips[v as usize]?;
+        let mesh = &state.mesh;
+        let t_mid = 0.5 * (times[0] + times[1]);
+        let directions = fracture.directions(mesh, v, tip, |t| {
+            element_stress(self, mesh, solver, v, t, t_mid)
+        });
+        directions[0].is_finite().then_some(Extension {
+            at: mesh.vertex(v),
+            directions,
+        })
+    }
+
+    /// The event of an [`Extension`] of the tip at `v`: adds the crack edges (see the module
+    /// documentation) and returns what changed for the scheduler.
+    pub(super) fn extend(
+        &self,
+        state: &mut Frontier,
+        v: VertexId,
+        extension: &Extension,
+    ) -> Changed {
+        let fracture = self
+            .problem
+            .fracture
+            .as_ref()
+            .expect("extensions need [fracture]");
+        let mesh = &state.mesh;
+        if (v as usize) >= mesh.vertices().len() || mesh.vertex(v) != extension.at {
+            return Changed::default();
+        }
+        let Some(tip) = state.tips[v as usize] else {
+            return Changed::default();
+        };
+        let time = state.front.time(v);
+        let mut changed = Changed::default();
+        let mut events = Vec::new();
+        let mut extended = 0;
+        for &d in extension.directions.iter().filter(|d| d.is_finite()) {
+            let mesh = &state.mesh;
+            let at = mesh.vertex(v);
+            let Some(c) = fracture::crossing(mesh, v, d) else {
+                continue;
+            };
+            let branch = if extended == 0 {
+                tip.branch
+            } else {
+                state.next_branch
+            };
+            let event = |kind, to| FractureEvent {
+                time,
+                kind,
+                branch,
+                from: at,
+                to,
+            };
+            if fracture.is_crack(mesh.edges()[c.edge as usize].tag) {
+                events.push(event("arrest", at));
+                state.tips[v as usize] = None;
+                continue;
+            }
+            let [p, q] = mesh.edges()[c.edge as usize].vertices;
+            let near = if c.fraction < fracture.snap {
+                Some(p)
+            } else if c.fraction > 1.0 - fracture.snap {
+                Some(q)
+            } else {
+                None
+            };
+            let target = near.filter(|&w| fracture.may_take(mesh, v, tip, d, w));
+            let target = match target {
+                Some(w) => w,
+                None => match self.split_at(state, c.triangle, Some(c.corner), c.fraction) {
+                    Ok((true, more, new)) => {
+                        changed.offer.extend(more.offer);
+                        changed.below_end += more.below_end;
+                        *new.last().expect("a split adds a vertex")
+                    }
+                    Ok((false, more, _)) => {
+                        changed.offer.extend(more.offer);
+                        changed.below_end += more.below_end;
+                        events.push(event("refused", at));
+                        continue;
+                    }
+                    Err(_) => {
+                        // A child would be degenerate (a very flat triangle): as refused.
+                        events.push(event("refused", at));
+                        continue;
+                    }
+                },
+            };
+            let mesh = &mut state.mesh;
+            let edge = mesh
+                .edge_between(v, target)
+                .expect("the target is a neighbour of the tip");
+            let joins = !fracture.crack_edges(mesh, target).is_empty();
+            mesh.set_tag(edge, Some(fracture.tag));
+            let to = mesh.vertex(target);
+            events.push(event("extension", to));
+            if extended == 1 {
+                state.next_branch += 1;
+            }
+            extended += 1;
+            changed.offer.extend([v, target]);
+            if joins || fracture::on_boundary(&state.mesh, target) {
+                events.push(event("arrest", to));
+            } else {
+                state.tips[target as usize] = Some(Tip {
+                    direction: (to[1] - at[1]).atan2(to[0] - at[0]),
+                    branch,
+                });
+            }
+            state.tips[v as usize] = None;
+        }
+        if extended == 2 {
+            let mut branching = events[0].clone();
+            branching.kind = "branching";
+            events.push(branching);
+        }
+        self.book.lock().fracture_events.extend(events);
+        changed.offer.sort_unstable();
+        changed.offer.dedup();
+        changed
+    }
+}
+
+/// The in-plane stress (Pa) at the tent's vertex `v` at time `t` (s), the middle of its pole, in
+/// the element over star triangle `triangle` of the patch `solver` just solved.
+fn element_stress(
+    solve: &Solve,
+    mesh: &Mesh,
+    solver: &PatchSolver,
+    v: VertexId,
+    triangle: TriangleId,
+    t: f64,
+) -> [f64; 3] {
+    let system = &solve.problem.system;
+    let (mut phi, mut values) = ([0.0; SCRATCH], [0.0; SCRATCH]);
+    let (n, width) = (solve.basis.len(), solver.width());
+    let (_, geometry, coefficients) = solver
+        .elements()
+        .find(|&(t, _, _)| t == triangle)
+        .expect("the patch has an element over every star triangle");
+    let [x, y] = mesh.vertex(v);
+    evaluate(
+        &solve.basis,
+        geometry,
+        coefficients,
+        [x, y, system.c_ref() * t],
+        &mut phi[..n],
+        &mut values[..width],
+    );
+    let z = system.z_ref();
+    [values[2], values[3], values[4]].map(|s| z * s)
+}
+
+/// `events.csv`: one line per fracture event in the order they happened.
+pub(super) fn events_csv(events: &[FractureEvent]) -> String {
+    let mut csv = String::from("time_s,event,branch,x_m,y_m,to_x_m,to_y_m\n");
+    for e in events {
+        let _ = writeln!(
+            csv,
+            "{:e},{},{},{:e},{:e},{:e},{:e}",
+            e.time, e.kind, e.branch, e.from[0], e.from[1], e.to[0], e.to[1]
+        );
+    }
+    csv
+}
+
+/// `cracks.csv`: every crack edge at the end, its ends (m), its tag and its damage on the front
+/// (the interface state at the face's top corner; the initial damage where no face was solved).
+pub(super) fn cracks_csv(
+    mesh: &Mesh,
+    solution: &FrontSolution,
+    fracture: &Fracture,
+    order: usize,
+    initial_damage: impl Fn(Option<sdg_mesh::TagId>) -> f64,
+) -> String {
+    let basis = FaceBasis::new(order);
+    let mut psi = [0.0; SCRATCH];
+    let mut csv = String::from("x0_m,y0_m,x1_m,y1_m,tag,damage\n");
+    for (e, edge) in mesh.edges().iter().enumerate() {
+        if !fracture.is_crack(edge.tag) {
+            continue;
+        }
+        let damage = solution.face(e).map_or(initial_damage(edge.tag), |face| {
+            let top = face
+                .geometry
+                .corners()
+                .into_iter()
+                .max_by(|a, b| a[2].total_cmp(&b[2]))
+                .expect("a face has corners");
+            face.evaluate(&basis, top, &mut psi[..basis.len()])[STATE_COMPONENTS - 1]
+        });
+        let [a, b] = edge.vertices.map(|w| mesh.vertex(w));
+        let tag = edge
+            .tag
+            .map_or("", |t| mesh.tag_names()[t as usize].as_str());
+        let _ = writeln!(
+            csv,
+            "{:e},{:e},{:e},{:e},{tag},{damage:e}",
+            a[0], a[1], b[0], b[1]
+        );
+    }
+    csv
+}
+
+/// The summary of the fracture events of a run on the final `state`.
+pub(super) fn summary(events: &[FractureEvent], state: &Frontier) -> FractureSummary {
+    let count = |kind: &str| events.iter().filter(|e| e.kind == kind).count() as u64;
+    FractureSummary {
+        extensions: count("extension"),
+        branchings: count("branching"),
+        arrests: count("arrest"),
+        refused: count("refused"),
+        branches: state.next_branch,
+        active_tips: state.tips.iter().flatten().count(),
+        total_length: events
+            .iter()
+            .filter(|e| e.kind == "extension")
+            .map(|e| (e.to[0] - e.from[0]).hypot(e.to[1] - e.from[1]))
+            .fold(0.0, |a, b| a + b),
+        first_branching_time: events
+            .iter()
+            .find(|e| e.kind == "branching")
+            .map(|e| e.time),
+    }
+}

@@ -1,0 +1,79 @@
+//! Crack propagation (`[fracture]`, seed 4.3.2) on `configs/crack_growth.toml`: a notch under
+//! symmetric mode-I waves grows straight ahead on new damage edges that debond behind it, the
+//! energy balance holds, and the crack pattern is bitwise the same for any thread count.
+
+mod common;
+
+use std::path::Path;
+
+use common::{csv_columns, outputs, shipped, solve};
+
+/// `events.csv` rows: time, from x, from y, to x, to y; and the event names.
+fn events(dir: &Path) -> (Vec<Vec<f64>>, Vec<String>) {
+    let rows = csv_columns(
+        &dir.join("events.csv"),
+        &["time_s", "x_m", "y_m", "to_x_m", "to_y_m"],
+    );
+    let text = std::fs::read_to_string(dir.join("events.csv")).unwrap();
+    let kinds = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().to_string())
+        .collect();
+    (rows, kinds)
+}
+
+#[test]
+fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
+    let problem = shipped("crack_growth.toml", &["time.end=1.1e-6"]);
+    let (summary, dir) = solve(&problem, 2, true);
+    let (rows, kinds) = events(dir.path());
+    let fracture = summary.fracture.as_ref().expect("fracture summary");
+    assert!(fracture.extensions >= 6, "{fracture:?}");
+    assert_eq!(
+        (fracture.branchings, fracture.arrests),
+        (0, 0),
+        "{fracture:?}"
+    );
+    // Every extension runs along y = 1 mm, each from where the last one ended.
+    let mut x = 1e-3;
+    for (row, kind) in rows.iter().zip(&kinds) {
+        if kind != "extension" {
+            continue;
+        }
+        assert_eq!([row[1], row[2], row[4]], [x, 1e-3, 1e-3], "{row:?}");
+        assert!(row[3] > x, "{row:?}");
+        x = row[3];
+    }
+    assert!((fracture.total_length - (x - 1e-3)).abs() < 1e-15);
+    // The first new edges are debonded (D = 1 up to the polynomial's overshoot).
+    let cracks = csv_columns(
+        &dir.path().join("cracks.csv"),
+        &["x0_m", "y0_m", "x1_m", "damage"],
+    );
+    let new: Vec<&Vec<f64>> = cracks.iter().filter(|c| c[0] >= 1e-3).collect();
+    assert_eq!(new.len() as u64, fracture.extensions);
+    let debonded = new.iter().filter(|c| c[3] > 0.95).count();
+    assert!(debonded >= 4, "{new:?}");
+    assert!(summary.energy.fracture_energy > 0.0);
+    assert!(
+        summary.energy.balance_residual_rel.abs() < 1e-10,
+        "{:?}",
+        summary.energy
+    );
+}
+
+#[test]
+fn the_crack_pattern_is_bitwise_the_same_for_one_and_two_threads() {
+    // Up to just after the first branching and a branch's arrest on the other.
+    let problem = shipped(
+        "crack_growth.toml",
+        &["time.end=1.2e-6", "output.png=false"],
+    );
+    let (one, a) = solve(&problem, 1, true);
+    let (two, b) = solve(&problem, 2, true);
+    let fracture = one.fracture.as_ref().unwrap();
+    assert!(fracture.branchings >= 1, "{fracture:?}");
+    assert_eq!(one.state_hash, two.state_hash);
+    assert_eq!(outputs(a.path()), outputs(b.path()));
+}
