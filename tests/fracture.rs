@@ -53,9 +53,14 @@ fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
     );
     let new: Vec<&Vec<f64>> = cracks.iter().filter(|c| c[0] >= 1e-3).collect();
     assert_eq!(new.len() as u64, fracture.extensions);
+    assert!(
+        cracks.iter().all(|c| (0.0..=1.0).contains(&c[3])),
+        "{cracks:?}"
+    );
     let debonded = new.iter().filter(|c| c[3] > 0.95).count();
     assert!(debonded >= 4, "{new:?}");
     assert!(summary.energy.fracture_energy > 0.0);
+    assert!(dir.path().join("crack_path.png").is_file());
     assert!(
         summary.energy.balance_residual_rel.abs() < 1e-10,
         "{:?}",

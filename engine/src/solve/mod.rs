@@ -622,13 +622,17 @@ fn run_job(
         let events = propagation::events_csv(&book.fracture_events);
         write_atomic(&dir, "events.csv", events.as_bytes())?;
         let cracks =
-            propagation::cracks_csv(mesh, solution, fracture, config.solver.order, |tag| {
+            propagation::crack_edges(mesh, solution, fracture, config.solver.order, |tag| {
                 match problem.interfaces.law(tag) {
                     sdg_solver::interface::Law::Damage(d) => d.initial,
                     _ => 1.0,
                 }
             });
-        write_atomic(&dir, "cracks.csv", cracks.as_bytes())?;
+        if config.output.png {
+            propagation::write_crack_path_png(&dir, mesh, &cracks, front.min_time());
+        }
+        let csv = propagation::cracks_csv(mesh, &cracks);
+        write_atomic(&dir, "cracks.csv", csv.as_bytes())?;
     }
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;

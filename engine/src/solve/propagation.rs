@@ -24,6 +24,7 @@ use serde::Serialize;
 use super::Solve;
 use crate::fracture::{self, Fracture, Tip};
 use crate::frontier::Frontier;
+use crate::plot::{FieldPlot, Values};
 
 /// Scratch size for one element's basis values and fields at a point.
 const SCRATCH: usize = 64;
@@ -248,43 +249,105 @@ pub(super) fn events_csv(events: &[FractureEvent]) -> String {
     csv
 }
 
-/// `cracks.csv`: every crack edge at the end, its ends (m), its tag and its damage on the front
-/// (the interface state at the face's top corner; the initial damage where no face was solved).
-pub(super) fn cracks_csv(
+/// A crack edge at the end of a run.
+pub(super) struct CrackEdge {
+    pub(super) edge: sdg_mesh::EdgeId,
+    /// End points, m.
+    pub(super) ends: [[f64; 2]; 2],
+    /// Damage on the front, in [0, 1]: the interface state at the top corner of the last face
+    /// solved over the edge, or the tag's initial damage where none was.
+    pub(super) damage: f64,
+}
+
+/// Every crack edge of `mesh` with its damage on the front; `initial_damage(tag)` for edges no
+/// face was solved over.
+pub(super) fn crack_edges(
     mesh: &Mesh,
     solution: &FrontSolution,
     fracture: &Fracture,
     order: usize,
     initial_damage: impl Fn(Option<sdg_mesh::TagId>) -> f64,
-) -> String {
+) -> Vec<CrackEdge> {
     let basis = FaceBasis::new(order);
     let mut psi = [0.0; SCRATCH];
+    (0..mesh.edges().len())
+        .filter(|&e| fracture.is_crack(mesh.edges()[e].tag))
+        .map(|e| {
+            let edge = &mesh.edges()[e];
+            let damage = solution.face(e).map_or(initial_damage(edge.tag), |face| {
+                let top = face
+                    .geometry
+                    .corners()
+                    .into_iter()
+                    .max_by(|a, b| a[2].total_cmp(&b[2]))
+                    .expect("a face has corners");
+                face.evaluate(&basis, top, &mut psi[..basis.len()])[STATE_COMPONENTS - 1]
+            });
+            // The face polynomial may overshoot where D saturates; D itself is in [0, 1].
+            let damage = damage.clamp(0.0, 1.0);
+            CrackEdge {
+                edge: e as sdg_mesh::EdgeId,
+                ends: edge.vertices.map(|w| mesh.vertex(w)),
+                damage,
+            }
+        })
+        .collect()
+}
+
+/// `cracks.csv`: the crack edges, their ends (m), tag and damage.
+pub(super) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge]) -> String {
     let mut csv = String::from("x0_m,y0_m,x1_m,y1_m,tag,damage\n");
-    for (e, edge) in mesh.edges().iter().enumerate() {
-        if !fracture.is_crack(edge.tag) {
-            continue;
-        }
-        let damage = solution.face(e).map_or(initial_damage(edge.tag), |face| {
-            let top = face
-                .geometry
-                .corners()
-                .into_iter()
-                .max_by(|a, b| a[2].total_cmp(&b[2]))
-                .expect("a face has corners");
-            face.evaluate(&basis, top, &mut psi[..basis.len()])[STATE_COMPONENTS - 1]
-        });
-        let [a, b] = edge.vertices.map(|w| mesh.vertex(w));
-        let tag = edge
+    for c in cracks {
+        let tag = mesh.edges()[c.edge as usize]
             .tag
             .map_or("", |t| mesh.tag_names()[t as usize].as_str());
+        let [a, b] = c.ends;
         let _ = writeln!(
             csv,
-            "{:e},{:e},{:e},{:e},{tag},{damage:e}",
-            a[0], a[1], b[0], b[1]
+            "{:e},{:e},{:e},{:e},{tag},{:e}",
+            a[0], a[1], b[0], b[1], c.damage
         );
     }
     csv
 }
+
+/// `crack_path.png`: the final mesh's domain with the crack edges in red and the triangles
+/// beside them coloured by their damage (the largest of a triangle's crack edges).
+pub(super) fn write_crack_path_png(
+    dir: &std::path::Path,
+    mesh: &Mesh,
+    cracks: &[CrackEdge],
+    time: f64,
+) {
+    let mut damage = vec![f64::NAN; mesh.triangles().len()];
+    for c in cracks {
+        for t in mesh.edges()[c.edge as usize]
+            .triangles
+            .into_iter()
+            .flatten()
+        {
+            let d = &mut damage[t as usize];
+            *d = if d.is_nan() {
+                c.damage
+            } else {
+                d.max(c.damage)
+            };
+        }
+    }
+    let segments: Vec<[[f64; 2]; 2]> = cracks.iter().map(|c| c.ends).collect();
+    let path = dir.join("crack_path.png");
+    let image = FieldPlot::new(mesh.vertices(), mesh.triangles(), Values::Cells(&damage))
+        .title("cracks (red), damage D beside them")
+        .time(Some(time))
+        .segments(&segments)
+        .render(CRACK_PATH_PNG_SIZE);
+    if let Err(e) = image.and_then(|image| image.write_png(&path)) {
+        tracing::warn!("{}: {e}", path.display());
+    }
+}
+
+/// Size of `crack_path.png`, pixels.
+const CRACK_PATH_PNG_SIZE: (u32, u32) = (1200, 900);
 
 /// The summary of the fracture events of a run on the final `state`.
 pub(super) fn summary(events: &[FractureEvent], state: &Frontier) -> FractureSummary {
