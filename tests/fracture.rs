@@ -82,3 +82,70 @@ fn the_crack_pattern_is_bitwise_the_same_for_one_and_two_threads() {
     assert_eq!(one.state_hash, two.state_hash);
     assert_eq!(outputs(a.path()), outputs(b.path()));
 }
+
+/// Weak defects (mean 150 MPa, sd 30 MPa, lower bound 30 MPa, 1e4 per mm^2): cracks nucleate
+/// ahead of and around the notch once the waves meet.
+const WEAK_DEFECTS: [&str; 4] = [
+    "fracture.defect_density=1e10",
+    "fracture.defect_mean=1.5e8",
+    "fracture.defect_std=3e7",
+    "fracture.defect_lower=3e7",
+];
+
+#[test]
+fn cracks_nucleate_across_the_tension_the_same_way_for_any_thread_count() {
+    let mut set = WEAK_DEFECTS.to_vec();
+    set.extend(["time.end=8e-7", "output.png=false"]);
+    let problem = shipped("crack_growth.toml", &set);
+    let (one, a) = solve(&problem, 1, true);
+    let (two, b) = solve(&problem, 2, true);
+    let fracture = one.fracture.as_ref().unwrap();
+    assert!(fracture.nucleations >= 3, "{fracture:?}");
+    assert_eq!(one.state_hash, two.state_hash);
+    assert_eq!(outputs(a.path()), outputs(b.path()));
+    // Under tension along y, every nucleated crack runs along x, both ways from its site.
+    let (rows, kinds) = events(a.path());
+    let mut sites = 0;
+    for (k, kind) in kinds.iter().enumerate() {
+        if kind != "nucleation" {
+            continue;
+        }
+        sites += 1;
+        let site = &rows[k];
+        let halves: Vec<&Vec<f64>> = rows[k + 1..]
+            .iter()
+            .zip(&kinds[k + 1..])
+            .take_while(|(_, kind)| *kind == "extension")
+            .map(|(r, _)| r)
+            .filter(|r| r[1] == site[1] && r[2] == site[2])
+            .collect();
+        for h in &halves {
+            assert_eq!(h[4], site[2], "{h:?}");
+        }
+        if halves.len() == 2 {
+            assert!((halves[0][3] - site[1]) * (halves[1][3] - site[1]) < 0.0);
+        }
+    }
+    assert_eq!(sites, fracture.nucleations);
+    assert!(one.energy.balance_residual_rel.abs() < 1e-10);
+}
+
+#[test]
+fn the_seed_changes_the_nucleation_sites() {
+    let base = ["time.end=8e-7", "output.png=false"];
+    let mut set = WEAK_DEFECTS.to_vec();
+    set.extend(base);
+    let (first, a) = solve(&shipped("crack_growth.toml", &set), 2, true);
+    set.push("fracture.seed=7");
+    let (second, b) = solve(&shipped("crack_growth.toml", &set), 2, true);
+    assert_ne!(first.state_hash, second.state_hash);
+    let sites = |dir: &Path| {
+        let (rows, kinds) = events(dir);
+        rows.into_iter()
+            .zip(kinds)
+            .filter(|(_, k)| k == "nucleation")
+            .map(|(r, _)| [r[1], r[2]])
+            .collect::<Vec<_>>()
+    };
+    assert_ne!(sites(a.path()), sites(b.path()));
+}

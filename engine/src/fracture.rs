@@ -12,7 +12,10 @@ use std::f64::consts::PI;
 
 use sdg_mesh::{EdgeId, Mesh, TagId, TriangleId, VertexId, geometry};
 use sdg_solver::interface::Law;
-use sdg_solver::nucleation::{effective_traction, tensile_maxima};
+use sdg_solver::nucleation::{
+    DefectStrengths, Draws, crack_directions, effective_traction, max_effective_traction,
+    tensile_maxima, weakest_defect,
+};
 
 use crate::config::FractureConfig;
 
@@ -31,6 +34,18 @@ pub struct Fracture {
     pub snap: f64,
     /// Mixity factor `beta` of the damage law of `tag`.
     pub beta: f64,
+    /// Nucleation from random defects, if configured.
+    pub nucleation: Option<Nucleation>,
+}
+
+/// Nucleation from random defects (seed 4.3.1, (4.15)-(4.18)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Nucleation {
+    /// Defects per unit area, 1/m^2.
+    pub density: f64,
+    pub strengths: DefectStrengths,
+    /// Seed of the draws.
+    pub seed: u64,
 }
 
 /// A crack tip: the crack arrives at its vertex travelling in `direction` (radians); `branch`
@@ -69,6 +84,14 @@ impl Fracture {
             shield: config.shield_angle.to_radians(),
             snap: config.snap,
             beta: damage.beta,
+            nucleation: config
+                .defects()
+                .expect("validated defects")
+                .map(|(density, strengths)| Nucleation {
+                    density,
+                    strengths,
+                    seed: config.seed,
+                }),
         }
     }
 
@@ -194,6 +217,43 @@ impl Fracture {
                 .all(|e| {
                     angle_between(along, angle_of(mesh, v, other_end(mesh, e, v))) >= self.shield
                 })
+    }
+}
+
+impl Fracture {
+    /// The two directions (radians) of a crack nucleating at the top of the tent pole of vertex
+    /// `v` that reached `t_new` (s), if one does: `v` is interior and on no crack, and the
+    /// largest effective traction over orientations and over the star's elements (`stress(t)`,
+    /// Pa, at the middle of the pole) reaches the weakest defect in the area the vertex stands
+    /// for (a third of its star's area): a Poisson number of defects of mean
+    /// `density * area` with truncated-normal strengths. The draws are keyed by the run seed,
+    /// the vertex position and `t_new` (bits), so they do not depend on vertex numbering or
+    /// thread scheduling. The crack runs both ways along the plane of that traction.
+    pub fn nucleates(
+        &self,
+        mesh: &Mesh,
+        v: VertexId,
+        t_new: f64,
+        stress: impl Fn(TriangleId) -> [f64; 3],
+    ) -> Option<[f64; 2]> {
+        let n = self.nucleation.as_ref()?;
+        let star = mesh.vertex_triangles(v);
+        let (th, strongest) = star
+            .iter()
+            .map(|&t| max_effective_traction(stress(t), self.beta))
+            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.total_cmp(&a.0)))?;
+        // No defect is weaker than the truncation point.
+        if strongest <= n.strengths.lower
+            || on_boundary(mesh, v)
+            || vertex_edges(mesh, v).any(|e| self.is_crack(mesh.edges()[e as usize].tag))
+        {
+            return None;
+        }
+        let area = star.iter().map(|&t| mesh.area(t)).sum::<f64>() / 3.0;
+        let [x, y] = mesh.vertex(v);
+        let mut draws = Draws::new(n.seed, [x.to_bits(), y.to_bits(), t_new.to_bits()]);
+        let weakest = weakest_defect(n.density, area, &n.strengths, &mut draws)?;
+        (strongest >= weakest).then(|| crack_directions(th))
     }
 }
 
@@ -336,6 +396,7 @@ mod tests {
             shield: 35f64.to_radians(),
             snap: 0.2,
             beta: 1.0,
+            nucleation: None,
         };
         (mesh, fracture)
     }
@@ -390,6 +451,63 @@ mod tests {
         fracture.shield = spread + 0.01;
         let d = fracture.directions(&mesh, v, tip, |_| stress);
         assert!(d[0].is_finite() && d[1].is_nan(), "{d:?}");
+    }
+
+    #[test]
+    fn a_crack_nucleates_across_tension_where_weak_defects_are_and_nowhere_else() {
+        let (mesh, mut fracture) = notched();
+        let strengths = DefectStrengths::new(50.0, 10.0, 5.0).unwrap();
+        fracture.nucleation = Some(Nucleation {
+            density: 1e6,
+            strengths,
+            seed: 3,
+        });
+        let inside = vertex_at(&mesh, [0.5, 0.25]);
+        let tension = |_| [0.0, 1e4, 0.0];
+        let d = fracture.nucleates(&mesh, inside, 1e-6, tension).unwrap();
+        let mut d = d.map(|x| x.rem_euclid(2.0 * PI));
+        d.sort_by(f64::total_cmp);
+        assert!(d[0].abs() < 1e-12 && (d[1] - PI).abs() < 1e-12, "{d:?}");
+        // Equal compression (no shear either), a stress below the weakest possible defect, the
+        // notch tip, the boundary.
+        assert_eq!(
+            fracture.nucleates(&mesh, inside, 1e-6, |_| [-1e4, -1e4, 0.0]),
+            None
+        );
+        assert_eq!(
+            fracture.nucleates(&mesh, inside, 1e-6, |_| [0.0, 4.0, 0.0]),
+            None
+        );
+        for at in [[0.5, 0.5], [0.25, 0.0]] {
+            assert_eq!(
+                fracture.nucleates(&mesh, vertex_at(&mesh, at), 1e-6, tension),
+                None
+            );
+        }
+        // Few defects: whether one is weak enough depends on the draw, keyed by the time.
+        fracture.nucleation.as_mut().unwrap().density = 1.0;
+        let stress = |_| [0.0, 45.0, 0.0];
+        let hits = (0..200)
+            .filter(|&k| {
+                fracture
+                    .nucleates(&mesh, inside, k as f64, stress)
+                    .is_some()
+            })
+            .count();
+        // P = 1 - exp(-density area F(45)) with the area a third of the star's and
+        // F(45) = P(s < 45) for N(50, 10) truncated at 5.
+        let area: f64 = mesh
+            .vertex_triangles(inside)
+            .iter()
+            .map(|&t| mesh.area(t))
+            .sum::<f64>()
+            / 3.0;
+        let p = 1.0 - (-area * strengths.cdf(45.0)).exp();
+        let expected = 200.0 * p;
+        assert!(
+            (hits as f64 - expected).abs() < 4.0 * (expected * (1.0 - p)).sqrt() + 1.0,
+            "{hits} vs {expected}"
+        );
     }
 
     #[test]

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use sdg_solver::interface::Law;
+use sdg_solver::nucleation::DefectStrengths;
 
 use super::Config;
 
@@ -29,6 +30,59 @@ pub struct FractureConfig {
     /// instead of splitting (default 0.2, in (0, 0.5]).
     #[serde(default = "default_snap")]
     pub snap: f64,
+    /// Nucleation from random defects (seed 4.3.1): defects per unit area, 1/m^2 (> 0). Without
+    /// it no crack nucleates; with it `defect_mean`, `defect_std` and `defect_lower` are
+    /// required.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub defect_density: Option<f64>,
+    /// Mean defect strength, Pa.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub defect_mean: Option<f64>,
+    /// Standard deviation of the defect strengths before truncation, Pa.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub defect_std: Option<f64>,
+    /// Lower bound of the defect strengths (the truncation point), Pa.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub defect_lower: Option<f64>,
+    /// Seed of the defect draws (default 0).
+    #[serde(default)]
+    pub seed: u64,
+}
+
+impl FractureConfig {
+    /// The defect strengths, when nucleation is on; `(key, reason)` for a missing or invalid
+    /// defect setting.
+    pub fn defects(&self) -> Result<Option<(f64, DefectStrengths)>, (String, String)> {
+        let key = |k: &str| format!("fracture.{k}");
+        let keys = [
+            ("defect_mean", self.defect_mean),
+            ("defect_std", self.defect_std),
+            ("defect_lower", self.defect_lower),
+        ];
+        let Some(density) = self.defect_density else {
+            return match keys.iter().find(|(_, v)| v.is_some()) {
+                Some((k, _)) => Err((key(k), "needs fracture.defect_density".into())),
+                None => Ok(None),
+            };
+        };
+        if !(density.is_finite() && density > 0.0) {
+            return Err((
+                key("defect_density"),
+                format!("must be a positive number of defects per m^2, got {density}"),
+            ));
+        }
+        let [mean, std, lower] = keys.map(|(k, v)| {
+            v.ok_or_else(|| {
+                (
+                    key(k),
+                    "is required with fracture.defect_density".to_string(),
+                )
+            })
+        });
+        let strengths =
+            DefectStrengths::new(mean?, std?, lower?).map_err(|e| (key(e.key), e.reason))?;
+        Ok(Some((density, strengths)))
+    }
 }
 
 fn default_snap() -> f64 {
@@ -90,7 +144,7 @@ impl Config {
                 format!("must be a fraction of an edge in (0, 0.5], got {}", f.snap),
             );
         }
-        Ok(())
+        f.defects().map(drop)
     }
 }
 
@@ -161,10 +215,41 @@ shield_angle = 35.0
             ),
             ("fracture.snap=0.6", "fracture.snap", "(0, 0.5]"),
             ("fracture.snap=0.0", "fracture.snap", "(0, 0.5]"),
+            (
+                "fracture.defect_mean=3e8",
+                "fracture.defect_mean",
+                "defect_density",
+            ),
+            (
+                "fracture.defect_density=1e9",
+                "fracture.defect_mean",
+                "required",
+            ),
+            (
+                "fracture.defect_density=-1.0",
+                "fracture.defect_density",
+                "positive",
+            ),
         ] {
             let e = parse(&text, &[set]).unwrap_err();
             assert_eq!(e.key.as_deref(), Some(key), "{set}: {e}");
             assert!(e.reason.contains(words), "{set}: {e}");
+        }
+        let defects = [
+            "fracture.defect_density=1e9",
+            "fracture.defect_mean=3.1e8",
+            "fracture.defect_std=6.2e7",
+        ];
+        for (set, key) in [
+            ("fracture.defect_lower=4e8", "fracture.defect_lower"),
+            ("fracture.defect_lower=2.5e7", ""),
+        ] {
+            let mut sets = defects.to_vec();
+            sets.push(set);
+            match parse(&text, &sets) {
+                Ok(c) => assert!(key.is_empty() && c.fracture.unwrap().defect_density.is_some()),
+                Err(e) => assert_eq!(e.key.as_deref(), Some(key), "{e}"),
+            }
         }
         let cracked = text.replace("c0 = 0.8\n", "c0 = 0.8\ninitial_damage = 1.0\n");
         let e = parse(&cracked, &[]).unwrap_err();

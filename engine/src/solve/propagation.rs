@@ -36,6 +36,8 @@ pub(super) struct Extension {
     at: [f64; 2],
     /// Directions (radians), unused entries NaN.
     directions: [f64; 2],
+    /// A crack nucleates at the vertex (it is no tip): both directions are new branches.
+    nucleation: bool,
 }
 
 /// One line of `events.csv`.
@@ -53,6 +55,8 @@ pub(super) struct FractureEvent {
 /// `fracture` in `summary.json`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct FractureSummary {
+    /// Cracks nucleated from defects.
+    pub nucleations: u64,
     /// Crack edges added.
     pub extensions: u64,
     /// Tips that extended along two directions at once.
@@ -61,7 +65,8 @@ pub struct FractureSummary {
     pub arrests: u64,
     /// Extensions the mesh could not make yet (the split was refused); the tip tries again.
     pub refused: u64,
-    /// Crack branches: the initial tips and every branching's new one.
+    /// Crack branches: the initial tips, every branching's new one and both halves of every
+    /// nucleated crack.
     pub branches: u32,
     /// Tips still active at the end.
     pub active_tips: usize,
@@ -82,15 +87,17 @@ impl Solve<'_> {
         v: VertexId,
         times: [f64; 2],
     ) -> Option<Extension> {
-        let tip = state.tips[v as usize]?;
         let mesh = &state.mesh;
         let t_mid = 0.5 * (times[0] + times[1]);
-        let directions = fracture.directions(mesh, v, tip, |t| {
-            element_stress(self, mesh, solver, v, t, t_mid)
-        });
+        let stress = |t| element_stress(self, mesh, solver, v, t, t_mid);
+        let (directions, nucleation) = match state.tips[v as usize] {
+            Some(tip) => (fracture.directions(mesh, v, tip, stress), false),
+            None => (fracture.nucleates(mesh, v, times[1], stress)?, true),
+        };
         directions[0].is_finite().then_some(Extension {
             at: mesh.vertex(v),
             directions,
+            nucleation,
         })
     }
 
@@ -111,12 +118,25 @@ impl Solve<'_> {
         if (v as usize) >= mesh.vertices().len() || mesh.vertex(v) != extension.at {
             return Changed::default();
         }
-        let Some(tip) = state.tips[v as usize] else {
+        // A nucleation site is on no crack; a tip must still be one.
+        let tip = state.tips[v as usize];
+        let on_crack = !fracture.crack_edges(mesh, v).is_empty();
+        if extension.nucleation == (tip.is_some() || on_crack) {
             return Changed::default();
-        };
+        }
         let time = state.front.time(v);
         let mut changed = Changed::default();
         let mut events = Vec::new();
+        if extension.nucleation {
+            let at = mesh.vertex(v);
+            events.push(FractureEvent {
+                time,
+                kind: "nucleation",
+                branch: state.next_branch,
+                from: at,
+                to: at,
+            });
+        }
         let mut extended = 0;
         for &d in extension.directions.iter().filter(|d| d.is_finite()) {
             let mesh = &state.mesh;
@@ -124,11 +144,25 @@ impl Solve<'_> {
             let Some(c) = fracture::crossing(mesh, v, d) else {
                 continue;
             };
-            let branch = if extended == 0 {
-                tip.branch
-            } else {
-                state.next_branch
+            // A nucleated crack's two halves are new branches, each travelling its way.
+            let (tip, new_branch) = match tip {
+                Some(tip) if extended == 0 => (tip, false),
+                Some(tip) => (
+                    Tip {
+                        branch: state.next_branch,
+                        ..tip
+                    },
+                    true,
+                ),
+                None => (
+                    Tip {
+                        direction: d,
+                        branch: state.next_branch,
+                    },
+                    true,
+                ),
             };
+            let branch = tip.branch;
             let event = |kind, to| FractureEvent {
                 time,
                 kind,
@@ -179,7 +213,7 @@ impl Solve<'_> {
             mesh.set_tag(edge, Some(fracture.tag));
             let to = mesh.vertex(target);
             events.push(event("extension", to));
-            if extended == 1 {
+            if new_branch {
                 state.next_branch += 1;
             }
             extended += 1;
@@ -194,7 +228,7 @@ impl Solve<'_> {
             }
             state.tips[v as usize] = None;
         }
-        if extended == 2 {
+        if extended == 2 && !extension.nucleation {
             let mut branching = events[0].clone();
             branching.kind = "branching";
             events.push(branching);
@@ -353,6 +387,7 @@ const CRACK_PATH_PNG_SIZE: (u32, u32) = (1200, 900);
 pub(super) fn summary(events: &[FractureEvent], state: &Frontier) -> FractureSummary {
     let count = |kind: &str| events.iter().filter(|e| e.kind == kind).count() as u64;
     FractureSummary {
+        nucleations: count("nucleation"),
         extensions: count("extension"),
         branchings: count("branching"),
         arrests: count("arrest"),
