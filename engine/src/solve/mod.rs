@@ -224,8 +224,17 @@ impl<'a> Work<'a> for Solve<'a> {
                             .map(|&t| (t, mesh.triangles()[t as usize]))
                     })
                     .collect();
+                let [x, y] = mesh.vertex(v);
+                tracing::debug!(
+                    vertex = v,
+                    x,
+                    y,
+                    t = tent.t_old,
+                    %failure,
+                    refine = star.len(),
+                    "patch not converged"
+                );
                 if star.is_empty() {
-                    let [x, y] = mesh.vertex(v);
                     return Err(EngineError::Runtime(format!(
                         "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {failure}",
                         tent.t_old
@@ -244,6 +253,13 @@ impl<'a> Work<'a> for Solve<'a> {
                     .map(|&t| (t, mesh.triangles()[t as usize]))
                     .collect::<Vec<_>>();
                 if !star.is_empty() {
+                    tracing::debug!(
+                        vertex = v,
+                        eta,
+                        bulk = report.dissipation,
+                        cohesive = report.cohesive_mismatch,
+                        "patch above the tolerance"
+                    );
                     return Ok((tent.t_old, Outcome::Rejected { star }));
                 }
             }
