@@ -69,7 +69,7 @@ fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
 }
 
 #[test]
-fn the_crack_pattern_is_bitwise_the_same_for_one_and_two_threads() {
+fn the_crack_pattern_is_bitwise_the_same_for_one_two_and_four_threads() {
     // Up to just after the first branching and a branch's arrest on the other.
     let problem = shipped(
         "crack_growth.toml",
@@ -81,6 +81,9 @@ fn the_crack_pattern_is_bitwise_the_same_for_one_and_two_threads() {
     assert!(fracture.branchings >= 1, "{fracture:?}");
     assert_eq!(one.state_hash, two.state_hash);
     assert_eq!(outputs(a.path()), outputs(b.path()));
+    let (four, c) = solve(&problem, 4, true);
+    assert_eq!(one.state_hash, four.state_hash);
+    assert_eq!(outputs(a.path()), outputs(c.path()));
 }
 
 /// Weak defects (mean 150 MPa, sd 30 MPa, lower bound 30 MPa, 1e4 per mm^2): cracks nucleate
