@@ -1,6 +1,7 @@
 //! `sdg`: adaptive spacetime discontinuous Galerkin simulation of dynamic fracture.
 //!
-//! Exit codes: 0 success, 2 invalid arguments, configuration or mesh, 1 runtime failure.
+//! Exit codes: 0 success, 2 invalid arguments, configuration or mesh, or an estimated cost
+//! above `[limits]`, 1 runtime failure.
 
 use std::io::IsTerminal;
 use std::num::NonZeroUsize;
@@ -25,8 +26,8 @@ enum Command {
     Run(JobArgs),
     /// Pitch tents to the end time without solving; write the summary and spacetime mesh.
     Mesh(JobArgs),
-    /// Check a configuration and its mesh, then exit.
-    Validate(ConfigArgs),
+    /// Check a configuration and its mesh, print the estimated cost of the run, then exit.
+    Validate(ValidateArgs),
     /// Draw a field of a VTU file (a snapshot, or any triangle grid) as PNG, or the crack tips of
     /// one or more runs.
     Plot(PlotArgs),
@@ -43,6 +44,16 @@ struct ConfigArgs {
     /// Print nothing but errors.
     #[arg(long)]
     quiet: bool,
+}
+
+// `validate`: a config, and the threads the estimated wall time is for.
+#[derive(Debug, Args)]
+struct ValidateArgs {
+    #[command(flatten)]
+    config: ConfigArgs,
+    /// Worker threads of the estimated run (default: all available cores).
+    #[arg(long, value_name = "N")]
+    threads: Option<NonZeroUsize>,
 }
 
 // The options of the commands that pitch tents, `run` and `mesh`.
@@ -65,6 +76,9 @@ struct JobArgs {
     /// Log format: text, or json (one object per line, for job scripts).
     #[arg(long, value_enum, default_value_t = LogFormat::Text)]
     log_format: LogFormat,
+    /// Run even when the estimated cost exceeds `[limits]`.
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Debug, Args)]
@@ -141,19 +155,34 @@ fn options(job: &JobArgs) -> RunOptions {
         threads: job.threads.map(NonZeroUsize::get),
         deterministic: job.deterministic,
         progress: !job.config.quiet,
+        force: job.force,
     }
 }
 
-fn validate(args: &ConfigArgs) -> Result<(), EngineError> {
-    let problem = setup(args)?;
-    if !args.quiet {
+fn validate(args: &ValidateArgs) -> Result<(), EngineError> {
+    let problem = setup(&args.config)?;
+    let options = RunOptions {
+        threads: args.threads.map(NonZeroUsize::get),
+        ..RunOptions::default()
+    };
+    let estimate = sdg_engine::estimate_job(&problem, &options)?;
+    if !args.config.quiet {
+        let m = &problem.material;
         println!(
-            "{}: valid ({} vertices, {} triangles)",
-            args.config.display(),
+            "{}: valid ({} vertices, {} triangles)\n\
+             wave speeds: c_d = {:.6e} m/s, c_s = {:.6e} m/s, c_R = {:.6e} m/s\n\
+             estimate: {}",
+            args.config.config.display(),
             problem.mesh.vertices().len(),
-            problem.mesh.triangles().len()
+            problem.mesh.triangles().len(),
+            m.c_d(),
+            m.c_s(),
+            m.c_r(),
+            estimate.describe()
         );
     }
+    // What `sdg run` would refuse, `validate` refuses too.
+    estimate.check(&problem)?;
     Ok(())
 }
 

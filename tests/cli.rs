@@ -99,6 +99,12 @@ fn mesh_writes_summary_and_spacetime_mesh() {
     let ratio = s["max_slope_ratio"].as_f64().unwrap();
     assert!(ratio > 0.0 && ratio < 0.9, "{ratio}");
     assert!(s["tents"].as_u64().unwrap() > 0);
+    let estimated = s["estimate"]["tents"].as_f64().unwrap();
+    let ratio = s["tents"].as_f64().unwrap() / estimated;
+    assert!(
+        (0.9..1.1).contains(&ratio),
+        "{estimated} tents estimated: {s}"
+    );
     assert!(s["tetrahedra"].as_u64().unwrap() > s["tents"].as_u64().unwrap());
     assert!(s["wall_time_s"].as_f64().is_some() && s["threads"].as_u64() == Some(2));
     let vtu = std::fs::read_to_string(out_dir.join("spacetime.vtu")).unwrap();
@@ -142,8 +148,22 @@ fn each_command_lists_only_its_options() {
     for option in ["<CONFIG>", "--set", "--quiet"] {
         assert!(text.contains(option), "validate: {option} missing:\n{text}");
     }
-    for option in job {
+    for option in job.iter().filter(|&&o| o != "--threads") {
         assert!(!text.contains(option), "validate: {option} listed:\n{text}");
+    }
+    assert!(
+        text.contains("--threads"),
+        "validate: --threads missing:\n{text}"
+    );
+    assert!(
+        !text.contains("--force"),
+        "validate: --force listed:\n{text}"
+    );
+    for command in ["run", "mesh"] {
+        assert!(
+            help(command).contains("--force"),
+            "{command}: --force missing"
+        );
     }
     let text = help("plot");
     for option in ["<FILE>...", "--field", "--out ", "--edges", "--quiet"] {
@@ -497,4 +517,109 @@ fn unwritable_output_is_a_runtime_failure() {
     let out = sdg(&["run", &config, "--output", blocker.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(stderr(&out).contains("blocker"), "{}", stderr(&out));
+}
+
+/// The unit slips: runs whose wave speed makes the tent count astronomical are refused
+/// before any work, quickly, with the estimate and what drives it.
+#[test]
+fn a_run_that_cannot_finish_is_refused_before_any_work() {
+    let (dir, config) = config_file(CONFIG);
+    for (command, set, driver) in [
+        ("run", "material.density=1e-30", "density = 1e-30"),
+        ("run", "material.young=1e308", "young = 1e308"),
+        ("mesh", "material.density=1e-30", "density = 1e-30"),
+        ("validate", "material.density=1e-30", "density = 1e-30"),
+    ] {
+        let out_dir = dir.path().join("refused");
+        let start = std::time::Instant::now();
+        let mut args = vec![command, &config, "--set", set];
+        if command != "validate" {
+            args.extend(["--output", out_dir.to_str().unwrap(), "--quiet"]);
+        }
+        expect_input_error(
+            &args,
+            &["case.toml", "limits.max_tents", "tents", driver, "--force"],
+        );
+        let seconds = start.elapsed().as_secs_f64();
+        assert!(seconds < 5.0, "{command} {set}: {seconds} s");
+        assert!(!out_dir.exists(), "{command} {set}: wrote outputs");
+    }
+}
+
+/// A limit below a small run's estimate refuses it (exit 2); `--force` runs it, and its
+/// summary carries the estimate beside the actual values.
+#[test]
+fn force_runs_beyond_the_limits_and_the_summary_keeps_the_estimate() {
+    let (dir, config) = config_file(CONFIG);
+    let out_dir = dir.path().join("out");
+    let args = [
+        "run",
+        &config,
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--threads",
+        "2",
+        "--set",
+        "limits.max_tents=10",
+    ];
+    expect_input_error(&args, &["limits.max_tents", "more than the limit 1.000e1"]);
+    let out = sdg(&[&args[..], &["--force", "--quiet"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(out_dir.join("summary.json")).unwrap();
+    let s: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let estimate = &s["estimate"];
+    let (tents, patches) = (
+        estimate["tents"].as_f64().unwrap(),
+        s["patches"].as_f64().unwrap(),
+    );
+    assert!(
+        (patches / tents - 1.0).abs() < 0.1,
+        "{tents} estimated, {patches} solved"
+    );
+    assert_eq!(estimate["lower_bound"].as_bool(), Some(false));
+    assert_eq!(estimate["threads"].as_u64(), Some(2));
+    for key in ["wall_time_s", "memory_bytes", "seconds_per_tent"] {
+        assert!(estimate[key].as_f64().unwrap() > 0.0, "{key}: {estimate}");
+    }
+    if cfg!(target_os = "linux") {
+        assert!(s["peak_memory_bytes"].as_f64().unwrap() > 1e6);
+    }
+    let out = sdg(&["validate", &config, "--threads", "3"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    for needle in [
+        "c_d = ",
+        "c_s = ",
+        "c_R = ",
+        "estimate: ",
+        "tents",
+        "on 3 thread(s)",
+    ] {
+        assert!(text.contains(needle), "`{needle}` not in:\n{text}");
+    }
+}
+
+/// A run past `limits.max_wall_time_s` (an estimate can be short: refinement adds tents) stops
+/// with exit 1 and a message, leaving its history.
+#[test]
+fn a_run_stops_when_its_wall_time_is_up() {
+    let (dir, config) = config_file(CONFIG);
+    let out_dir = dir.path().join("out");
+    let out = sdg(&[
+        "run",
+        &config,
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--set",
+        "limits.max_wall_time_s=1e-9",
+        "--force",
+        "--quiet",
+    ]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("limits.max_wall_time_s = 0.000000001 s is up"),
+        "{err}"
+    );
+    assert!(out_dir.join("history.csv").exists());
 }

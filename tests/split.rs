@@ -307,6 +307,7 @@ fn splitting_front_edges_off_their_midpoints_keeps_causality_energy_and_momentum
         threads: Some(2),
         deterministic: true,
         progress: false,
+        force: false,
     };
     let seen = Arc::new(Mutex::new(None));
     let system = problem.system.clone();

@@ -4,6 +4,7 @@
 mod adapt;
 pub mod config;
 pub mod error;
+pub mod estimate;
 pub mod fracture;
 mod frontier;
 pub mod lefm;
@@ -18,9 +19,10 @@ pub mod spacetime;
 
 pub use config::{Config, ConfigError, LoadedConfig};
 pub use error::EngineError;
+pub use estimate::Estimate;
 pub use problem::Problem;
 pub use run::{MeshSummary, RunOptions, mesh_job, pitch_to_end};
 #[doc(hidden)]
 pub use solve::{Live, solve_job_with};
-pub use solve::{RunSummary, solve_job};
+pub use solve::{RunSummary, estimate_job, solve_job};
 pub use spacetime::SpacetimeMesh;

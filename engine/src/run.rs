@@ -11,6 +11,7 @@ use sdg_mesh::{Front, Mesh, Pitcher, Tent};
 use sdg_scheduler::{Events, Fixed, Options, VertexId, Work};
 
 use crate::error::EngineError;
+use crate::estimate::{self, Estimate};
 use crate::output::write_atomic;
 use crate::problem::Problem;
 use crate::spacetime::SpacetimeMesh;
@@ -24,8 +25,10 @@ pub struct RunOptions {
     pub threads: Option<usize>,
     /// Forces deterministic mode on (overrides `scheduler.deterministic`).
     pub deterministic: bool,
-    /// Show a progress bar on a terminal.
+    /// Show a progress bar on a terminal, and the estimate before the run on standard error.
     pub progress: bool,
+    /// Run even when the estimate exceeds `[limits]`.
+    pub force: bool,
 }
 
 impl RunOptions {
@@ -167,6 +170,8 @@ pub struct MeshSummary {
     pub wall_time_s: f64,
     /// Worker threads used.
     pub threads: usize,
+    /// The estimate made before pitching.
+    pub estimate: Estimate,
 }
 
 /// `sdg mesh`: pitches tents to the end time without solving, writes `summary.json` and, when
@@ -180,8 +185,17 @@ pub fn mesh_job(
     let c_max = problem.material.max_wave_speed();
     let pitcher = Pitcher::new(mesh, c_max, config.pitch.safety, config.time.end)
         .map_err(|e| EngineError::Runtime(e.to_string()))?;
-    let dir = options.output_dir(problem)?;
     let scheduler = options.scheduler(problem);
+    let estimate = estimate::mesh(mesh, &pitcher, scheduler.threads);
+    tracing::info!(
+        tents = estimate.tents,
+        wall_time_s = estimate.wall_time_s,
+        "estimate"
+    );
+    if !options.force {
+        estimate.check(problem)?;
+    }
+    let dir = options.output_dir(problem)?;
 
     let front = Front::flat(mesh.vertices().len(), 0.0);
     let work = MeshWork {
@@ -227,6 +241,7 @@ pub fn mesh_job(
         max_slope_ratio: record.max_slope_ratio,
         wall_time_s,
         threads: scheduler.threads,
+        estimate,
     };
     if let Some(s) = record.spacetime {
         write_atomic(&dir, "spacetime.vtu", s.to_grid(c_max).to_vtu().as_bytes())?;

@@ -26,6 +26,7 @@ pub fn run(text: &str, overrides: &[String]) -> (RunSummary, tempfile::TempDir) 
         threads: Some(2),
         deterministic: true,
         progress: false,
+        force: false,
     };
     let (summary, _) = sdg_engine::solve_job(&problem, &options).expect("run succeeds");
     (summary, dir)
@@ -43,6 +44,7 @@ pub fn solve(
         threads: Some(threads),
         deterministic,
         progress: false,
+        force: false,
     };
     let (summary, _) = sdg_engine::solve_job(problem, &options).unwrap();
     (summary, dir)

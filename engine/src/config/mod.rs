@@ -26,7 +26,8 @@ pub use material::{MaterialConfig, PlaneName};
 pub(crate) use mesh::rectangle_key;
 pub use mesh::{DiagonalName, MeshConfig, MeshKind, SegmentConfig};
 pub use settings::{
-    AdaptConfig, OutputConfig, PitchConfig, SchedulerConfig, SolverConfig, TimeConfig, ZoneConfig,
+    AdaptConfig, LimitsConfig, OutputConfig, PitchConfig, SchedulerConfig, SolverConfig,
+    TimeConfig, ZoneConfig,
 };
 
 use overrides::apply_override;
@@ -69,6 +70,9 @@ pub struct Config {
     /// Adaptive refinement of the front.
     #[serde(default)]
     pub adapt: AdaptConfig,
+    /// The most a run may cost: checked against its estimate before any work.
+    #[serde(default)]
+    pub limits: LimitsConfig,
     /// Boundary conditions, one entry per group of sides (`[[boundary]]`). Every boundary tag
     /// of the mesh must be named by one entry.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

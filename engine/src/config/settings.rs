@@ -33,6 +33,37 @@ impl Default for PitchConfig {
     }
 }
 
+/// `[limits]`: the most a run may cost. Before any work `sdg run` and `sdg mesh` estimate the
+/// run's tents and wall time and refuse (exit 2) a run whose estimate exceeds a limit, unless
+/// given `--force`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LimitsConfig {
+    /// Most tents. Default 1e10 (days on one node at the seed's resolution).
+    #[serde(default = "default_max_tents")]
+    pub max_tents: f64,
+    /// Most wall time, s, on the threads of the run. Default 2.592e6 (30 days).
+    #[serde(default = "default_max_wall_time_s")]
+    pub max_wall_time_s: f64,
+}
+
+fn default_max_tents() -> f64 {
+    1e10
+}
+
+fn default_max_wall_time_s() -> f64 {
+    2.592e6
+}
+
+impl Default for LimitsConfig {
+    fn default() -> Self {
+        Self {
+            max_tents: default_max_tents(),
+            max_wall_time_s: default_max_wall_time_s(),
+        }
+    }
+}
+
 /// `[output]`: what is written where.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]

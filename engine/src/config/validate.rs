@@ -24,6 +24,14 @@ impl Config {
                 ),
             );
         }
+        for (key, value) in [
+            ("limits.max_tents", self.limits.max_tents),
+            ("limits.max_wall_time_s", self.limits.max_wall_time_s),
+        ] {
+            if value.is_nan() || value <= 0.0 {
+                return fail(key, format!("must be a positive number, got {value}"));
+            }
+        }
         self.validate_physics()?;
         self.validate_adapt()?;
         self.validate_fracture()?;
@@ -400,6 +408,18 @@ mod tests {
             Some("pitch.safety")
         );
         assert_eq!(key_of(BASE, &["time.end=0"]).as_deref(), Some("time.end"));
+        for set in [
+            "limits.max_tents=0",
+            "limits.max_tents=nan",
+            "limits.max_tents=-1e9",
+        ] {
+            assert_eq!(key_of(BASE, &[set]).as_deref(), Some("limits.max_tents"));
+        }
+        assert_eq!(
+            key_of(BASE, &["limits.max_wall_time_s=-3600"]).as_deref(),
+            Some("limits.max_wall_time_s")
+        );
+        assert!(parse(BASE, &["limits.max_wall_time_s=inf"]).is_ok());
         assert_eq!(
             key_of(BASE, &["mesh.path=a.msh"]).as_deref(),
             Some("mesh.path")

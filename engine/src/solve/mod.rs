@@ -7,7 +7,7 @@
 //! whole front, so they run as scheduler events over every vertex: with no tent in flight.
 
 use std::path::PathBuf;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use parking_lot::Mutex;
 
@@ -23,6 +23,7 @@ use sdg_solver::system::{MAX_FIELDS, State};
 
 use crate::adapt::Adapt;
 use crate::error::EngineError;
+use crate::estimate::{self, Estimate};
 use crate::frontier::{Coarsening, Frontier};
 use crate::output::write_atomic;
 use crate::plot;
@@ -63,6 +64,8 @@ struct Solve<'a> {
     book: Mutex<Book>,
     /// The change [`solve_job_with`] applies once, until its milestone passes.
     intervention: Mutex<Option<Intervention>>,
+    /// When `limits.max_wall_time_s` is up: no tent starts after it.
+    deadline: Option<Instant>,
 }
 
 /// The scaled initial state at `x`.
@@ -182,6 +185,14 @@ impl<'a> Work<'a> for Solve<'a> {
         _: &Events<'a, Frontier>,
     ) -> Result<(f64, Outcome), EngineError> {
         let (mesh, front) = (&state.mesh, &state.front);
+        if self.deadline.is_some_and(|d| Instant::now() > d) {
+            return Err(EngineError::Runtime(format!(
+                "limits.max_wall_time_s = {} s is up at t = {:e} s (the front's least time); \
+                 the outputs so far are written",
+                self.problem.loaded.config.limits.max_wall_time_s,
+                front.min_time()
+            )));
+        }
         let star = mesh.vertex_triangles(v);
         if star.len() > self.max_star {
             return Err(EngineError::Runtime(format!(
@@ -363,6 +374,114 @@ impl<'a> Work<'a> for Solve<'a> {
     }
 }
 
+/// A patch solver for `problem` whose stars have at most `max_star` triangles.
+fn patch_solver(problem: &Problem, max_star: usize) -> PatchSolver {
+    let config = &problem.loaded.config;
+    PatchSolver::new(problem.system.clone(), config.solver.order, max_star).with_interfaces(
+        problem.interfaces.clone(),
+        Newton {
+            tol: config.solver.newton_tol,
+            max_iter: config.solver.newton_max_iter,
+        },
+    )
+}
+
+/// What a solve starts from: the flat front at time 0 (refined to the zones' `max_edge`), with
+/// crack tips, the adaptivity and the patch solvers' capacity.
+struct Start {
+    state: Frontier,
+    adapt: Option<Adapt>,
+    /// Triangles a vertex star may have.
+    max_star: usize,
+}
+
+impl Start {
+    fn new(problem: &Problem) -> Result<Self, EngineError> {
+        let config = &problem.loaded.config;
+        let mesh = &problem.mesh;
+        let c_max = problem.material.max_wave_speed();
+        let pitcher = Pitcher::new(mesh, c_max, config.pitch.safety, config.time.end)
+            .map_err(|e| EngineError::Runtime(e.to_string()))?;
+        let adapt = Adapt::new(&config.adapt, mesh, c_max, problem.material.density());
+        // Crack alignment splits edges as refinement does.
+        let splits = adapt.is_some() || problem.fracture.is_some();
+        let pitcher = if splits {
+            pitcher.for_refinement(mesh)
+        } else {
+            pitcher
+        };
+        let initial_star = (0..mesh.vertices().len() as u32)
+            .map(|v| mesh.vertex_triangles(v).len())
+            .max()
+            .unwrap_or(0);
+        // Bisection adds triangles to stars; the solvers are sized once, and refinement never
+        // grows a star beyond them.
+        let max_star = if splits {
+            (2 * initial_star).max(12)
+        } else {
+            initial_star
+        };
+        let (n, width) = {
+            let solver = PatchSolver::new(problem.system.clone(), config.solver.order, 0);
+            (solver.basis().len(), solver.width())
+        };
+        let mut state = Frontier::new(
+            mesh.clone(),
+            Front::flat(mesh.vertices().len(), 0.0),
+            FrontSolution::new(mesh.triangles().len(), n, width).with_edges(mesh.edges().len()),
+            pitcher,
+        );
+        if let Some(adapt) = &adapt {
+            refine_to_max_edge(&mut state, adapt, max_star)?;
+        }
+        if let Some(fracture) = &problem.fracture {
+            state.tips = fracture.initial_tips(&state.mesh);
+            state.next_branch = state.tips.iter().flatten().count() as u32;
+        }
+        Ok(Self {
+            state,
+            adapt,
+            max_star,
+        })
+    }
+}
+
+impl Frontier {
+    /// The estimate of a solve from this (initial) state on `threads`; `adapts` when
+    /// refinement is on.
+    fn estimate(
+        &self,
+        problem: &Problem,
+        max_star: usize,
+        threads: usize,
+        adapts: bool,
+    ) -> Estimate {
+        let start = estimate::Start {
+            mesh: &self.mesh,
+            pitcher: &self.pitcher,
+            solution: &self.solution,
+            initial: problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave),
+            new_solver: || patch_solver(problem, max_star),
+        };
+        estimate::solve(
+            problem,
+            start,
+            threads,
+            adapts || problem.fracture.is_some(),
+        )
+    }
+}
+
+/// The estimate of `sdg run` for `problem` with `options`, made as the run makes it before
+/// any work (`sdg validate`).
+pub fn estimate_job(problem: &Problem, options: &RunOptions) -> Result<Estimate, EngineError> {
+    let start = Start::new(problem)?;
+    let threads = options.scheduler(problem).threads;
+    Ok(start
+        .state
+        .estimate(problem, start.max_star, threads, start.adapt.is_some()))
+}
+
 /// `sdg run`: solves the problem to the end time; writes `summary.json`, `history.csv` and the
 /// configured snapshots. Returns the summary and the output folder.
 pub fn solve_job(
@@ -380,63 +499,36 @@ fn run_job(
 ) -> Result<(RunSummary, PathBuf), EngineError> {
     let (after, intervention) = intervention.unzip();
     let config = &problem.loaded.config;
-    let mesh = &problem.mesh;
     let system = &problem.system;
     let c_max = problem.material.max_wave_speed();
     let rho = problem.material.density();
     let t_end = config.time.end;
-    let pitcher = Pitcher::new(mesh, c_max, config.pitch.safety, t_end)
-        .map_err(|e| EngineError::Runtime(e.to_string()))?;
-    let dir = options.output_dir(problem)?;
     let scheduler = options.scheduler(problem);
-
-    let adapt = Adapt::new(&config.adapt, mesh, c_max, rho);
-    // Crack alignment splits edges as refinement does.
-    let splits = adapt.is_some() || problem.fracture.is_some();
-    let pitcher = if splits {
-        pitcher.for_refinement(mesh)
-    } else {
-        pitcher
-    };
-    let initial_star = (0..mesh.vertices().len() as u32)
-        .map(|v| mesh.vertex_triangles(v).len())
-        .max()
-        .unwrap_or(0);
-    // Bisection adds triangles to stars; the solvers are sized once, and refinement never
-    // grows a star beyond them.
-    let max_star = if splits {
-        (2 * initial_star).max(12)
-    } else {
-        initial_star
-    };
+    let Start {
+        mut state,
+        adapt,
+        max_star,
+    } = Start::new(problem)?;
+    let estimate = state.estimate(problem, max_star, scheduler.threads, adapt.is_some());
+    tracing::info!(
+        tents = estimate.tents,
+        lower_bound = estimate.lower_bound,
+        wall_time_s = estimate.wall_time_s,
+        memory_bytes = estimate.memory_bytes,
+        "estimate"
+    );
+    if options.progress {
+        eprintln!("estimate: {}", estimate.describe());
+    }
+    if !options.force {
+        estimate.check(problem)?;
+    }
+    let dir = options.output_dir(problem)?;
     let solvers: Vec<PatchSolver> = (0..scheduler.threads)
-        .map(|_| {
-            PatchSolver::new(system.clone(), config.solver.order, max_star).with_interfaces(
-                problem.interfaces.clone(),
-                Newton {
-                    tol: config.solver.newton_tol,
-                    max_iter: config.solver.newton_max_iter,
-                },
-            )
-        })
+        .map(|_| patch_solver(problem, max_star))
         .collect();
     let (basis, width) = (solvers[0].basis().clone(), solvers[0].width());
     let initial = problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave);
-    let mut state = Frontier::new(
-        mesh.clone(),
-        Front::flat(mesh.vertices().len(), 0.0),
-        FrontSolution::new(mesh.triangles().len(), basis.len(), width)
-            .with_edges(mesh.edges().len()),
-        pitcher,
-    );
-    if let Some(adapt) = &adapt {
-        // Energies of the initial data are taken on the refined front below.
-        refine_to_max_edge(&mut state, adapt, max_star)?;
-    }
-    if let Some(fracture) = &problem.fracture {
-        state.tips = fracture.initial_tips(&state.mesh);
-        state.next_branch = state.tips.iter().flatten().count() as u32;
-    }
     let energy0 = front_energy(
         &state.mesh,
         &state.front,
@@ -489,6 +581,9 @@ fn run_job(
             coefficients: vec![0.0; basis.len() * width],
         }),
         intervention: Mutex::new(intervention),
+        deadline: Duration::try_from_secs_f64(config.limits.max_wall_time_s)
+            .ok()
+            .and_then(|limit| Instant::now().checked_add(limit)),
     };
     solve.history_row(&state, &mut solve.book.lock());
     let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
@@ -600,6 +695,8 @@ fn run_job(
         wall_time_s,
         patches_per_second: book.patches as f64 / wall_time_s.max(f64::MIN_POSITIVE),
         threads: scheduler.threads,
+        peak_memory_bytes: estimate::peak_resident_bytes(),
+        estimate,
         energy,
         interface,
         loading: problem.loading,

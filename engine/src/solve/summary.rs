@@ -57,7 +57,8 @@ pub struct ErrorSummary {
 }
 
 /// `summary.json` of `sdg run`. In deterministic mode every field but `wall_time_s`,
-/// `patches_per_second` and `threads` is the same for any thread count.
+/// `patches_per_second`, `threads`, `peak_memory_bytes` and `estimate` is the same for any
+/// thread count.
 #[derive(Clone, Debug, Serialize)]
 pub struct RunSummary {
     /// `"run"`.
@@ -95,6 +96,12 @@ pub struct RunSummary {
     pub patches_per_second: f64,
     /// Worker threads used.
     pub threads: usize,
+    /// Peak resident memory of the process, bytes (Linux; absent elsewhere).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_memory_bytes: Option<f64>,
+    /// The estimate made before the run, to compare with `patches`, `wall_time_s` and
+    /// `peak_memory_bytes`.
+    pub estimate: crate::estimate::Estimate,
     /// Energy accounting.
     pub energy: EnergySummary,
     /// Newton statistics of patches with contact faces.
