@@ -1,7 +1,7 @@
 //! `sdg`: adaptive spacetime discontinuous Galerkin simulation of dynamic fracture.
 //!
 //! Exit codes: 0 success, 2 invalid arguments, configuration or mesh, or an estimated cost
-//! above `[limits]`, 1 runtime failure.
+//! above `[limits]`, 1 runtime failure (a panic included).
 
 use std::io::IsTerminal;
 use std::num::NonZeroUsize;
@@ -123,17 +123,24 @@ fn main() -> ExitCode {
         LogFormat::Text => logs.init(),
         LogFormat::Json => logs.json().init(),
     }
-    let result = match &cli.command {
+    // A panic is a bug: its message (printed by the panic hook, with the place) and exit 1,
+    // like any failure while running. Panics of worker threads end the run the same way
+    // (`sdg_scheduler::RunError::Panic`).
+    let result = std::panic::catch_unwind(|| match &cli.command {
         Command::Run(job) => run(job),
         Command::Mesh(job) => mesh(job),
         Command::Validate(args) => validate(args),
         Command::Plot(args) => plot(args),
-    };
+    });
     match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
+        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e)) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code())
+        }
+        Err(_) => {
+            eprintln!("error: internal error (a bug, please report it with the message above)");
+            ExitCode::from(1)
         }
     }
 }

@@ -314,19 +314,14 @@ fn splitting_front_edges_off_their_midpoints_keeps_causality_energy_and_momentum
     // The default: a thousandth of the shortest initial edge.
     let min_edge = 1e-3 * problem.mesh.edge_length_range().0;
     let out = Arc::clone(&seen);
+    // A failed check inside the event ends the run with its message (RunError::Panic).
     let (s, _) = sdg_engine::solve_job_with(&problem, &options, AFTER, move |live| {
-        // A panic inside a scheduler event would leave the workers waiting: report it after
-        // the run instead.
-        let checked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            let mut seen = Seen::default();
-            intervene(live, &system, min_edge, &mut seen);
-            seen
-        }));
-        *out.lock().unwrap() = Some(checked);
+        let mut seen = Seen::default();
+        intervene(live, &system, min_edge, &mut seen);
+        *out.lock().unwrap() = Some(seen);
     })
     .unwrap();
-    let checked = seen.lock().unwrap().take().expect("the intervention ran");
-    let seen = checked.unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+    let seen = seen.lock().unwrap().take().expect("the intervention ran");
     eprintln!("{seen:#?}");
     eprintln!(
         "with splits: {} refinements, {} coarsenings, balance {:e}, momentum {:e}, error {:?}; \

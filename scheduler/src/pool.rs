@@ -8,13 +8,14 @@
 //! changes. Workers with nothing to do sleep on a condition variable. Tents hold the state
 //! shared (a read lock); events take it exclusively between tents. See `scheduler/README.md`.
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 
 use crossbeam_deque::{Injector, Steal, Stealer, Worker};
 use parking_lot::{Condvar, Mutex, RwLock};
 
 use crate::claim::ClaimTable;
-use crate::{Events, RunError, State, Stats, VertexId, Work, below_end, is_ready};
+use crate::{Events, RunError, State, Stats, VertexId, Work, below_end, is_ready, panic_message};
 
 /// The state and the claims on its vertices: shared by tents, exclusive for events.
 struct Locked<'s, S> {
@@ -35,6 +36,8 @@ struct Shared<'s, 'a, W: Work<'a>> {
     remaining: AtomicUsize,
     stop: AtomicBool,
     error: Mutex<Option<W::Error>>,
+    /// The message of the first panic of a worker.
+    panic: Mutex<Option<String>>,
     sleep: Mutex<usize>,
     wake: Condvar,
     events: Events<'a, W::State>,
@@ -67,6 +70,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
         queued: AtomicUsize::new(0),
         stop: AtomicBool::new(false),
         error: Mutex::new(None),
+        panic: Mutex::new(None),
         sleep: Mutex::new(0),
         wake: Condvar::new(),
         events: Events::default(),
@@ -80,9 +84,21 @@ pub(crate) fn run<'a, W: Work<'a>>(
     std::thread::scope(|s| {
         for (id, (local, scratch)) in workers.into_iter().zip(scratch).enumerate() {
             let shared = &shared;
-            s.spawn(move || worker(shared, id, &local, scratch));
+            s.spawn(move || {
+                // A panicking worker stops the others (its locks are released as it unwinds).
+                if let Err(payload) =
+                    catch_unwind(AssertUnwindSafe(|| worker(shared, id, &local, scratch)))
+                {
+                    shared.panic.lock().get_or_insert(panic_message(payload));
+                    shared.stop.store(true, Ordering::Release);
+                    wake_all(shared);
+                }
+            });
         }
     });
+    if let Some(message) = shared.panic.into_inner() {
+        return Err(RunError::Panic(message));
+    }
     if let Some(e) = shared.error.into_inner() {
         return Err(RunError::Work(e));
     }
@@ -90,7 +106,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
     // the end: no tent is in flight any more, so they run here in queue order.
     let locked = shared.locked.into_inner();
     for action in shared.events.take() {
-        let changed = action(locked.state);
+        let changed = catch_unwind(AssertUnwindSafe(|| action(locked.state)))
+            .map_err(|payload| RunError::Panic(panic_message(payload)))?;
         count_remaining(&shared.remaining, changed.below_end);
         shared.events_run.fetch_add(1, Ordering::Relaxed);
     }

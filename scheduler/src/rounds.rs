@@ -7,18 +7,22 @@
 //! events then run in the order they were queued, with the state held exclusively. The result
 //! depends only on the inputs.
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Barrier;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use parking_lot::{Mutex, RwLock};
 
-use crate::{Events, RunError, State, Stats, VertexId, Work, below_end, is_ready};
+use crate::{Events, RunError, State, Stats, VertexId, Work, below_end, is_ready, panic_message};
+
+/// What a worker's tent gave: its outcome or error, or the message of its panic.
+type Tried<O, E> = Result<Result<O, E>, String>;
 
 /// Shared state of one round.
 struct Round<O, E> {
     chosen: Vec<VertexId>,
     next: AtomicUsize,
-    results: Vec<Mutex<Option<Result<O, E>>>>,
+    results: Vec<Mutex<Option<Tried<O, E>>>>,
 }
 
 pub(crate) fn run<'a, W: Work<'a>>(
@@ -62,8 +66,12 @@ pub(crate) fn run<'a, W: Work<'a>>(
                         loop {
                             let i = r.next.fetch_add(1, Ordering::Relaxed);
                             let Some(&v) = chosen.get(i) else { break };
-                            let result =
-                                work.tent(&**state, &mut scratch, v, events).map(|(_, o)| o);
+                            // A panic is handed to the main thread, which ends the run; the
+                            // worker goes on to the barrier so that nobody waits for it.
+                            let result = catch_unwind(AssertUnwindSafe(|| {
+                                work.tent(&**state, &mut scratch, v, events).map(|(_, o)| o)
+                            }))
+                            .map_err(panic_message);
                             *r.results[i].lock() = Some(result);
                             per_thread[id].fetch_add(1, Ordering::Relaxed);
                         }
@@ -72,7 +80,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 }
             });
         }
-        let result = (|| {
+        // A panic here leaves the workers at the round's first barrier, as an error does.
+        let result = catch_unwind(AssertUnwindSafe(|| {
             loop {
                 let guard = state.read();
                 let s: &W::State = &guard;
@@ -118,7 +127,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                     let guard = state.read();
                     for (i, &v) in chosen.iter().enumerate() {
                         let result = r.results[i].lock().take().expect("every chosen tent ran");
-                        let outcome = result.map_err(RunError::Work)?;
+                        let outcome = result.map_err(RunError::Panic)?.map_err(RunError::Work)?;
                         work.record(&**guard, v, outcome, &events)
                             .map_err(RunError::Work)?;
                     }
@@ -136,7 +145,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 n = guard.mesh().vertices().len();
                 taken.resize(n, false);
             }
-        })();
+        }))
+        .unwrap_or_else(|payload| Err(RunError::Panic(panic_message(payload))));
         done.store(true, Ordering::Release);
         barrier.wait();
         result

@@ -278,3 +278,103 @@ fn work_errors_stop_the_run() {
         assert!(matches!(e, RunError::Work("boom")));
     }
 }
+
+/// A panic in a tent (a worker), in a record or in an event ends the run with
+/// `RunError::Panic` and its message, in both modes and for 1 and 3 threads, instead of leaving
+/// the other threads waiting. Each run has 20 s before the test calls it a hang.
+#[test]
+fn panics_end_the_run_with_their_message() {
+    #[derive(Clone, Copy, Debug)]
+    enum Where {
+        Tent,
+        Record,
+        Event,
+    }
+    struct Panicking<'m> {
+        pitcher: Pitcher,
+        at: Where,
+        calls: AtomicUsize,
+        fired: AtomicBool,
+        _mesh: PhantomData<&'m ()>,
+    }
+    impl<'a, 'm: 'a> Work<'a> for Panicking<'m> {
+        type State = Fixed<'m>;
+        type Scratch = ();
+        type Outcome = ();
+        type Error = &'static str;
+        fn tent(
+            &self,
+            state: &Fixed<'m>,
+            _: &mut (),
+            v: VertexId,
+            _: &Events<'a, Fixed<'m>>,
+        ) -> Result<(f64, ()), &'static str> {
+            let call = self.calls.fetch_add(1, Ordering::SeqCst);
+            if call == 40 && matches!(self.at, Where::Tent) {
+                panic!("tent {call} panics");
+            }
+            let tent = self
+                .pitcher
+                .pitch(state.mesh, state.front, v)
+                .ok_or("not ready")?;
+            Ok((tent.t_new, ()))
+        }
+        fn record(
+            &'a self,
+            _: &Fixed<'m>,
+            _: VertexId,
+            (): (),
+            events: &Events<'a, Fixed<'m>>,
+        ) -> Result<(), &'static str> {
+            if self.calls.load(Ordering::SeqCst) > 40 && !self.fired.swap(true, Ordering::SeqCst) {
+                match self.at {
+                    Where::Record => panic!("record panics"),
+                    Where::Event => events.push(Box::new(|_: &mut Fixed<'m>| -> Changed {
+                        panic!("event panics")
+                    })),
+                    Where::Tent => {}
+                }
+            }
+            Ok(())
+        }
+    }
+    let mesh = perturbed(8);
+    for at in [Where::Tent, Where::Record, Where::Event] {
+        for (deterministic, threads) in [(false, 1), (false, 3), (true, 1), (true, 3)] {
+            let (send, receive) = std::sync::mpsc::channel();
+            let mesh = mesh.clone();
+            std::thread::spawn(move || {
+                let front = Front::flat(mesh.vertices().len(), 0.0);
+                let work = Panicking {
+                    pitcher: Pitcher::new(&mesh, C, SAFETY, 1.0).unwrap(),
+                    at,
+                    calls: AtomicUsize::new(0),
+                    fired: AtomicBool::new(false),
+                    _mesh: PhantomData,
+                };
+                let mut state = Fixed {
+                    mesh: &mesh,
+                    front: &front,
+                };
+                let options = Options {
+                    threads,
+                    deterministic,
+                };
+                let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    sdg_scheduler::run(&mut state, 1.0, &work, vec![(); threads], &options)
+                        .map(drop)
+                        .map_err(|e| e.to_string())
+                }));
+                send.send(result.map_err(|_| ())).unwrap();
+            });
+            let case = format!("{at:?}, deterministic {deterministic}, {threads} threads");
+            let result = receive
+                .recv_timeout(Duration::from_secs(20))
+                .unwrap_or_else(|_| panic!("{case}: the run hangs"));
+            let message = result
+                .unwrap_or_else(|()| panic!("{case}: the panic escaped the run"))
+                .expect_err(&case);
+            assert!(message.contains("panics"), "{case}: {message}");
+        }
+    }
+}
