@@ -1,6 +1,7 @@
 //! `crack_tips.png`: the extension and the speed of each crack tip over time, from
 //! `crack_tips.csv`; under a `[loading]`, in the seed's normalized units against the LEFM tip
-//! (as seed figures 2.6-2.8). `sdg plot` draws several runs' tips together.
+//! (as seed figures 2.6-2.8). `sdg plot` draws several runs' tips together. Runs with
+//! `[fracture]` draw their branches' tips as `tip_speed.png`, against the Rayleigh speed.
 
 use std::path::{Path, PathBuf};
 
@@ -44,12 +45,16 @@ pub fn crack_charts(
     for &(label, csv) in runs {
         tip_series((label, "crack_tips.csv"), csv, normalization, &mut tips)?;
     }
-    render(&tips, normalization)
+    render(&tips, normalization, None)
 }
 
 /// The extension chart above the speed chart of `tips`, with the LEFM reference under a
-/// `normalization`.
-fn render(tips: &[TipSeries], normalization: Option<Normalization>) -> Result<Image, EngineError> {
+/// `normalization`, and the Rayleigh speed `c_r` (m/s) as a line when given.
+fn render(
+    tips: &[TipSeries],
+    normalization: Option<Normalization>,
+    c_r: Option<f64>,
+) -> Result<Image, EngineError> {
     let (time, extension, speed) = match normalization {
         Some(_) => (
             "normalized time t' = (t - t0) / tau'",
@@ -64,6 +69,16 @@ fn render(tips: &[TipSeries], normalization: Option<Normalization>) -> Result<Im
         position = position.series(&tip.name, &tip.extension, LineStyle::Solid);
         velocity = velocity.series(&tip.name, &tip.speed, LineStyle::Solid);
     }
+    if let Some(c_r) = c_r {
+        let times = tips.iter().flat_map(|t| t.speed.iter().map(|p| p.0));
+        let (first, last) = times.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+        if first < last {
+            let line = [(first, c_r), (last, c_r)];
+            velocity = velocity.series("Rayleigh speed c_R", &line, LineStyle::Dashed);
+        }
+    }
     if let Some(n) = normalization {
         let reference = lefm::tip_history((n.end - n.arrival) / n.tau, 400);
         let a: Vec<(f64, f64)> = reference.iter().map(|r| (r.0, r.1)).collect();
@@ -75,8 +90,9 @@ fn render(tips: &[TipSeries], normalization: Option<Normalization>) -> Result<Im
     Ok(position.render(half)?.above(velocity.render(half)?))
 }
 
-/// Appends the series of the `crack_tips.csv` text `csv` to `tips`, one per interface tag,
-/// named `label, tag`; errors name the `source` file.
+/// Appends the series of the `crack_tips.csv` text `csv` to `tips`, one per interface tag (or
+/// per branch, for runs with `[fracture]`), named `label, tag` (`label, branch N`); errors name
+/// the `source` file.
 fn tip_series(
     (label, source): (&str, &str),
     csv: &str,
@@ -92,12 +108,16 @@ fn tip_series(
             .position(|h| *h == name)
             .ok_or_else(|| EngineError::Input(format!("{source}: no column {name}")))
     };
-    let (t, tag, a, v) = (
-        column("t_s")?,
-        column("interface")?,
-        column("extension_m")?,
-        column("speed_m_s")?,
-    );
+    let (tag, prefix) = match column("interface") {
+        Ok(i) => (i, ""),
+        Err(_) => (
+            column("branch").map_err(|_| {
+                EngineError::Input(format!("{source}: no column interface or branch"))
+            })?,
+            "branch ",
+        ),
+    };
+    let (t, a, v) = (column("t_s")?, column("extension_m")?, column("speed_m_s")?);
     // x = (t - shift) * per_time, extension * per_length, speed * per_speed.
     let (shift, per_time, per_length, per_speed) = match normalization {
         Some(n) => (n.arrival, 1.0 / n.tau, 1.0 / (n.tau * n.c_r), 1.0 / n.c_r),
@@ -110,7 +130,7 @@ fn tip_series(
                 .and_then(|s| s.parse::<f64>().ok())
                 .unwrap_or(f64::NAN)
         };
-        let name = format!("{label}, {}", f.get(tag).copied().unwrap_or(""));
+        let name = format!("{label}, {prefix}{}", f.get(tag).copied().unwrap_or(""));
         if tips[first..].last().is_none_or(|l| l.name != name) {
             tips.push(TipSeries {
                 name,
@@ -136,6 +156,19 @@ pub fn write_crack_png(dir: &Path, csv: &str, normalization: Option<Normalizatio
     }
 }
 
+/// Draws the branch tips of a run with `[fracture]` (`crack_tips.csv`'s text `csv`) as
+/// `dir/tip_speed.png`, the speed against the Rayleigh speed `c_r` (m/s); a picture that cannot
+/// be drawn is logged as a warning.
+pub fn write_tip_speed_png(dir: &Path, csv: &str, c_r: f64) {
+    let path = dir.join("tip_speed.png");
+    let mut tips = Vec::new();
+    let charts = tip_series(("sdg", "crack_tips.csv"), csv, None, &mut tips)
+        .and_then(|()| render(&tips, None, Some(c_r)));
+    if let Err(e) = charts.and_then(|image| image.write_png(&path)) {
+        tracing::warn!("{}: {e}", path.display());
+    }
+}
+
 /// `sdg plot` of one or more runs' `crack_tips.csv` files: their tips drawn together, each run
 /// named by its folder, into `out`. Errors name the file that cannot be read or lacks a column.
 pub fn plot_tips(files: &[PathBuf], out: &Path) -> Result<(), EngineError> {
@@ -150,7 +183,7 @@ pub fn plot_tips(files: &[PathBuf], out: &Path) -> Result<(), EngineError> {
             .map_or_else(|| source.clone(), |n| n.to_string_lossy().into_owned());
         tip_series((&label, &source), &text, None, &mut tips)?;
     }
-    render(&tips, None)?.write_png(out)
+    render(&tips, None, None)?.write_png(out)
 }
 
 #[cfg(test)]

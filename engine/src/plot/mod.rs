@@ -22,7 +22,9 @@ use crate::output::write_atomic;
 pub use command::{
     FIELD_PNG_SIZE, HISTORY_PNG_SIZE, PlotRequest, history_chart, plot_vtu, write_history_png,
 };
-pub use crack::{CRACK_PNG_SIZE, Normalization, crack_charts, plot_tips, write_crack_png};
+pub use crack::{
+    CRACK_PNG_SIZE, Normalization, crack_charts, plot_tips, write_crack_png, write_tip_speed_png,
+};
 pub use field::{FieldLayout, FieldPlot, Values, viridis};
 pub use line::{LineChart, LineStyle};
 pub use vtu::VtuGrid;

@@ -651,7 +651,14 @@ fn run_job(
             / book.nonlinear_patches.max(1) as f64,
         newton_iterations_max: book.newton_max,
     };
-    let (crack_csv, crack) = if problem.interfaces.any_cohesive() {
+    let c_r = problem.material.c_r();
+    let (crack_csv, crack) = if problem.fracture.is_some() {
+        // Per branch: the crossings of one tag would mix the tips of its branches.
+        let crossings: Vec<Crossing> = book.crossings.iter().map(|&(_, c)| c).collect();
+        let branches = propagation::branch_tips(&book.fracture_events, &crossings);
+        let (csv, summary) = propagation::branch_tips_csv(&branches, c_r);
+        (Some(csv), Some(summary))
+    } else if problem.interfaces.any_cohesive() {
         let names = mesh.tag_names();
         let crossings: Vec<_> = book
             .crossings
@@ -661,7 +668,7 @@ fn run_job(
                 (name.to_string(), *c)
             })
             .collect();
-        let (csv, summary) = crack_output::write(&crossings, problem.material.c_r());
+        let (csv, summary) = crack_output::write(&crossings, c_r);
         (Some(csv), Some(summary))
     } else {
         (None, None)
@@ -721,7 +728,9 @@ fn run_job(
     solve.write_probes(&dir, &mut book)?;
     if let Some(csv) = crack_csv {
         write_atomic(&dir, "crack_tips.csv", csv.as_bytes())?;
-        if config.output.png {
+        if config.output.png && problem.fracture.is_some() {
+            plot::write_tip_speed_png(&dir, &csv, c_r);
+        } else if config.output.png {
             let normalization = problem.loading.map(|l| plot::Normalization {
                 tau: l.scales.tau,
                 c_r: l.scales.c_r,
