@@ -237,16 +237,19 @@ impl Fracture {
         stress: impl Fn(TriangleId) -> [f64; 3],
     ) -> Option<[f64; 2]> {
         let n = self.nucleation.as_ref()?;
+        // The cheap checks before the star's stresses.
+        if on_boundary(mesh, v)
+            || vertex_edges(mesh, v).any(|e| self.is_crack(mesh.edges()[e as usize].tag))
+        {
+            return None;
+        }
         let star = mesh.vertex_triangles(v);
         let (th, strongest) = star
             .iter()
             .map(|&t| max_effective_traction(stress(t), self.beta))
             .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.total_cmp(&a.0)))?;
         // No defect is weaker than the truncation point.
-        if strongest <= n.strengths.lower
-            || on_boundary(mesh, v)
-            || vertex_edges(mesh, v).any(|e| self.is_crack(mesh.edges()[e as usize].tag))
-        {
+        if strongest <= n.strengths.lower {
             return None;
         }
         let area = star.iter().map(|&t| mesh.area(t)).sum::<f64>() / 3.0;
