@@ -1,6 +1,7 @@
 //! Crack propagation (`[fracture]`, seed 4.3.2) on `configs/crack_growth.toml`: a notch under
 //! symmetric mode-I waves grows straight ahead on new damage edges that debond behind it, the
-//! energy balance holds, and the crack pattern is bitwise the same for any thread count.
+//! energy balance holds, and the crack pattern is bitwise the same for any thread count; and
+//! the load of the seed's branching plate, `configs/crack_branching.toml`.
 
 mod common;
 
@@ -61,6 +62,7 @@ fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
     assert!(debonded >= 4, "{new:?}");
     assert!(summary.energy.fracture_energy > 0.0);
     assert!(dir.path().join("crack_path.png").is_file());
+    assert!(dir.path().join("crack_zoom.png").is_file());
     // One branch: its tip (where the damage reaches 1) runs along y = 1 mm behind the newest
     // crack edge, slower than the dilatational wave. (On these 62.5 um p = 1 edges its fitted
     // speed reaches 1.08 c_R, over 13 states: the config shows the machinery, not converged
@@ -172,4 +174,54 @@ fn the_seed_changes_the_nucleation_sites() {
             .collect::<Vec<_>>()
     };
     assert_ne!(sites(a.path()), sites(b.path()));
+}
+
+/// `configs/crack_branching.toml` loads the plate as the seed does (4.5): waves of `s = 10 MPa`
+/// (incoming characteristic `w = 2 s`) ramped by `3 r^2 - 2 r^3` over 2 us through the top and
+/// the bottom, meeting on the crack plane at `t0 = 5 mm / c_d`, the seed's `t = 0`. With rollers
+/// on the sides instead of transmitting ones the waves are exactly 1D until then, and the work
+/// the load has done is `2 W s^2 / Z (13/35 tau0 + t0 - tau0)` (13/35 = the integral of the
+/// squared ramp over its time). Nothing cracks before the waves meet.
+#[test]
+fn the_branching_plate_is_loaded_as_the_seed_says() {
+    let (c_d, z) = common::pmma_p_wave();
+    let (width, s, tau0) = (16e-3, 10e6, 2e-6);
+    let t0 = 5e-3 / c_d;
+    let end = format!("time.end={t0:e}");
+    let problem = shipped(
+        "crack_branching.toml",
+        &[
+            &end,
+            "adapt.enabled=false",
+            "boundary.0.kind=\"roller\"",
+            "output.png=false",
+        ],
+    );
+    let (summary, dir) = solve(&problem, 2, true);
+    let work = 2.0 * width * s * s / z * (13.0 / 35.0 * tau0 + t0 - tau0);
+    let energy = &summary.energy;
+    assert!(
+        (energy.boundary_work / work - 1.0).abs() < 1e-5,
+        "{} J/m against {work} J/m",
+        energy.boundary_work
+    );
+    // A travelling wave carries as much kinetic as strain energy.
+    assert!((energy.final_kinetic / energy.final_strain - 1.0).abs() < 1e-3);
+    assert!(energy.balance_residual_rel.abs() < 1e-12, "{energy:?}");
+    let fracture = summary.fracture.as_ref().unwrap();
+    assert_eq!(
+        (
+            fracture.extensions,
+            fracture.nucleations,
+            fracture.active_tips
+        ),
+        (0, 0, 1),
+        "{fracture:?}"
+    );
+    // The notch is the only crack, debonded from the start.
+    let cracks = csv_columns(&dir.path().join("cracks.csv"), &["x1_m", "damage"]);
+    assert!(
+        cracks.iter().all(|c| c[0] <= 2e-3 && c[1] == 1.0),
+        "{cracks:?}"
+    );
 }

@@ -47,6 +47,7 @@ pub struct FieldPlot<'a> {
     time: Option<f64>,
     edges: bool,
     segments: &'a [[[f64; 2]; 2]],
+    window: Option<[f64; 4]>,
 }
 
 /// Line colour of the extra segments (interfaces, cracks): red, absent from viridis.
@@ -65,6 +66,7 @@ impl<'a> FieldPlot<'a> {
             time: None,
             edges: false,
             segments: &[],
+            window: None,
         }
     }
 
@@ -92,6 +94,13 @@ impl<'a> FieldPlot<'a> {
         self
     }
 
+    /// Draw only the part `[xmin, xmax, ymin, ymax]` (m) of the triangles' bounding box
+    /// (`None`: all of it); whatever lies outside is clipped.
+    pub fn window(mut self, window: Option<[f64; 4]>) -> Self {
+        self.window = window;
+        self
+    }
+
     /// The full title: the given one with `t = ... us` appended when the time is known.
     fn full_title(&self) -> String {
         match (self.time, self.title.is_empty()) {
@@ -102,7 +111,7 @@ impl<'a> FieldPlot<'a> {
     }
 
     /// Checks indices and lengths; returns the bounding box `[xmin, xmax, ymin, ymax]` (m) of
-    /// the triangles with finite corners.
+    /// the triangles with finite corners, within the window if one is set.
     fn bounds(&self) -> Result<[f64; 4], EngineError> {
         let n = self.points.len();
         if let Some(t) = self
@@ -132,7 +141,20 @@ impl<'a> FieldPlot<'a> {
             finite_range(corners().map(|p| p[0])),
             finite_range(corners().map(|p| p[1])),
         ) {
-            (Some((x0, x1)), Some((y0, y1))) if x1 > x0 && y1 > y0 => Ok([x0, x1, y0, y1]),
+            (Some((x0, x1)), Some((y0, y1))) if x1 > x0 && y1 > y0 => {
+                let Some([wx0, wx1, wy0, wy1]) = self.window else {
+                    return Ok([x0, x1, y0, y1]);
+                };
+                let view = [x0.max(wx0), x1.min(wx1), y0.max(wy0), y1.min(wy1)];
+                if view[1] > view[0] && view[3] > view[2] {
+                    Ok(view)
+                } else {
+                    Err(EngineError::Plot(format!(
+                        "the window {:?} m misses the triangles",
+                        [wx0, wx1, wy0, wy1]
+                    )))
+                }
+            }
             (Some(_), Some(_)) => Err(EngineError::Plot(
                 "the triangles have no area to draw (all on a line or a point)".into(),
             )),
@@ -545,6 +567,36 @@ mod tests {
         let [bx0, by0, bx1, by1] = lay.colorbar;
         let cx = (bx0 + bx1) / 2;
         assert!(luminance(image.pixel(cx, by0 + 2)) > luminance(image.pixel(cx, by1 - 3)) + 100.0);
+    }
+
+    #[test]
+    fn a_window_shows_its_part_of_the_field() {
+        // x from 0 to 10 mm; the window is the right half's lower part, 5 x 2.5 mm.
+        let (points, triangles) = grid(20, 0.01);
+        let values: Vec<f64> = points.iter().map(|p| p[0]).collect();
+        let whole = FieldPlot::new(&points, &triangles, Values::Points(&values));
+        let part = whole.clone().window(Some([0.005, 0.02, -1.0, 0.0025]));
+        let lay = part.layout((800, 600)).unwrap();
+        let [x0, y0, x1, y1] = lay.field;
+        assert_eq!(
+            x1 - x0,
+            2 * (y1 - y0),
+            "the window's aspect ratio, clipped to the data"
+        );
+        // The window's left edge is the field's middle: as light as the whole picture's middle.
+        let image = part.render((800, 600)).unwrap();
+        let [wx0, wy0, wx1, wy1] = whole.layout((800, 600)).unwrap().field;
+        let middle = whole.render((800, 600)).unwrap();
+        let left = luminance(image.pixel(x0 + 1, (y0 + y1) / 2));
+        let centre = luminance(middle.pixel((wx0 + wx1) / 2, (wy0 + wy1) / 2));
+        assert!((left - centre).abs() < 15.0, "{left} {centre}");
+        assert!(
+            whole
+                .window(Some([0.02, 0.03, 0.0, 0.01]))
+                .layout((800, 600))
+                .is_err(),
+            "a window beside the triangles"
+        );
     }
 
     #[test]

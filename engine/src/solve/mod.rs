@@ -751,7 +751,7 @@ fn run_job(
                 }
             });
         if config.output.png {
-            propagation::write_crack_path_png(&dir, mesh, &cracks, front.min_time());
+            propagation::write_crack_path_png(&dir, mesh, &cracks, fracture.tag, front.min_time());
         }
         let csv = propagation::cracks_csv(mesh, &cracks);
         write_atomic(&dir, "cracks.csv", csv.as_bytes())?;
