@@ -195,6 +195,7 @@ fn the_branching_plate_is_loaded_as_the_seed_says() {
             "adapt.enabled=false",
             "boundary.0.kind=\"roller\"",
             "output.png=false",
+            "output.snapshot_times=[]",
         ],
     );
     let (summary, dir) = solve(&problem, 2, true);

@@ -353,8 +353,8 @@ pub(super) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge]) -> String {
 
 /// `crack_path.png`: the final mesh's domain with the crack edges in red and the triangles
 /// beside them coloured by their damage (the largest of a triangle's crack edges); and
-/// `crack_zoom.png`: the same around the edges the run added (`grown` tag), with the mesh's
-/// edges, when there are any.
+/// `crack_zoom.png`: the same around the edges the run added (`grown` tag), when there are
+/// any, with the mesh's edges unless they would hide the triangles.
 pub(super) fn write_crack_path_png(
     dir: &std::path::Path,
     mesh: &Mesh,
@@ -386,8 +386,14 @@ pub(super) fn write_crack_path_png(
         .iter()
         .filter(|c| mesh.edges()[c.edge as usize].tag == Some(grown))
         .flat_map(|c| c.ends);
-    let zoom =
-        zoom_window(new_ends, mesh.vertices()).map(|w| plot.clone().window(Some(w)).edges(true));
+    let zoom = zoom_window(new_ends, mesh.vertices()).map(|w| {
+        // The mesh's edges only where they leave the triangles visible.
+        let inside = |p: &&[f64; 2]| (w[0]..=w[1]).contains(&p[0]) && (w[2]..=w[3]).contains(&p[1]);
+        let shown = mesh.vertices().iter().filter(inside).count();
+        plot.clone()
+            .window(Some(w))
+            .edges(shown <= ZOOM_MAX_EDGED_VERTICES)
+    });
     for (name, plot) in [("crack_path.png", Some(plot)), ("crack_zoom.png", zoom)] {
         let Some(plot) = plot else { continue };
         let path = dir.join(name);
@@ -423,6 +429,9 @@ fn zoom_window(points: impl Iterator<Item = [f64; 2]>, domain: &[[f64; 2]]) -> O
         cy + half_height,
     ])
 }
+
+/// Most mesh vertices in `crack_zoom.png`'s window for which it draws the mesh's edges.
+const ZOOM_MAX_EDGED_VERTICES: usize = 1500;
 
 /// Size of `crack_path.png`, pixels.
 const CRACK_PATH_PNG_SIZE: (u32, u32) = (1200, 900);
