@@ -11,8 +11,8 @@
 //! - `speed`: the least-squares slope of the extension against time over the tip states whose
 //!   extension lies within [`SPEED_EDGES`] lengths of the edge the tip crossed of this state's
 //!   (near the origin and the last state, the window of that width that stays inside the
-//!   states), m/s. The crack advances face by face, so over a window of less than a few edges the slope
-//!   measures those steps, not its speed (on `configs/damage_mode1.toml`, fits over nine
+//!   states), m/s. The crack advances face by face, so over a window of less than a few edges
+//!   the slope measures those steps, not its speed (on `configs/damage_mode1.toml`, fits over nine
 //!   successive states, about 10 ns, scattered up to 1.13 c_R about a mean of 0.9 c_R); with
 //!   two edges on each side, even a tip that crosses each edge at once and then waits is
 //!   measured to 8%;

@@ -408,26 +408,28 @@ pub(super) fn write_crack_path_png(
 /// their bounding box, 1.2 times as large (at least 1% of the domain's diagonal) and with the
 /// picture's aspect ratio; `None` for no points.
 fn zoom_window(points: impl Iterator<Item = [f64; 2]>, domain: &[[f64; 2]]) -> Option<[f64; 4]> {
-    let bounds = |ps: &mut dyn Iterator<Item = [f64; 2]>| {
-        ps.fold(None, |b: Option<[f64; 4]>, p| {
-            let [x0, x1, y0, y1] = b.unwrap_or([p[0], p[0], p[1], p[1]]);
-            Some([x0.min(p[0]), x1.max(p[0]), y0.min(p[1]), y1.max(p[1])])
-        })
-    };
-    let [x0, x1, y0, y1] = bounds(&mut points.into_iter())?;
-    let [dx0, dx1, dy0, dy1] = bounds(&mut domain.iter().copied())?;
+    let [x0, x1, y0, y1] = bounding_box(points)?;
+    let [dx0, dx1, dy0, dy1] = bounding_box(domain.iter().copied())?;
     let (w, h) = CRACK_PATH_PNG_SIZE;
     let aspect = f64::from(h) / f64::from(w);
     let least = 0.01 * (dx1 - dx0).hypot(dy1 - dy0);
     let half_width = 0.6 * (x1 - x0).max((y1 - y0) / aspect).max(least);
-    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
     let half_height = aspect * half_width;
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
     Some([
         cx - half_width,
         cx + half_width,
         cy - half_height,
         cy + half_height,
     ])
+}
+
+/// `[xmin, xmax, ymin, ymax]` of `points`; `None` for none.
+fn bounding_box(points: impl Iterator<Item = [f64; 2]>) -> Option<[f64; 4]> {
+    points.fold(None, |b, p| {
+        let [x0, x1, y0, y1] = b.unwrap_or([p[0], p[0], p[1], p[1]]);
+        Some([x0.min(p[0]), x1.max(p[0]), y0.min(p[1]), y1.max(p[1])])
+    })
 }
 
 /// Most mesh vertices in `crack_zoom.png`'s window for which it draws the mesh's edges.
