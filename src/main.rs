@@ -1,7 +1,8 @@
 //! `sdg`: adaptive spacetime discontinuous Galerkin simulation of dynamic fracture.
 //!
-//! Exit codes: 0 success, 2 invalid arguments, configuration or mesh, or an estimated cost
-//! above `[limits]`, 1 runtime failure (a panic included).
+//! Exit codes: 0 success; 2 invalid arguments, configuration, mesh or checkpoint, or an
+//! estimated cost above `[limits]`; 1 runtime failure (a panic included); 3 checkpointed and
+//! stopped by SIGTERM, SIGINT or the wall-time limit: resubmit with `--restart`.
 
 use std::io::IsTerminal;
 use std::num::NonZeroUsize;
@@ -10,7 +11,9 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 
-use sdg_engine::{EngineError, LoadedConfig, Problem, RunOptions};
+use std::sync::Arc;
+
+use sdg_engine::{Control, EngineError, LoadedConfig, Problem, RunOptions};
 
 /// Adaptive spacetime DG simulation of dynamic fracture on tent-pitched meshes.
 #[derive(Debug, Parser)]
@@ -23,7 +26,7 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Solve the configured problem to the end time.
-    Run(JobArgs),
+    Run(RunArgs),
     /// Pitch tents to the end time without solving; write the summary and spacetime mesh.
     Mesh(JobArgs),
     /// Check a configuration and its mesh, print the estimated cost of the run, then exit.
@@ -81,6 +84,20 @@ struct JobArgs {
     force: bool,
 }
 
+// `run`: a job that can checkpoint, stop and restart.
+#[derive(Debug, Args)]
+struct RunArgs {
+    #[command(flatten)]
+    job: JobArgs,
+    /// Go on from the checkpoint FILE, or the newest valid one in the folder (the
+    /// configuration and overrides must be those of the run that wrote it).
+    #[arg(long, value_name = "PATH")]
+    restart: Option<PathBuf>,
+    /// Checkpoint and stop with exit code 3 after this much wall time, s.
+    #[arg(long, value_name = "SECONDS")]
+    max_wall_time: Option<f64>,
+}
+
 #[derive(Debug, Args)]
 struct PlotArgs {
     /// A VTU file (ASCII, base64 binary or appended, uncompressed or zlib); or one or more
@@ -111,7 +128,7 @@ enum LogFormat {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let (level, format) = match &cli.command {
-        Command::Run(job) | Command::Mesh(job) => (job.log_level, job.log_format),
+        Command::Run(RunArgs { job, .. }) | Command::Mesh(job) => (job.log_level, job.log_format),
         // No log options: warnings as text, should there be any.
         Command::Validate(_) | Command::Plot(_) => (tracing::Level::WARN, LogFormat::Text),
     };
@@ -134,6 +151,10 @@ fn main() -> ExitCode {
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e @ EngineError::Checkpointed { .. })) => {
+            eprintln!("stopped: {e}");
+            ExitCode::from(e.exit_code())
+        }
         Ok(Err(e)) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code())
@@ -163,7 +184,52 @@ fn options(job: &JobArgs) -> RunOptions {
         deterministic: job.deterministic,
         progress: !job.config.quiet,
         force: job.force,
+        ..RunOptions::default()
     }
+}
+
+/// Turns signals into requests to the run: SIGTERM and SIGINT checkpoint and stop (exit 3),
+/// SIGUSR1 checkpoints and goes on. A second SIGTERM or SIGINT ends the process at once with
+/// code 130, without waiting for the checkpoint (the one before it is left whole).
+fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError> {
+    use tokio::signal::unix::{SignalKind, signal};
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_io()
+        .build()
+        .map_err(|e| EngineError::Runtime(format!("signal handling: {e}")))?;
+    let listen = |kind| {
+        let _guard = runtime.enter();
+        signal(kind).map_err(|e| EngineError::Runtime(format!("signal handling: {e}")))
+    };
+    let (mut term, mut int, mut usr1) = (
+        listen(SignalKind::terminate())?,
+        listen(SignalKind::interrupt())?,
+        listen(SignalKind::user_defined1())?,
+    );
+    std::thread::spawn(move || {
+        runtime.block_on(async move {
+            let mut stopping = false;
+            loop {
+                let name = tokio::select! {
+                    _ = term.recv() => "SIGTERM",
+                    _ = int.recv() => "SIGINT",
+                    _ = usr1.recv() => {
+                        tracing::info!("SIGUSR1: a checkpoint at the next quiescent point");
+                        control.checkpoint();
+                        continue;
+                    }
+                };
+                if stopping {
+                    eprintln!("{name} again: exiting without waiting for the checkpoint");
+                    std::process::exit(130);
+                }
+                stopping = true;
+                eprintln!("{name}: writing a checkpoint, then stopping (again to exit at once)");
+                control.stop(format!("{name} received"));
+            }
+        });
+    });
+    Ok(())
 }
 
 fn validate(args: &ValidateArgs) -> Result<(), EngineError> {
@@ -211,8 +277,23 @@ fn mesh(job: &JobArgs) -> Result<(), EngineError> {
     Ok(())
 }
 
-fn run(job: &JobArgs) -> Result<(), EngineError> {
-    let (summary, dir) = sdg_engine::solve_job(&setup(&job.config)?, &options(job))?;
+fn run(args: &RunArgs) -> Result<(), EngineError> {
+    let job = &args.job;
+    let problem = setup(&job.config)?;
+    if let Some(s) = args.max_wall_time.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(EngineError::Input(format!(
+            "--max-wall-time: must be a positive number of seconds, got {s}"
+        )));
+    }
+    let control = Arc::new(Control::default());
+    listen_to_signals(control.clone())?;
+    let options = RunOptions {
+        restart: args.restart.clone(),
+        max_wall_time_s: args.max_wall_time,
+        control: Some(control),
+        ..options(job)
+    };
+    let (summary, dir) = sdg_engine::solve_job(&problem, &options)?;
     if !job.config.quiet {
         let error = summary.error.map_or(String::new(), |e| {
             format!(

@@ -1,7 +1,8 @@
 //! The fuzz corpus (`tests/data/fuzz/config/`, made by `tests/data/fuzz/mutate.py`): shipped
 //! configs with one mutation each, unit slips among them. Every input ends well within 60 s with
 //! exit 0, 1 or 2 and a message, never a panic: bad values are rejected at load time, runs that
-//! cannot finish are refused by their estimate, and the rest stop at `limits.max_wall_time_s`.
+//! cannot finish are refused by their estimate, and the rest stop at `limits.max_wall_time_s`
+//! (with a checkpoint: exit 3).
 
 mod common;
 
@@ -25,7 +26,7 @@ fn every_corpus_input_ends_quickly_with_a_reason() {
     inputs.sort();
     assert!(inputs.len() >= 40, "{} inputs", inputs.len());
     let out = tempfile::tempdir().unwrap();
-    let mut codes = [0usize; 3];
+    let mut codes = [0usize; 4];
     for input in &inputs {
         let start = Instant::now();
         let mut child = Command::new(env!("CARGO_BIN_EXE_sdg"))
@@ -58,12 +59,13 @@ fn every_corpus_input_ends_quickly_with_a_reason() {
         match code {
             0 => {}
             1 | 2 => assert!(err.starts_with("error: "), "{name}: exit {code}: {err}"),
+            3 => assert!(err.contains("stopped: "), "{name}: exit 3: {err}"),
             _ => panic!("{name}: exit {code}: {err}"),
         }
         codes[code as usize] += 1;
     }
     eprintln!(
-        "exit 0: {}, exit 1: {}, exit 2: {}",
-        codes[0], codes[1], codes[2]
+        "exit 0: {}, exit 1: {}, exit 2: {}, exit 3: {}",
+        codes[0], codes[1], codes[2], codes[3]
     );
 }

@@ -308,6 +308,7 @@ fn splitting_front_edges_off_their_midpoints_keeps_causality_energy_and_momentum
         deterministic: true,
         progress: false,
         force: false,
+        ..RunOptions::default()
     };
     let seen = Arc::new(Mutex::new(None));
     let system = problem.system.clone();

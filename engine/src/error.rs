@@ -32,15 +32,31 @@ pub enum EngineError {
     /// A picture could not be drawn (data that cannot be plotted, an image too small).
     #[error("plot: {0}")]
     Plot(String),
+    /// The run stopped before the end time after writing a checkpoint (a signal, the wall-time
+    /// limit): `sdg run --restart` goes on from it.
+    #[error(
+        "{reason}: stopped at t = {time:e} s with checkpoint {}; resume with --restart",
+        checkpoint.display()
+    )]
+    Checkpointed {
+        /// Why the run stopped.
+        reason: String,
+        /// The front's least time, s.
+        time: f64,
+        /// The checkpoint file.
+        checkpoint: PathBuf,
+    },
 }
 
 impl EngineError {
-    /// Process exit code: 2 for invalid input (config, mesh, input file), 1 for a runtime
-    /// failure.
+    /// Process exit code: 2 for invalid input (config, mesh, input file, a checkpoint that
+    /// cannot be restarted from), 1 for a runtime failure, 3 for a run checkpointed and stopped
+    /// ("resubmit me").
     pub fn exit_code(&self) -> u8 {
         match self {
             Self::Config(_) | Self::Mesh(_) | Self::Input(_) => 2,
             Self::Io { .. } | Self::Runtime(_) | Self::Plot(_) => 1,
+            Self::Checkpointed { .. } => 3,
         }
     }
 

@@ -50,7 +50,7 @@ pub struct Nucleation {
 
 /// A crack tip: the crack arrives at its vertex travelling in `direction` (radians); `branch`
 /// names the crack branch it ends.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Tip {
     pub direction: f64,
     pub branch: u32,

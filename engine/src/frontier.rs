@@ -28,7 +28,7 @@ use sdg_solver::face::FaceState;
 use crate::fracture::Tip;
 
 /// The space mesh, its front, the elements under the front and the pitcher.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Frontier {
     pub(crate) mesh: Mesh,
     pub(crate) front: Front,

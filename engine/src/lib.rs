@@ -22,7 +22,7 @@ pub use error::EngineError;
 pub use estimate::Estimate;
 pub use problem::Problem;
 pub use run::{MeshSummary, RunOptions, mesh_job, pitch_to_end};
+pub use solve::{Control, RunSummary, estimate_job, solve_job};
 #[doc(hidden)]
 pub use solve::{Live, solve_job_with};
-pub use solve::{RunSummary, estimate_job, solve_job};
 pub use spacetime::SpacetimeMesh;

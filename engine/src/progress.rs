@@ -19,6 +19,13 @@ pub struct Progress {
     start: Instant,
 }
 
+/// No bar: what a restored run has until [`Progress::new`] replaces it.
+impl Default for Progress {
+    fn default() -> Self {
+        Self::new(false, 1.0)
+    }
+}
+
 impl Progress {
     /// A bar for a run of `total` vertex-seconds (vertices times end time), shown when `enabled`
     /// and stderr is a terminal.

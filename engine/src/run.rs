@@ -29,6 +29,13 @@ pub struct RunOptions {
     pub progress: bool,
     /// Run even when the estimate exceeds `[limits]`.
     pub force: bool,
+    /// Go on from this checkpoint, or from the newest valid one in this folder.
+    pub restart: Option<PathBuf>,
+    /// Checkpoint and stop (exit code 3) after this much wall time, s.
+    pub max_wall_time_s: Option<f64>,
+    /// Where requests to checkpoint or stop come from (the signal listener); a run makes its
+    /// own when `None`.
+    pub control: Option<std::sync::Arc<crate::solve::Control>>,
 }
 
 impl RunOptions {

@@ -35,7 +35,7 @@ use crate::output::{CellType, Field, UnstructuredGrid, write_atomic};
 use crate::plot::{FIELD_PNG_SIZE, FieldPlot, Values};
 
 /// Field values at a point of a slice, physical SI units.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PointValues {
     /// Velocity, m/s.
     pub velocity: [f64; 3],
@@ -48,7 +48,7 @@ pub struct PointValues {
 }
 
 /// Values on a contact interface at a point of a slice, physical SI units.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InterfaceValues {
     /// Normal separation, m.
     pub delta: f64,
@@ -66,14 +66,14 @@ pub struct InterfaceValues {
 }
 
 /// A slice segment of an interface: ends `(x, y)`, metres, and the values there.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 struct Segment {
     xy: [[f64; 2]; 2],
     values: [InterfaceValues; 2],
 }
 
 /// A slice triangle: corners `(x, y)` counter-clockwise, metres, and the fields there.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 struct Triangle {
     xy: [[f64; 2]; 3],
     values: [PointValues; 3],
@@ -86,7 +86,7 @@ impl Triangle {
 }
 
 /// A snapshot not written yet.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 struct Pending {
     /// Index in the sorted list of times, for the file name.
     index: usize,
@@ -108,6 +108,7 @@ struct Pending {
 /// as `snapshot_NNNN.vtu` plus a ParaView collection `snapshots.pvd` once it is complete.
 ///
 /// Points are stored per triangle (no merging), which is exact for discontinuous fields.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct Snapshots {
     c_ref: f64,
     dir: PathBuf,
@@ -273,6 +274,11 @@ impl Snapshots {
                 }
             }
         }
+    }
+
+    /// Writes the snapshots still to come to `dir` (a run restored from a checkpoint).
+    pub fn set_dir(&mut self, dir: &std::path::Path) {
+        self.dir = dir.to_path_buf();
     }
 
     /// Writes every pending snapshot whose time is `<= front_min_time` (s), except that the

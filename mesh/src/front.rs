@@ -13,7 +13,7 @@ use crate::refine::Split;
 
 /// The front `t = tau(x)`: one time (seconds) per mesh vertex, interpolated linearly on each
 /// triangle. Every front triangle is a facet of the spacetime mesh built so far.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub struct Front {
     times: Vec<AtomicU64>,
 }

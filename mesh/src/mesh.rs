@@ -15,7 +15,7 @@ pub type EdgeId = u32;
 pub type TagId = u16;
 
 /// An edge of the triangulation.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Edge {
     /// End vertices, smaller id first.
     pub vertices: [VertexId; 2],
@@ -72,7 +72,7 @@ pub enum MeshError {
 /// Contract: every triangle is counter-clockwise with positive area, every edge belongs to one
 /// or two triangles, and every vertex belongs to at least one triangle. Each triangle also
 /// carries a refinement edge for newest-vertex bisection (see [`Mesh::bisect`]).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Mesh {
     pub(crate) vertices: Vec<Point>,
     pub(crate) triangles: Vec<[VertexId; 3]>,

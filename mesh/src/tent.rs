@@ -67,7 +67,7 @@ pub enum PitchError {
 }
 
 /// Computes tent heights on a fixed mesh under the rule in the module docs.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Pitcher {
     budgets: Vec<f64>,
     c_max: f64,

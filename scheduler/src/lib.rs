@@ -102,6 +102,14 @@ pub trait Work<'a>: Sync {
         outcome: Self::Outcome,
         events: &Events<'a, Self::State>,
     ) -> Result<(), Self::Error>;
+
+    /// True asks the run to pause: it returns at the next quiescent point (no tent in flight,
+    /// every queued event run) with [`Stats::paused`] set, and a later [`run`] on the same state
+    /// goes on from there. Deterministic mode pauses between rounds, so a paused and resumed
+    /// run is bitwise the same as an uninterrupted one. Polled before every tent or round.
+    fn pause(&self) -> bool {
+        false
+    }
 }
 
 /// An event: runs with exclusive access to the state (no tent in flight) and reports what it
@@ -166,6 +174,8 @@ pub struct Stats {
     pub rounds: u64,
     /// Topology events run.
     pub events: u64,
+    /// The run paused at [`Work::pause`]'s request before the front reached the end time.
+    pub paused: bool,
 }
 
 /// What stopped a run before the front reached the end time.

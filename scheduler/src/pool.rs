@@ -35,6 +35,8 @@ struct Shared<'s, 'a, W: Work<'a>> {
     /// Vertices below the end time.
     remaining: AtomicUsize,
     stop: AtomicBool,
+    /// A worker saw [`Work::pause`]: the others stop too, and the run returns paused.
+    paused: AtomicBool,
     error: Mutex<Option<W::Error>>,
     /// The message of the first panic of a worker.
     panic: Mutex<Option<String>>,
@@ -69,6 +71,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
         stealers: workers.iter().map(Worker::stealer).collect(),
         queued: AtomicUsize::new(0),
         stop: AtomicBool::new(false),
+        paused: AtomicBool::new(false),
         error: Mutex::new(None),
         panic: Mutex::new(None),
         sleep: Mutex::new(0),
@@ -112,7 +115,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
         shared.events_run.fetch_add(1, Ordering::Relaxed);
     }
     let remaining = shared.remaining.load(Ordering::SeqCst);
-    if remaining > 0 {
+    let paused = shared.paused.load(Ordering::SeqCst);
+    if remaining > 0 && !paused {
         return Err(RunError::Stalled { remaining });
     }
     let tents_per_thread: Vec<u64> = shared
@@ -125,6 +129,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
         tents_per_thread,
         rounds: 0,
         events: shared.events_run.load(Ordering::Relaxed),
+        paused: paused && remaining > 0,
     })
 }
 
@@ -136,6 +141,12 @@ fn worker<'a, W: Work<'a>>(
 ) {
     loop {
         if shared.stop.load(Ordering::Acquire) || shared.remaining.load(Ordering::Acquire) == 0 {
+            return;
+        }
+        if shared.work.pause() {
+            shared.paused.store(true, Ordering::SeqCst);
+            shared.stop.store(true, Ordering::Release);
+            wake_all(shared);
             return;
         }
         run_events(shared, local);

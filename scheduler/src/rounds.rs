@@ -94,10 +94,13 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 if ready.is_empty() {
                     let remaining = below_end(s, t_end);
                     return if remaining == 0 {
-                        Ok(())
+                        Ok(false)
                     } else {
                         Err(RunError::Stalled { remaining })
                     };
+                }
+                if work.pause() {
+                    return Ok(true);
                 }
                 ready.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 {
@@ -154,5 +157,5 @@ pub(crate) fn run<'a, W: Work<'a>>(
     for (count, total) in per_thread.iter().zip(&mut stats.tents_per_thread) {
         *total = count.load(Ordering::Relaxed) as u64;
     }
-    outcome.map(|()| stats)
+    outcome.map(|paused| Stats { paused, ..stats })
 }

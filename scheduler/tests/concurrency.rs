@@ -43,6 +43,8 @@ struct Checked<'m> {
     event_every: usize,
     events_run: AtomicU64,
     max_slope: Mutex<f64>,
+    /// [`Work::pause`] answers true once this many tents are recorded (until the next run).
+    pause_after: AtomicUsize,
 }
 
 impl Checked<'_> {
@@ -58,6 +60,7 @@ impl Checked<'_> {
             event_every,
             events_run: AtomicU64::new(0),
             max_slope: Mutex::new(0.0),
+            pause_after: AtomicUsize::new(usize::MAX),
         }
     }
 
@@ -169,6 +172,10 @@ where
         }
         Ok(())
     }
+
+    fn pause(&self) -> bool {
+        self.records.load(Ordering::SeqCst) >= self.pause_after.load(Ordering::SeqCst)
+    }
 }
 
 fn run(mesh: &Mesh, threads: usize, deterministic: bool, event_every: usize) -> (u64, u64) {
@@ -194,6 +201,47 @@ fn run(mesh: &Mesh, threads: usize, deterministic: bool, event_every: usize) -> 
     assert!(*work.max_slope.lock() < SAFETY);
     assert!(work.in_flight.iter().all(|f| !f.load(Ordering::SeqCst)));
     (stats.tents, work.events_run.load(Ordering::Relaxed))
+}
+
+/// Pauses a run after `pause_after` records, checks that it stopped quiescent, and resumes it
+/// to the end; returns the tents and the final front.
+fn paused_and_resumed(mesh: &Mesh, threads: usize, deterministic: bool) -> (u64, Vec<f64>) {
+    let t_end = 3.0 / 16.0;
+    let front = Front::flat(mesh.vertices().len(), 0.0);
+    let work = Checked::new(mesh, t_end, 7);
+    work.pause_after.store(300, Ordering::SeqCst);
+    let options = Options {
+        threads,
+        deterministic,
+    };
+    let mut state = Fixed {
+        mesh,
+        front: &front,
+    };
+    let first = sdg_scheduler::run(&mut state, t_end, &work, vec![(); threads], &options).unwrap();
+    assert!(first.paused, "{threads} threads, deterministic {deterministic}");
+    assert!(work.in_flight.iter().all(|f| !f.load(Ordering::SeqCst)));
+    assert!(front.snapshot().iter().any(|&t| t < t_end));
+    // Every queued event ran before the pause: one per 7 records.
+    let records = work.records.load(Ordering::SeqCst);
+    assert_eq!(work.events_run.load(Ordering::SeqCst) as usize, records.div_ceil(7));
+    work.pause_after.store(usize::MAX, Ordering::SeqCst);
+    let rest = sdg_scheduler::run(&mut state, t_end, &work, vec![(); threads], &options).unwrap();
+    assert!(!rest.paused);
+    assert!(front.snapshot().iter().all(|&t| t == t_end));
+    (first.tents + rest.tents, front.snapshot())
+}
+
+#[test]
+fn a_paused_run_resumes_to_the_end_and_deterministic_runs_do_not_notice() {
+    let mesh = perturbed(12);
+    let (tents, front) = paused_and_resumed(&mesh, 2, false);
+    assert!(tents > 0 && !front.is_empty());
+    let uninterrupted = run(&mesh, 2, true, 7).0;
+    for threads in [1, 2, 4] {
+        let (tents, _) = paused_and_resumed(&mesh, threads, true);
+        assert_eq!(tents, uninterrupted, "{threads} threads");
+    }
 }
 
 #[test]

@@ -21,7 +21,9 @@ use crate::face::{FaceBasis, FaceState};
 pub const SAMPLES: usize = 4;
 
 /// The levels tracked.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 pub enum Level {
     /// The crack tip: `delta = delta_c` (Xu-Needleman), `D = 1 - eps` (damage).
     Tip,
@@ -40,7 +42,7 @@ pub struct Tracking {
 }
 
 /// A point of a cohesive interface where the normal separation reached a level.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Crossing {
     /// The edge.
     pub edge: EdgeId,

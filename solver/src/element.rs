@@ -10,7 +10,7 @@ use crate::face::FaceState;
 pub type SpacePoint = [f64; 3];
 
 /// The affine map `X = P0 + J xi` of a tetrahedron from the reference tetrahedron.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Geometry {
     origin: SpacePoint,
     jacobian: [[f64; 3]; 3],
@@ -93,7 +93,7 @@ impl Geometry {
 /// It also holds the interface state on the front: per mesh edge, the last interface face solved
 /// over it (see [`crate::face`]), or nothing while the edge carries the initial state (zero
 /// separation and slip). Only the tent at one of an edge's ends touches its entry.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub struct FrontSolution {
     basis_len: usize,
     width: usize,
@@ -102,7 +102,7 @@ pub struct FrontSolution {
 }
 
 /// The element under one front triangle.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 struct Cell {
     solved: bool,
     geometry: Geometry,

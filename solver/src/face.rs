@@ -73,7 +73,7 @@ impl FaceBasis {
 /// The affine map of a vertical face from the reference triangle: corner `k` of the reference
 /// (`0`, `e1`, `e2`) goes to corner `k` of the face (`P0`, `P1`, `P2`). Points are located on the
 /// face by their distance `s` from `P0` along the edge direction and their height `tau`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FaceGeometry {
     corners: [SpacePoint; 3],
     /// Unit direction of the edge from `P0` to `P1` in space.
@@ -137,7 +137,7 @@ pub const STATE_COMPONENTS: usize = 3;
 
 /// The interface state on one face: coefficients of each of its [`STATE_COMPONENTS`] in the
 /// face's [`FaceBasis`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FaceState {
     /// Where the face lies.
     pub geometry: FaceGeometry,

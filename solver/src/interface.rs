@@ -435,7 +435,7 @@ impl Law {
 }
 
 /// Which contact mode dominates at a point: the largest area fraction.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Mode {
     /// Bonded law.
     Bonded,

@@ -27,6 +27,7 @@ pub fn run(text: &str, overrides: &[String]) -> (RunSummary, tempfile::TempDir) 
         deterministic: true,
         progress: false,
         force: false,
+        ..RunOptions::default()
     };
     let (summary, _) = sdg_engine::solve_job(&problem, &options).expect("run succeeds");
     (summary, dir)
@@ -45,19 +46,21 @@ pub fn solve(
         deterministic,
         progress: false,
         force: false,
+        ..RunOptions::default()
     };
     let (summary, _) = sdg_engine::solve_job(problem, &options).unwrap();
     (summary, dir)
 }
 
-/// Every output file, with the fields measured on the machine (`wall_time_s`,
-/// `patches_per_second`, `threads`, `peak_memory_bytes`, `estimate`) removed from
-/// `summary.json`.
+/// Every output file (not the checkpoint folder), with the fields measured on the machine
+/// (`wall_time_s`, `patches_per_second`, `threads`, `peak_memory_bytes`, `estimate`) and the
+/// process's checkpoints removed from `summary.json`.
 pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
         .unwrap()
-        .map(|e| {
-            let path = e.unwrap().path();
+        .map(|e| e.unwrap().path())
+        .filter(|path| path.is_file())
+        .map(|path| {
             let name = path.file_name().unwrap().to_string_lossy().into_owned();
             let mut bytes = std::fs::read(&path).unwrap();
             if name == "summary.json" {
@@ -68,6 +71,7 @@ pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
                     "threads",
                     "peak_memory_bytes",
                     "estimate",
+                    "checkpoint",
                 ] {
                     json.as_object_mut().unwrap().remove(key);
                 }

@@ -26,8 +26,8 @@ pub use material::{MaterialConfig, PlaneName};
 pub(crate) use mesh::rectangle_key;
 pub use mesh::{DiagonalName, MeshConfig, MeshKind, SegmentConfig};
 pub use settings::{
-    AdaptConfig, LimitsConfig, OutputConfig, PitchConfig, SchedulerConfig, SolverConfig,
-    TimeConfig, ZoneConfig,
+    AdaptConfig, CheckpointConfig, LimitsConfig, OutputConfig, PitchConfig, SchedulerConfig,
+    SolverConfig, TimeConfig, ZoneConfig,
 };
 
 use overrides::apply_override;
@@ -73,6 +73,9 @@ pub struct Config {
     /// The most a run may cost: checked against its estimate before any work.
     #[serde(default)]
     pub limits: LimitsConfig,
+    /// When the run saves its state for a restart.
+    #[serde(default)]
+    pub checkpoint: CheckpointConfig,
     /// Boundary conditions, one entry per group of sides (`[[boundary]]`). Every boundary tag
     /// of the mesh must be named by one entry.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

@@ -64,6 +64,41 @@ impl Default for LimitsConfig {
     }
 }
 
+/// `[checkpoint]`: when a run saves its whole state, so that `sdg run --restart` can go on
+/// from it. Whatever is set here, SIGTERM, SIGINT, SIGUSR1 and `--max-wall-time` write one.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointConfig {
+    /// Wall time between checkpoints, s; default 1800 (half an hour), `inf` for none.
+    #[serde(default = "default_every_wall_s")]
+    pub every_wall_s: f64,
+    /// Simulated time between checkpoints, s: one each time the whole front passes a
+    /// multiple of it; none when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub every_sim_s: Option<f64>,
+    /// Folder of the checkpoint files; default `checkpoints` in the output folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dir: Option<PathBuf>,
+    /// How many checkpoints to keep, the newest; default 2.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keep: Option<u32>,
+}
+
+fn default_every_wall_s() -> f64 {
+    1800.0
+}
+
+impl Default for CheckpointConfig {
+    fn default() -> Self {
+        Self {
+            every_wall_s: default_every_wall_s(),
+            every_sim_s: None,
+            dir: None,
+            keep: None,
+        }
+    }
+}
+
 /// `[output]`: what is written where.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]

@@ -32,6 +32,28 @@ impl Config {
                 return fail(key, format!("must be a positive number, got {value}"));
             }
         }
+        let c = &self.checkpoint;
+        if !(c.every_wall_s > 0.0) {
+            return fail(
+                "checkpoint.every_wall_s",
+                format!(
+                    "must be a positive time in s (inf for none), got {}",
+                    c.every_wall_s
+                ),
+            );
+        }
+        if let Some(every) = c.every_sim_s.filter(|&v| !(v.is_finite() && v > 0.0)) {
+            return fail(
+                "checkpoint.every_sim_s",
+                format!("must be a positive time in s, got {every}"),
+            );
+        }
+        if c.keep == Some(0) {
+            return fail(
+                "checkpoint.keep",
+                "must be at least 1: a restart needs a checkpoint".into(),
+            );
+        }
         self.validate_physics()?;
         self.validate_adapt()?;
         self.validate_fracture()?;
@@ -420,6 +442,17 @@ mod tests {
             Some("limits.max_wall_time_s")
         );
         assert!(parse(BASE, &["limits.max_wall_time_s=inf"]).is_ok());
+        for set in [
+            "checkpoint.every_wall_s=0",
+            "checkpoint.every_wall_s=nan",
+            "checkpoint.every_sim_s=-1e-6",
+            "checkpoint.every_sim_s=inf",
+            "checkpoint.keep=0",
+        ] {
+            let key = set.split('=').next();
+            assert_eq!(key_of(BASE, &[set]).as_deref(), key, "{set}");
+        }
+        assert!(parse(BASE, &["checkpoint.every_wall_s=inf", "checkpoint.keep=1"]).is_ok());
         assert_eq!(
             key_of(BASE, &["mesh.path=a.msh"]).as_deref(),
             Some("mesh.path")

@@ -24,7 +24,7 @@ const HISTORY_ROWS: usize = 100;
 
 /// Times the whole front must pass before something happens, with a count of the vertices whose
 /// recorded time is still below each.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Milestones {
     /// Increasing times (s) and what they are for.
     times: Vec<(f64, Milestone)>,
@@ -32,26 +32,37 @@ pub(super) struct Milestones {
     next: usize,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(super) enum Milestone {
     History,
     Snapshot,
+    /// A checkpoint is due (`checkpoint.every_sim_s`).
+    Checkpoint,
     /// The change of [`super::solve_job_with`] is due.
     Intervention,
 }
 
 impl Milestones {
     /// Milestones for a front of `vertices` vertices at time 0: the history rows up to `t_end`
-    /// (s), the snapshot times and the intervention time, if any (s).
+    /// (s), the snapshot times, the multiples of `checkpoint_every` (s) below `t_end` and the
+    /// intervention time, if any (s).
     pub(super) fn new(
         vertices: usize,
         t_end: f64,
         snapshots: &[f64],
+        checkpoint_every: Option<f64>,
         intervention: Option<f64>,
     ) -> Self {
+        let checkpoints = checkpoint_every.map_or(0, |dt| (t_end / dt).ceil() as usize);
         let mut times: Vec<(f64, Milestone)> = (1..HISTORY_ROWS)
             .map(|k| (t_end * k as f64 / HISTORY_ROWS as f64, Milestone::History))
             .chain(snapshots.iter().map(|&t| (t, Milestone::Snapshot)))
+            .chain(
+                (1..checkpoints)
+                    .map(|k| k as f64 * checkpoint_every.unwrap_or(0.0))
+                    .filter(|&t| t < t_end)
+                    .map(|t| (t, Milestone::Checkpoint)),
+            )
             .chain(intervention.map(|t| (t, Milestone::Intervention)))
             .collect();
         times.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -102,7 +113,7 @@ impl Milestones {
 }
 
 /// Everything recorded across tents, behind one lock.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Book {
     pub(super) totals: PatchReport,
     pub(super) patches: u64,
@@ -129,14 +140,31 @@ pub(super) struct Book {
     pub(super) max_slope_ratio: f64,
     pub(super) snapshots: Snapshots,
     pub(super) milestones: Milestones,
+    #[serde(skip)]
     pub(super) passed: Vec<(f64, Milestone)>,
     pub(super) history: String,
+    #[serde(skip)]
     pub(super) progress: Progress,
     /// Basis values and element values for snapshot evaluation, and an element copy.
+    #[serde(skip)]
     pub(super) phi: Vec<f64>,
+    #[serde(skip)]
     pub(super) values: Vec<f64>,
+    #[serde(skip)]
     pub(super) geometry: Geometry,
+    #[serde(skip)]
     pub(super) coefficients: Vec<f64>,
+}
+
+impl Book {
+    /// Makes a book read from a checkpoint ready to go on: scratch for `basis_len` basis
+    /// functions of `width` fields, snapshots written to `dir`.
+    pub(super) fn resume(&mut self, dir: &std::path::Path, basis_len: usize, width: usize) {
+        self.phi = vec![0.0; basis_len];
+        self.values = vec![0.0; width];
+        self.coefficients = vec![0.0; basis_len * width];
+        self.snapshots.set_dir(dir);
+    }
 }
 
 impl Solve<'_> {
@@ -287,7 +315,7 @@ mod tests {
 
     #[test]
     fn milestones_pass_when_every_vertex_has() {
-        let mut m = Milestones::new(2, 1.0, &[0.0, 0.5], None);
+        let mut m = Milestones::new(2, 1.0, &[0.0, 0.5], None, None);
         let mut passed = Vec::new();
         m.advance(0.0, 0.3, &mut passed);
         assert_eq!(passed, [(0.0, Milestone::Snapshot)], "t = 0 passes at once");

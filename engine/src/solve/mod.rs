@@ -6,12 +6,12 @@
 //! snapshot is then complete, or a history row is due. History rows integrate the energy over the
 //! whole front, so they run as scheduler events over every vertex: with no tent in flight.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use parking_lot::Mutex;
-
-use std::sync::atomic::AtomicU64;
 
 use sdg_mesh::{Front, Pitcher, TagId, Tent, TriangleId};
 use sdg_scheduler::{Changed, Events, VertexId, Work};
@@ -34,6 +34,7 @@ use crate::snapshot::Snapshots;
 
 mod adaptivity;
 mod book;
+mod checkpoint;
 mod crack_output;
 mod interface_output;
 mod live;
@@ -42,13 +43,15 @@ mod summary;
 
 use adaptivity::refine_to_max_edge;
 use book::{Book, Milestone, Milestones};
+pub use checkpoint::Control;
+use checkpoint::Counts;
 pub use crack_output::CrackSummary;
 use live::Intervention;
 pub use live::{Live, solve_job_with};
 use propagation::Extension;
 pub use propagation::FractureSummary;
 use summary::state_hash;
-pub use summary::{EnergySummary, ErrorSummary, InterfaceSummary, RunSummary};
+pub use summary::{CheckpointSummary, EnergySummary, ErrorSummary, InterfaceSummary, RunSummary};
 
 /// The read-only context and the bookkeeping of a solve.
 struct Solve<'a> {
@@ -64,8 +67,14 @@ struct Solve<'a> {
     book: Mutex<Book>,
     /// The change [`solve_job_with`] applies once, until its milestone passes.
     intervention: Mutex<Option<Intervention>>,
-    /// When `limits.max_wall_time_s` is up: no tent starts after it.
-    deadline: Option<Instant>,
+    /// Requests from outside (signals) and the run's own checkpoint and stop times.
+    control: Arc<Control>,
+    /// When the wall-time limit is up: the run checkpoints and stops, and why.
+    deadline: Option<(Instant, String)>,
+    /// When the solve started, and when the next checkpoint by wall time is due
+    /// (`checkpoint.every_wall_s`), ns after it; `u64::MAX` for none.
+    started: Instant,
+    next_wall_checkpoint_ns: AtomicU64,
 }
 
 /// The scaled initial state at `x`.
@@ -76,7 +85,32 @@ fn initial_state(problem: &Problem, initial: Initial, x: [f64; 2]) -> State {
     }
 }
 
+/// When a run that starts now must stop: at `limits.max_wall_time_s` or `--max-wall-time`
+/// (`max_wall_time_s`), the earlier; with the reason it stops.
+fn deadline(limit_s: f64, max_wall_time_s: Option<f64>) -> Option<(Instant, String)> {
+    let (seconds, name) = match max_wall_time_s {
+        Some(s) if s < limit_s => (s, "--max-wall-time"),
+        _ => (limit_s, "limits.max_wall_time_s"),
+    };
+    let at = Instant::now().checked_add(Duration::try_from_secs_f64(seconds).ok()?)?;
+    Some((at, format!("{name} = {seconds} s is up")))
+}
+
 impl Solve<'_> {
+    /// Writes what a run that stops before the end has produced so far: the history up to now
+    /// (a row for the front as it is) and the probes; complete snapshots are already written.
+    fn write_partial_outputs(&self, state: &Frontier, dir: &Path) -> Result<(), EngineError> {
+        let config = &self.problem.loaded.config;
+        let mut book = self.book.lock();
+        book.progress.finish();
+        self.history_row(state, &mut book);
+        write_atomic(dir, "history.csv", book.history.as_bytes())?;
+        if config.output.png {
+            plot::write_history_png(dir, &book.history);
+        }
+        self.write_probes(dir, &mut book)
+    }
+
     /// Writes `interface.csv` when probes are configured.
     fn write_probes(&self, dir: &std::path::Path, book: &mut Book) -> Result<(), EngineError> {
         let probes = &self.problem.probes;
@@ -185,14 +219,6 @@ impl<'a> Work<'a> for Solve<'a> {
         _: &Events<'a, Frontier>,
     ) -> Result<(f64, Outcome), EngineError> {
         let (mesh, front) = (&state.mesh, &state.front);
-        if self.deadline.is_some_and(|d| Instant::now() > d) {
-            return Err(EngineError::Runtime(format!(
-                "limits.max_wall_time_s = {} s is up at t = {:e} s (the front's least time); \
-                 the outputs so far are written",
-                self.problem.loaded.config.limits.max_wall_time_s,
-                front.min_time()
-            )));
-        }
         let star = mesh.vertex_triangles(v);
         if star.len() > self.max_star {
             return Err(EngineError::Runtime(format!(
@@ -365,12 +391,34 @@ impl<'a> Work<'a> for Solve<'a> {
                 Changed::default()
             }));
         }
+        if passed.iter().any(|p| p.1 == Milestone::Checkpoint) {
+            self.control.checkpoint();
+        }
         if passed.iter().any(|p| p.1 == Milestone::Intervention) {
             events.push(Box::new(move |state: &mut Frontier| self.intervene(state)));
         }
         passed.clear();
         book.passed = passed;
         Ok(())
+    }
+
+    fn pause(&self) -> bool {
+        if self.control.is_pending() {
+            return true;
+        }
+        let now = Instant::now();
+        if let Some((deadline, reason)) = &self.deadline {
+            if now >= *deadline {
+                self.control.stop(reason.clone());
+                return true;
+            }
+        }
+        let due = self.next_wall_checkpoint_ns.load(Ordering::Relaxed);
+        if due != u64::MAX && now.duration_since(self.started).as_nanos() >= u128::from(due) {
+            self.control.checkpoint();
+            return true;
+        }
+        false
     }
 }
 
@@ -524,10 +572,15 @@ fn run_job(
         estimate.check(problem)?;
     }
     let dir = options.output_dir(problem)?;
-    let solvers: Vec<PatchSolver> = (0..scheduler.threads)
-        .map(|_| patch_solver(problem, max_star))
-        .collect();
-    let (basis, width) = (solvers[0].basis().clone(), solvers[0].width());
+    let folder = checkpoint::Folder::new(config, &dir);
+    let restored = match &options.restart {
+        Some(path) => Some(checkpoint::restore(path, config)?),
+        None => None,
+    };
+    let (basis, width) = {
+        let solver = PatchSolver::new(system.clone(), config.solver.order, 0);
+        (solver.basis().clone(), solver.width())
+    };
     let initial = problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave);
     let energy0 = front_energy(
         &state.mesh,
@@ -567,6 +620,7 @@ fn run_job(
                 state.mesh.vertices().len(),
                 t_end,
                 &config.output.snapshot_times,
+                config.checkpoint.every_sim_s,
                 after,
             ),
             passed: Vec::new(),
@@ -581,11 +635,38 @@ fn run_job(
             coefficients: vec![0.0; basis.len() * width],
         }),
         intervention: Mutex::new(intervention),
-        deadline: Duration::try_from_secs_f64(config.limits.max_wall_time_s)
-            .ok()
-            .and_then(|limit| Instant::now().checked_add(limit)),
+        control: options.control.clone().unwrap_or_default(),
+        deadline: deadline(config.limits.max_wall_time_s, options.max_wall_time_s),
+        started: Instant::now(),
+        next_wall_checkpoint_ns: AtomicU64::new(u64::MAX),
     };
-    solve.history_row(&state, &mut solve.book.lock());
+    let mut counts = Counts::default();
+    let restarted = match restored {
+        Some((file, restored)) => {
+            tracing::info!(
+                checkpoint = %file.display(),
+                time = restored.header.time,
+                "restarting"
+            );
+            counts = restored.counts;
+            state = restored.frontier;
+            let mut book = restored.book;
+            book.resume(&dir, basis.len(), width);
+            let done: f64 = state.front.snapshot().iter().sum();
+            book.progress =
+                Progress::new(options.progress, state.mesh.vertices().len() as f64 * t_end);
+            book.progress.advance(done, book.patches);
+            solve
+                .energy_reference
+                .store(book.energy_max.to_bits(), Ordering::Relaxed);
+            *solve.book.lock() = book;
+            Some((file, restored.header.time))
+        }
+        None => {
+            solve.history_row(&state, &mut solve.book.lock());
+            None
+        }
+    };
     let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
     tracing::info!(
         threads = scheduler.threads,
@@ -594,24 +675,62 @@ fn run_job(
         vertices = state.mesh.vertices().len(),
         "solve started"
     );
-    let start = Instant::now();
-    let stats = match sdg_scheduler::run(&mut state, t_end, &solve, solvers, &scheduler) {
-        Ok(stats) => stats,
-        Err(e) => {
-            // Keep what the run produced so far: the history up to the failure and the
-            // snapshots already complete.
-            let mut book = solve.book.lock();
-            book.progress.finish();
-            solve.history_row(&state, &mut book);
-            write_atomic(&dir, "history.csv", book.history.as_bytes())?;
-            if config.output.png {
-                plot::write_history_png(&dir, &book.history);
-            }
-            solve.write_probes(&dir, &mut book)?;
-            return Err(scheduler_error(e));
-        }
+    let wall_every = Duration::try_from_secs_f64(config.checkpoint.every_wall_s).ok();
+    let (restarted_from, restart_time) = restarted.unzip();
+    let mut checkpoints = CheckpointSummary {
+        restarted_from,
+        restart_time,
+        ..CheckpointSummary::default()
     };
-    let wall_time_s = start.elapsed().as_secs_f64();
+    loop {
+        let segment = Instant::now();
+        if let Some(every) = wall_every {
+            let due = (segment - solve.started + every).as_nanos();
+            let due = u64::try_from(due).unwrap_or(u64::MAX - 1);
+            solve.next_wall_checkpoint_ns.store(due, Ordering::Relaxed);
+        }
+        let solvers: Vec<PatchSolver> = (0..scheduler.threads)
+            .map(|_| patch_solver(problem, max_star))
+            .collect();
+        let result = sdg_scheduler::run(&mut state, t_end, &solve, solvers, &scheduler);
+        counts.wall_time_s += segment.elapsed().as_secs_f64();
+        let stats = match result {
+            Ok(stats) => stats,
+            Err(e) => {
+                solve.write_partial_outputs(&state, &dir)?;
+                return Err(scheduler_error(e));
+            }
+        };
+        counts.tents += stats.tents;
+        counts.events += stats.events;
+        counts.rounds += stats.rounds;
+        if !stats.paused {
+            break;
+        }
+        // Quiescent: no tent in flight, no event queued.
+        let request = solve.control.take();
+        let written = Instant::now();
+        let path = folder.write(config, counts, &state, &solve.book.lock())?;
+        counts.written += 1;
+        checkpoints.written += 1;
+        checkpoints.write_seconds += written.elapsed().as_secs_f64();
+        tracing::info!(
+            checkpoint = %path.display(),
+            time = state.front.min_time(),
+            seconds = written.elapsed().as_secs_f64(),
+            "checkpoint written"
+        );
+        if let Some(reason) = request.stop {
+            solve.write_partial_outputs(&state, &dir)?;
+            return Err(EngineError::Checkpointed {
+                reason,
+                time: state.front.min_time(),
+                checkpoint: path,
+            });
+        }
+    }
+    let wall_time_s = counts.wall_time_s;
+    let stats = counts;
     let mut book = solve.book.lock();
     book.progress.finish();
     solve.history_row(&state, &mut book);
@@ -718,6 +837,7 @@ fn run_job(
         rejected_patches: book.rejected,
         coarsenings: book.coarsenings,
         events: stats.events,
+        checkpoint: checkpoints,
         min_edge,
         max_edge,
     };

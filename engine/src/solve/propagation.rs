@@ -12,6 +12,7 @@
 //! arrests there). A crossing of a crack edge arrests the tip. Two directions make a branch:
 //! the first keeps the tip's branch id, the second takes a new one.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -44,11 +45,12 @@ pub(super) struct Extension {
 }
 
 /// One line of `events.csv`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct FractureEvent {
     /// Front time at the tip, s.
     time: f64,
-    kind: &'static str,
+    /// `nucleation`, `extension`, `branching` or `arrest`.
+    kind: Cow<'static, str>,
     branch: u32,
     /// Where it happened and, for an extension, the new edge's far end (m).
     from: [f64; 2],
@@ -137,7 +139,7 @@ impl Solve<'_> {
             let at = mesh.vertex(v);
             events.push(FractureEvent {
                 time,
-                kind: "nucleation",
+                kind: "nucleation".into(),
                 branch: state.next_branch,
                 from: at,
                 to: at,
@@ -169,9 +171,9 @@ impl Solve<'_> {
                 ),
             };
             let branch = tip.branch;
-            let event = |kind, to| FractureEvent {
+            let event = |kind: &'static str, to| FractureEvent {
                 time,
-                kind,
+                kind: kind.into(),
                 branch,
                 from: at,
                 to,
@@ -236,7 +238,7 @@ impl Solve<'_> {
         }
         if extended == 2 && !extension.nucleation {
             let mut branching = events[0].clone();
-            branching.kind = "branching";
+            branching.kind = "branching".into();
             events.push(branching);
         }
         self.book.lock().fracture_events.extend(events);
@@ -561,7 +563,7 @@ mod tests {
     fn extension(time: f64, branch: u32, from: [f64; 2], to: [f64; 2]) -> FractureEvent {
         FractureEvent {
             time,
-            kind: "extension",
+            kind: "extension".into(),
             branch,
             from,
             to,
@@ -629,7 +631,7 @@ mod tests {
             "{summary:?}"
         );
         let mut branching = extension(1.2e-7, 0, [6e-5, 0.0], [6e-5, 0.0]);
-        branching.kind = "branching";
+        branching.kind = "branching".into();
         events.push(branching);
         let (time, distance) = first_branching(&events);
         assert_eq!(time, Some(1.2e-7));

@@ -134,6 +134,21 @@ pub struct RunSummary {
     pub min_edge: f64,
     /// Longest edge of the final space mesh, m.
     pub max_edge: f64,
+    /// Checkpoints of this process and the one it restarted from.
+    pub checkpoint: CheckpointSummary,
+}
+
+/// `checkpoint` in `summary.json`.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct CheckpointSummary {
+    /// Checkpoints this process wrote.
+    pub written: u64,
+    /// The checkpoint file this run restarted from, if any.
+    pub restarted_from: Option<PathBuf>,
+    /// The front's least time in that checkpoint, s.
+    pub restart_time: Option<f64>,
+    /// Wall time spent writing checkpoints, s (not part of `wall_time_s`).
+    pub write_seconds: f64,
 }
 
 /// FNV-1a over the bits of the front times, of every element under the front and of every

@@ -71,7 +71,7 @@ pub struct ElementReport {
 }
 
 /// Totals over one patch.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PatchReport {
     /// Elements solved.
     pub elements: usize,
@@ -104,7 +104,7 @@ pub struct PatchReport {
 
 /// The state of a contact interface at one point, physical units, in the frame of the face
 /// (normal, tangential; each value is the same whichever side the normal points from).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InterfaceSample {
     /// Time, s.
     pub time: f64,

@@ -1,0 +1,395 @@
+//! Checkpoints: the whole state of a solve at a quiescent point of the front (no tent in flight,
+//! no event queued), so that `sdg run --restart` goes on exactly where the run stopped.
+//!
+//! A checkpoint holds the mesh, the front, the elements under it with the interface states, the
+//! pitcher's budgets, the adaptivity flags, crack tips, the bookkeeping (energy accounts,
+//! counters, history rows, pending snapshot slices, milestones, probe samples, crack crossings
+//! and fracture events) and the configuration it ran. Random draws need no state: they are
+//! keyed by the run seed and stable ids. Deterministic runs pause between rounds, so a resumed
+//! run is bitwise the same as an uninterrupted one, on any number of threads.
+//!
+//! The file, `checkpoint_NNNNNN.sdgc`, is [`MAGIC`], the format version (u32), the payload's
+//! length (u64) and CRC-32 (u32), all little-endian, then the payload: the state in CBOR
+//! (RFC 8949: self-describing and the same on every machine, readable from Python's `cbor2`),
+//! zlib-compressed. It is written to a temporary file, synced and renamed, so a reader sees a
+//! whole checkpoint or none. A file with another magic, version, length or checksum, or written
+//! by another configuration, is refused with the reason.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use parking_lot::Mutex;
+use serde::{Deserialize, Serialize};
+
+use super::book::Book;
+use crate::config::Config;
+use crate::error::EngineError;
+use crate::frontier::Frontier;
+
+/// The first bytes of every checkpoint file.
+const MAGIC: &[u8; 8] = b"SDGCKPT\n";
+/// The layout of the payload; a reader refuses any other.
+const FORMAT: u32 = 1;
+/// Bytes before the payload: magic, format, length, checksum.
+const PREAMBLE: usize = 8 + 4 + 8 + 4;
+/// zlib level: fast; the solution's floating-point bits compress little anyway.
+const LEVEL: u8 = 1;
+/// Configuration keys a restart may change: they do not enter the state.
+const FREE_KEYS: [&str; 4] = ["scheduler", "limits", "checkpoint", "output.dir"];
+
+/// Requests to a running solve from outside its workers (signals, job control): it pauses at
+/// the next quiescent point, writes a checkpoint and goes on, or stops with exit code 3.
+#[derive(Debug, Default)]
+pub struct Control {
+    pending: AtomicBool,
+    request: Mutex<Request>,
+}
+
+/// What was asked since the last checkpoint.
+#[derive(Debug, Default)]
+pub(super) struct Request {
+    /// Write a checkpoint and go on.
+    pub(super) checkpoint: bool,
+    /// Write a checkpoint and stop, for this reason.
+    pub(super) stop: Option<String>,
+}
+
+impl Control {
+    /// Asks for a checkpoint, after which the run goes on (SIGUSR1).
+    pub fn checkpoint(&self) {
+        self.request.lock().checkpoint = true;
+        self.pending.store(true, Ordering::Release);
+    }
+
+    /// Asks for a checkpoint and a stop with exit code 3 (SIGTERM, SIGINT, the wall-time
+    /// limit); `reason` says why. The first reason given is kept.
+    pub fn stop(&self, reason: impl Into<String>) {
+        self.request
+            .lock()
+            .stop
+            .get_or_insert_with(|| reason.into());
+        self.pending.store(true, Ordering::Release);
+    }
+
+    /// True when a request waits.
+    pub(super) fn is_pending(&self) -> bool {
+        self.pending.load(Ordering::Acquire)
+    }
+
+    /// Takes the requests.
+    pub(super) fn take(&self) -> Request {
+        let mut request = self.request.lock();
+        self.pending.store(false, Ordering::Release);
+        std::mem::take(&mut *request)
+    }
+}
+
+/// Counts of the run so far that live outside the bookkeeping.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+pub(super) struct Counts {
+    /// Tents, topology events and deterministic rounds so far.
+    pub(super) tents: u64,
+    pub(super) events: u64,
+    pub(super) rounds: u64,
+    /// Wall time of the solve so far, s, over every restart.
+    pub(super) wall_time_s: f64,
+    /// Checkpoints written so far: the number of the next file.
+    pub(super) written: u64,
+}
+
+/// What identifies a checkpoint without its state.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct Header {
+    /// The `sdg` version that wrote it.
+    pub(super) version: String,
+    /// The configuration of the run, as JSON.
+    pub(super) config: String,
+    /// The front's least time, s.
+    pub(super) time: f64,
+}
+
+/// A checkpoint being written: borrowed from the running solve.
+#[derive(Serialize)]
+struct Saved<'a> {
+    header: Header,
+    counts: Counts,
+    frontier: &'a Frontier,
+    book: &'a Book,
+}
+
+/// A checkpoint read back.
+#[derive(Deserialize)]
+pub(super) struct Restored {
+    pub(super) header: Header,
+    pub(super) counts: Counts,
+    pub(super) frontier: Frontier,
+    pub(super) book: Book,
+}
+
+/// The checkpoint folder of a run and how many files it keeps.
+#[derive(Debug)]
+pub(super) struct Folder {
+    pub(super) dir: PathBuf,
+    keep: usize,
+}
+
+impl Folder {
+    /// The folder of `config` whose outputs go to `output`.
+    pub(super) fn new(config: &Config, output: &Path) -> Self {
+        let c = &config.checkpoint;
+        Self {
+            dir: c.dir.clone().unwrap_or_else(|| output.join("checkpoints")),
+            keep: c.keep.unwrap_or(2) as usize,
+        }
+    }
+
+    /// Writes checkpoint number `counts.written` of `frontier` and `book` (held still by the
+    /// caller), then removes all but the newest `keep`. Returns its path.
+    pub(super) fn write(
+        &self,
+        config: &Config,
+        counts: Counts,
+        frontier: &Frontier,
+        book: &Book,
+    ) -> Result<PathBuf, EngineError> {
+        let saved = Saved {
+            header: Header {
+                version: env!("CARGO_PKG_VERSION").into(),
+                config: config_json(config),
+                time: frontier.front.min_time(),
+            },
+            counts,
+            frontier,
+            book,
+        };
+        let mut cbor = Vec::new();
+        ciborium::into_writer(&saved, &mut cbor)
+            .map_err(|e| EngineError::Runtime(format!("checkpoint: encoding the state: {e}")))?;
+        let payload = miniz_oxide::deflate::compress_to_vec_zlib(&cbor, LEVEL);
+        drop(cbor);
+        let mut bytes = Vec::with_capacity(PREAMBLE + payload.len());
+        bytes.extend_from_slice(MAGIC);
+        bytes.extend_from_slice(&FORMAT.to_le_bytes());
+        bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+        bytes.extend_from_slice(&payload);
+        let name = format!("checkpoint_{:06}.sdgc", counts.written);
+        let path = write_synced(&self.dir, &name, &bytes)?;
+        let mut files = list(&self.dir);
+        files.truncate(files.len().saturating_sub(self.keep));
+        for old in files {
+            if let Err(e) = std::fs::remove_file(&old) {
+                tracing::warn!("{}: cannot remove an old checkpoint: {e}", old.display());
+            }
+        }
+        Ok(path)
+    }
+}
+
+/// Writes `bytes` to `dir/name` whole or not at all: a temporary file, synced, renamed, and
+/// the folder synced so that the rename survives a crash.
+fn write_synced(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineError> {
+    std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e))?;
+    let path = dir.join(name);
+    let tmp = dir.join(format!(".{name}.tmp"));
+    let mut file = std::fs::File::create(&tmp).map_err(|e| EngineError::io(&tmp, e))?;
+    file.write_all(bytes)
+        .and_then(|()| file.sync_all())
+        .map_err(|e| EngineError::io(&tmp, e))?;
+    drop(file);
+    std::fs::rename(&tmp, &path).map_err(|e| EngineError::io(&path, e))?;
+    if let Ok(folder) = std::fs::File::open(dir) {
+        // Not every file system syncs folders; the rename itself is atomic either way.
+        let _ = folder.sync_all();
+    }
+    Ok(path)
+}
+
+/// The checkpoint files in `dir`, oldest first (by number).
+fn list(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("checkpoint_") && n.ends_with(".sdgc"))
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+/// The configuration as the checkpoint stores it.
+fn config_json(config: &Config) -> String {
+    serde_json::to_string(config).expect("the configuration serializes")
+}
+
+/// Reads the checkpoint at `path`, or the newest valid one when `path` is a folder, for a run
+/// of `config`. A file that is not a whole checkpoint of this configuration is refused (exit 2)
+/// with the reason; in a folder, older files are tried after a refused newer one.
+pub(super) fn restore(path: &Path, config: &Config) -> Result<(PathBuf, Restored), EngineError> {
+    let refuse = |reason: String| EngineError::Input(reason);
+    if !path.is_dir() {
+        return read(path, config)
+            .map(|r| (path.to_path_buf(), r))
+            .map_err(|reason| refuse(format!("{}: {reason}", path.display())));
+    }
+    let mut reasons = Vec::new();
+    for file in list(path).into_iter().rev() {
+        match read(&file, config) {
+            Ok(restored) => {
+                for reason in &reasons {
+                    tracing::warn!("skipped {reason}");
+                }
+                return Ok((file, restored));
+            }
+            Err(reason) => reasons.push(format!("{}: {reason}", file.display())),
+        }
+    }
+    Err(refuse(if reasons.is_empty() {
+        format!(
+            "{}: no checkpoint_*.sdgc file to restart from",
+            path.display()
+        )
+    } else {
+        format!(
+            "no valid checkpoint to restart from: {}",
+            reasons.join("; ")
+        )
+    }))
+}
+
+/// Reads one checkpoint file for a run of `config`, or says why it cannot be used.
+fn read(path: &Path, config: &Config) -> Result<Restored, String> {
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let payload = payload(&bytes)?;
+    let cbor = miniz_oxide::inflate::decompress_to_vec_zlib(payload)
+        .map_err(|e| format!("the compressed state is damaged ({:?})", e.status))?;
+    let restored: Restored = ciborium::from_reader(&cbor[..])
+        .map_err(|e| format!("the state cannot be decoded: {e}"))?;
+    if let Some(key) = config_difference(&restored.header.config, &config_json(config)) {
+        return Err(format!(
+            "written by a run of another configuration ({key} differs); restart with the \
+             configuration and overrides of the run that wrote it"
+        ));
+    }
+    Ok(restored)
+}
+
+/// The payload of a checkpoint file's `bytes`, checked against its preamble.
+fn payload(bytes: &[u8]) -> Result<&[u8], String> {
+    if bytes.len() < PREAMBLE || &bytes[..8] != MAGIC {
+        return Err("not an sdg checkpoint (no SDGCKPT header)".into());
+    }
+    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
+    let format = word(8);
+    if format != FORMAT {
+        return Err(format!(
+            "checkpoint format {format}, this sdg reads format {FORMAT}"
+        ));
+    }
+    let length = u64::from_le_bytes(bytes[12..20].try_into().expect("8 bytes"));
+    let payload = &bytes[PREAMBLE..];
+    if payload.len() as u64 != length {
+        return Err(format!(
+            "truncated or extended: the state should be {length} bytes, the file holds {}",
+            payload.len()
+        ));
+    }
+    if crc32fast::hash(payload) != word(20) {
+        return Err("checksum mismatch: the file is damaged".into());
+    }
+    Ok(payload)
+}
+
+/// The first key (dotted) where two configurations in JSON differ, ignoring [`FREE_KEYS`].
+fn config_difference(saved: &str, current: &str) -> Option<String> {
+    let parse = |text: &str| serde_json::from_str::<serde_json::Value>(text).ok();
+    let (Some(saved), Some(current)) = (parse(saved), parse(current)) else {
+        return Some("the stored configuration".into());
+    };
+    first_difference(&saved, &current, "")
+}
+
+fn first_difference(a: &serde_json::Value, b: &serde_json::Value, at: &str) -> Option<String> {
+    use serde_json::Value;
+    if FREE_KEYS.contains(&at) {
+        return None;
+    }
+    let key = |k: &str| {
+        if at.is_empty() {
+            k.to_string()
+        } else {
+            format!("{at}.{k}")
+        }
+    };
+    match (a, b) {
+        (Value::Object(a), Value::Object(b)) => {
+            let keys: std::collections::BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+            keys.into_iter().find_map(|k| match (a.get(k), b.get(k)) {
+                (Some(x), Some(y)) => first_difference(x, y, &key(k)),
+                _ => (!FREE_KEYS.contains(&key(k).as_str())).then(|| key(k)),
+            })
+        }
+        (Value::Array(x), Value::Array(y)) if x.len() == y.len() => x
+            .iter()
+            .zip(y)
+            .enumerate()
+            .find_map(|(i, (x, y))| first_difference(x, y, &key(&i.to_string()))),
+        _ => (a != b).then(|| {
+            if at.is_empty() {
+                "the configuration".into()
+            } else {
+                at.into()
+            }
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_damaged_preamble_or_payload_is_refused() {
+        let payload = miniz_oxide::deflate::compress_to_vec_zlib(b"state", LEVEL);
+        let mut bytes = MAGIC.to_vec();
+        bytes.extend_from_slice(&FORMAT.to_le_bytes());
+        bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+        bytes.extend_from_slice(&payload);
+        assert_eq!(self::payload(&bytes), Ok(&payload[..]));
+        let reason = |b: &[u8]| self::payload(b).unwrap_err();
+        assert!(reason(&bytes[..bytes.len() - 1]).contains("truncated"));
+        assert!(reason(&bytes[..10]).contains("not an sdg checkpoint"));
+        let mut flipped = bytes.clone();
+        *flipped.last_mut().unwrap() ^= 1;
+        assert!(reason(&flipped).contains("checksum"));
+        let mut newer = bytes.clone();
+        newer[8] = 2;
+        assert!(reason(&newer).contains("format 2"));
+    }
+
+    #[test]
+    fn the_first_differing_key_is_named_and_free_keys_are_ignored() {
+        let a = r#"{"material":{"density":1190,"e":3.24e9},"scheduler":{"threads":1},
+                    "output":{"dir":"a","png":true},"interface":[{"strength":1},{"strength":2}]}"#;
+        let same = r#"{"material":{"density":1190,"e":3.24e9},"scheduler":{"threads":4},
+                    "output":{"dir":"b","png":true},"interface":[{"strength":1},{"strength":2}]}"#;
+        assert_eq!(config_difference(a, same), None);
+        let other = a.replace("\"e\":3.24e9", "\"e\":3.3e9");
+        assert_eq!(config_difference(a, &other).as_deref(), Some("material.e"));
+        let other = a.replace("{\"strength\":2}", "{\"strength\":3}");
+        assert_eq!(
+            config_difference(a, &other).as_deref(),
+            Some("interface.1.strength")
+        );
+        let other = a.replace("\"png\":true", "\"png\":true,\"vtu\":\"ascii\"");
+        assert_eq!(config_difference(a, &other).as_deref(), Some("output.vtu"));
+        let without_limits = a.replace(r#""scheduler":{"threads":1},"#, "");
+        assert_eq!(config_difference(a, &without_limits), None);
+    }
+}

@@ -1,0 +1,223 @@
+//! Checkpoints and restarts through the `sdg` binary, as a batch job uses them: a run killed
+//! (SIGKILL) after a checkpoint and restarted on another thread count ends bitwise as an
+//! uninterrupted deterministic run; SIGTERM checkpoints and exits 3; SIGUSR1 checkpoints and
+//! goes on; damaged checkpoints and checkpoints of another configuration are refused (exit 2).
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{outputs, stderr};
+
+/// The most a run may take from SIGTERM to its exit with a checkpoint (documented in the
+/// README's "Long runs" section), s.
+const STOP_WITHIN: Duration = Duration::from_secs(10);
+
+/// `sdg run` on the shipped `config` with `args` and `overrides`, started.
+fn spawn(config: &str, out: &Path, args: &[&str], overrides: &[&str]) -> Child {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_sdg"));
+    command
+        .arg("run")
+        .arg(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("configs")
+                .join(config),
+        )
+        .arg("--output")
+        .arg(out)
+        .args(["--deterministic", "--quiet"])
+        .args(args);
+    for o in overrides {
+        command.args(["--set", o]);
+    }
+    command
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the sdg binary runs")
+}
+
+/// Runs to the end: exit code and standard error.
+fn finish(child: Child) -> (i32, String) {
+    let out = child.wait_with_output().unwrap();
+    (out.status.code().unwrap_or(-1), stderr(&out))
+}
+
+/// The checkpoint files in `dir`, sorted.
+fn checkpoints(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "sdgc"))
+        .collect();
+    files.sort();
+    files
+}
+
+/// Waits until `dir` holds a checkpoint or `child` has ended.
+fn wait_for_checkpoint(child: &mut Child, dir: &Path) {
+    let start = Instant::now();
+    while checkpoints(dir).is_empty() {
+        assert!(child.try_wait().unwrap().is_none(), "the run ended first");
+        assert!(start.elapsed() < Duration::from_secs(120), "no checkpoint");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn signal(child: &Child, name: &str) {
+    let status = Command::new("kill")
+        .args([format!("-{name}"), child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+/// Kills a run with `before` threads after its first checkpoint, restarts it from the folder on
+/// `after` threads, and compares every output with an uninterrupted run's.
+fn killed_and_restarted(config: &str, overrides: &[&str], before: &str, after: &str) {
+    let reference = tempfile::tempdir().unwrap();
+    let (code, err) = finish(spawn(
+        config,
+        reference.path(),
+        &["--threads", after],
+        overrides,
+    ));
+    assert_eq!(code, 0, "{err}");
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("checkpoints");
+    let mut child = spawn(config, dir.path(), &["--threads", before], overrides);
+    wait_for_checkpoint(&mut child, &folder);
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let folder_arg = folder.to_str().unwrap();
+    let restart = ["--threads", after, "--restart", folder_arg];
+    let (code, err) = finish(spawn(config, dir.path(), &restart, overrides));
+    assert_eq!(code, 0, "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("summary.json")).unwrap()).unwrap();
+    let from = summary["checkpoint"]["restarted_from"].as_str().unwrap();
+    let time = summary["checkpoint"]["restart_time"].as_f64().unwrap();
+    eprintln!("{config}: restarted from {from} at t = {time:e} s");
+    assert!(
+        time > 0.0,
+        "the restart went on from the checkpoint's front"
+    );
+    let (expected, got) = (outputs(reference.path()), outputs(dir.path()));
+    assert_eq!(
+        expected.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        got.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    for ((name, a), (_, b)) in expected.iter().zip(&got) {
+        assert!(a == b, "{config}: {name} differs after the restart");
+    }
+}
+
+#[test]
+fn a_killed_crack_run_restarts_bitwise_on_two_threads() {
+    // Damage interfaces, crack tips extending by edge splits, snapshots with interface cuts.
+    killed_and_restarted(
+        "crack_growth.toml",
+        &[
+            "time.end=8e-7",
+            "checkpoint.every_sim_s=2e-7",
+            "output.snapshot_times=[4e-7, 8e-7]",
+        ],
+        "1",
+        "2",
+    );
+}
+
+#[test]
+fn a_killed_adaptive_contact_run_restarts_bitwise_on_one_thread() {
+    // Refinement, coarsening, contact faces solved by Newton, interface probes.
+    killed_and_restarted(
+        "stick_slip.toml",
+        &[
+            "mesh.nx=8",
+            "mesh.ny=8",
+            "time.end=1e-6",
+            "solver.order=2",
+            "adapt.enabled=true",
+            "adapt.tol=1e-2",
+            "adapt.min_edge=1.25e-4",
+            "output.snapshot_times=[5e-7, 1e-6]",
+            "output.interface_probes=[[0.00075, 0.002]]",
+            "checkpoint.every_sim_s=3e-7",
+        ],
+        "2",
+        "1",
+    );
+}
+
+#[test]
+fn sigusr1_checkpoints_and_goes_on_and_sigterm_stops_with_exit_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("checkpoints");
+    let long = ["time.end=1e-3", "mesh.nx=32", "mesh.ny=32"];
+    let mut child = spawn("plane_wave.toml", dir.path(), &["--threads", "2"], &long);
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(&child, "USR1");
+    wait_for_checkpoint(&mut child, &folder);
+    assert!(child.try_wait().unwrap().is_none(), "SIGUSR1 ends no run");
+    let sent = Instant::now();
+    signal(&child, "TERM");
+    let (code, err) = finish(child);
+    let took = sent.elapsed();
+    eprintln!("SIGTERM to exit: {took:?}; {err}");
+    assert_eq!(code, 3, "{err}");
+    assert!(took < STOP_WITHIN, "{took:?}");
+    assert!(
+        err.contains("SIGTERM") && err.contains("--restart"),
+        "{err}"
+    );
+    assert_eq!(checkpoints(&folder).len(), 2, "USR1's and TERM's");
+    assert!(dir.path().join("history.csv").is_file(), "outputs so far");
+    // The newest checkpoint is whole: the run goes on from it, and stops again at the limit.
+    let restart = [
+        "--threads",
+        "1",
+        "--restart",
+        folder.to_str().unwrap(),
+        "--max-wall-time",
+        "1",
+    ];
+    let (code, err) = finish(spawn("plane_wave.toml", dir.path(), &restart, &long));
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("--max-wall-time = 1 s is up"), "{err}");
+}
+
+#[test]
+fn damaged_and_foreign_checkpoints_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("checkpoints");
+    let limit = ["--threads", "1", "--max-wall-time", "0.3"];
+    let (code, err) = finish(spawn("plane_wave.toml", dir.path(), &limit, &[]));
+    assert_eq!(code, 3, "{err}");
+    let good = checkpoints(&folder).pop().expect("a checkpoint");
+    let bytes = std::fs::read(&good).unwrap();
+    let restart = |file: &Path, overrides: &[&str]| {
+        let args = ["--threads", "1", "--restart", file.to_str().unwrap()];
+        let (code, err) = finish(spawn("plane_wave.toml", dir.path(), &args, overrides));
+        assert_eq!(code, 2, "{}: {err}", file.display());
+        assert!(err.starts_with("error: "), "{err}");
+        err
+    };
+    let damaged = dir.path().join("damaged.sdgc");
+    let mut flipped = bytes.clone();
+    flipped[bytes.len() / 2] ^= 0x10;
+    std::fs::write(&damaged, &flipped).unwrap();
+    assert!(restart(&damaged, &[]).contains("checksum mismatch"));
+    std::fs::write(&damaged, &bytes[..bytes.len() - 100]).unwrap();
+    assert!(restart(&damaged, &[]).contains("truncated"));
+    assert!(restart(&good, &["material.density=1000"]).contains("material.density differs"));
+    // In a folder, a damaged newest file is skipped for an older whole one.
+    let newer = folder.join("checkpoint_999999.sdgc");
+    std::fs::write(&newer, &flipped).unwrap();
+    let args = ["--threads", "1", "--restart", folder.to_str().unwrap()];
+    let (code, err) = finish(spawn("plane_wave.toml", dir.path(), &args, &[]));
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("skipped") && err.contains("checksum"), "{err}");
+}
