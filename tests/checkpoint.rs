@@ -221,3 +221,64 @@ fn damaged_and_foreign_checkpoints_are_refused() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("skipped") && err.contains("checksum"), "{err}");
 }
+
+/// Runs plane_wave with `value` written into the element under triangle 0 at half the end
+/// time, as a bug or an unstable law would leave it; returns the error, the options and the
+/// output folder.
+fn poisoned(value: f64) -> (String, sdg_engine::RunOptions, tempfile::TempDir) {
+    let problem = common::shipped("plane_wave.toml", &["mesh.nx=8", "mesh.ny=8"]);
+    let t_end = problem.loaded.config.time.end;
+    let dir = tempfile::tempdir().unwrap();
+    let options = sdg_engine::RunOptions {
+        output_dir: Some(dir.path().to_path_buf()),
+        threads: Some(2),
+        deterministic: true,
+        ..Default::default()
+    };
+    let poison = move |live: &mut sdg_engine::Live<'_>| {
+        let solution = live.solution();
+        let mut geometry = sdg_solver::element::Geometry::default();
+        let mut coefficients = vec![0.0; live.basis().len() * solution.width()];
+        assert!(solution.load(0, &mut geometry, &mut coefficients));
+        coefficients[0] = value;
+        solution.store(0, &geometry, &coefficients);
+    };
+    let err = sdg_engine::solve_job_with(&problem, &options, 0.5 * t_end, poison)
+        .unwrap_err()
+        .to_string();
+    eprintln!("{err}");
+    (err, options, dir)
+}
+
+#[test]
+fn a_non_finite_patch_stops_the_run_with_a_checkpoint_before_it() {
+    let (err, options, dir) = poisoned(f64::NAN);
+    assert!(err.contains("a non-finite value") && err.contains("the patch of vertex"));
+    let folder = dir.path().join("checkpoints");
+    let [checkpoint] = &checkpoints(&folder)[..] else {
+        panic!("one checkpoint in {}", folder.display())
+    };
+    assert!(err.contains(&checkpoint.display().to_string()), "{err}");
+    assert!(dir.path().join("history.csv").is_file());
+    // The checkpoint holds the front before the bad patch: a restart meets it again.
+    let problem = common::shipped("plane_wave.toml", &["mesh.nx=8", "mesh.ny=8"]);
+    let again = sdg_engine::solve_job(
+        &problem,
+        &sdg_engine::RunOptions {
+            restart: Some(folder.clone()),
+            threads: Some(1),
+            ..options
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    let patch = |e: &str| e.split(';').next().unwrap().to_string();
+    assert_eq!(patch(&again), patch(&err));
+}
+
+#[test]
+fn an_energy_blow_up_stops_the_run() {
+    let (err, _, dir) = poisoned(1e6);
+    assert!(err.contains("energy blow-up"), "{err}");
+    assert_eq!(checkpoints(&dir.path().join("checkpoints")).len(), 1);
+}

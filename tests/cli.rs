@@ -616,10 +616,15 @@ fn a_run_stops_when_its_wall_time_is_up() {
         "--quiet",
     ]);
     let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "checkpointed and stopped: {err}"
+    );
     assert!(
-        err.contains("limits.max_wall_time_s = 0.000000001 s is up"),
+        err.starts_with("stopped: limits.max_wall_time_s = 0.000000001 s is up"),
         "{err}"
     );
     assert!(out_dir.join("history.csv").exists());
+    assert!(out_dir.join("checkpoints/checkpoint_000000.sdgc").exists());
 }

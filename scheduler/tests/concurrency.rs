@@ -219,12 +219,18 @@ fn paused_and_resumed(mesh: &Mesh, threads: usize, deterministic: bool) -> (u64,
         front: &front,
     };
     let first = sdg_scheduler::run(&mut state, t_end, &work, vec![(); threads], &options).unwrap();
-    assert!(first.paused, "{threads} threads, deterministic {deterministic}");
+    assert!(
+        first.paused,
+        "{threads} threads, deterministic {deterministic}"
+    );
     assert!(work.in_flight.iter().all(|f| !f.load(Ordering::SeqCst)));
     assert!(front.snapshot().iter().any(|&t| t < t_end));
     // Every queued event ran before the pause: one per 7 records.
     let records = work.records.load(Ordering::SeqCst);
-    assert_eq!(work.events_run.load(Ordering::SeqCst) as usize, records.div_ceil(7));
+    assert_eq!(
+        work.events_run.load(Ordering::SeqCst) as usize,
+        records.div_ceil(7)
+    );
     work.pause_after.store(usize::MAX, Ordering::SeqCst);
     let rest = sdg_scheduler::run(&mut state, t_end, &work, vec![(); threads], &options).unwrap();
     assert!(!rest.paused);

@@ -33,7 +33,7 @@ impl Config {
             }
         }
         let c = &self.checkpoint;
-        if !(c.every_wall_s > 0.0) {
+        if c.every_wall_s.is_nan() || c.every_wall_s <= 0.0 {
             return fail(
                 "checkpoint.every_wall_s",
                 format!(

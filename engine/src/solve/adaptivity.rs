@@ -71,6 +71,8 @@ impl Solve<'_> {
             self.initial,
             &state.solution,
         )?;
+        // A patch that fails a guard is left to the tent's own patch, which reports it.
+        self.guard(&report).is_none().then_some(())?;
         let area: f64 = mesh.vertex_triangles(m).iter().map(|&t| mesh.area(t)).sum();
         let eta = self.indicator(adapt, &report, area * (t_mid - t_m) / 3.0);
         if eta > adapt.tol {

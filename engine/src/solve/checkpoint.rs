@@ -53,6 +53,8 @@ pub(super) struct Request {
     pub(super) checkpoint: bool,
     /// Write a checkpoint and stop, for this reason.
     pub(super) stop: Option<String>,
+    /// Write a checkpoint and fail (exit code 1): a patch failed a guard.
+    pub(super) failure: Option<String>,
 }
 
 impl Control {
@@ -69,6 +71,13 @@ impl Control {
             .lock()
             .stop
             .get_or_insert_with(|| reason.into());
+        self.pending.store(true, Ordering::Release);
+    }
+
+    /// Asks for a checkpoint and a failure (exit code 1) with `reason`: a patch failed a
+    /// guard and was not stored. The first reason given is kept.
+    pub(super) fn fail(&self, reason: String) {
+        self.request.lock().failure.get_or_insert(reason);
         self.pending.store(true, Ordering::Release);
     }
 

@@ -85,6 +85,43 @@ fn initial_state(problem: &Problem, initial: Initial, x: [f64; 2]) -> State {
     }
 }
 
+/// A patch whose outflow energy exceeds this multiple of the most energy the body has held
+/// (initial energy plus boundary work, the patch's own included) has blown up: the scheme's
+/// upwind fluxes only ever dissipate.
+const BLOW_UP: f64 = 10.0;
+
+impl Solve<'_> {
+    /// What is wrong with a solved patch's `report`, if anything: a non-finite value or an
+    /// energy blow-up ([`BLOW_UP`]).
+    fn guard(&self, report: &PatchReport) -> Option<String> {
+        let values = [
+            ("energy_in", report.energy_in),
+            ("energy_out", report.energy_out),
+            ("boundary_work", report.boundary_work),
+            ("interface_work", report.interface_work),
+            ("friction_dissipation", report.friction_dissipation),
+            ("fracture_work", report.fracture_work),
+            ("dissipation", report.dissipation),
+            ("momentum_residual", report.momentum_residual),
+            ("cohesive_mismatch", report.cohesive_mismatch),
+        ];
+        if let Some((name, value)) = values.iter().find(|(_, v)| !v.is_finite()) {
+            return Some(format!("{name} is {value} (a non-finite value)"));
+        }
+        let held = f64::from_bits(self.energy_reference.load(Ordering::Relaxed))
+            + report.boundary_work.max(0.0);
+        let rho = self.problem.material.density();
+        (report.energy_out > BLOW_UP * held).then(|| {
+            format!(
+                "energy blow-up: the patch carries {:e} J/m out, more than {BLOW_UP} times the \
+                 {:e} J/m the body has held",
+                rho * report.energy_out,
+                rho * held
+            )
+        })
+    }
+}
+
 /// When a run that starts now must stop: at `limits.max_wall_time_s` or `--max-wall-time`
 /// (`max_wall_time_s`), the earlier; with the reason it stops.
 fn deadline(limit_s: f64, max_wall_time_s: Option<f64>) -> Option<(Instant, String)> {
@@ -149,6 +186,9 @@ enum Outcome {
     Rejected {
         star: Vec<(TriangleId, [VertexId; 3])>,
     },
+    /// The patch failed a guard (a non-finite value, an energy blow-up): nothing is stored,
+    /// and the run stops with a checkpoint of the front before it.
+    Failed,
     /// The tent's vertex is to be removed by the coarsening patch solved in its place.
     Coarsen {
         coarsening: Box<Coarsening>,
@@ -280,6 +320,14 @@ impl<'a> Work<'a> for Solve<'a> {
                 return Ok((tent.t_old, Outcome::Rejected { star }));
             }
         };
+        if let Some(quantity) = self.guard(&report) {
+            let [x, y] = mesh.vertex(v);
+            self.control.fail(format!(
+                "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {quantity}",
+                tent.t_old
+            ));
+            return Ok((tent.t_old, Outcome::Failed));
+        }
         if let Some(adapt) = &self.adapt {
             let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
             let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
@@ -355,6 +403,7 @@ impl<'a> Work<'a> for Solve<'a> {
                 }));
                 return Ok(());
             }
+            Outcome::Failed => return Ok(()),
             Outcome::Rejected { star } => {
                 let mut book = self.book.lock();
                 book.patches += 1;
@@ -720,6 +769,13 @@ fn run_job(
             seconds = written.elapsed().as_secs_f64(),
             "checkpoint written"
         );
+        if let Some(failure) = request.failure {
+            solve.write_partial_outputs(&state, &dir)?;
+            return Err(EngineError::Runtime(format!(
+                "{failure}; the front before this patch is in checkpoint {}",
+                path.display()
+            )));
+        }
         if let Some(reason) = request.stop {
             solve.write_partial_outputs(&state, &dir)?;
             return Err(EngineError::Checkpointed {
