@@ -564,27 +564,31 @@ fn override_spec(rng: &mut Rng, dotted: &[(String, String)], values: &[String]) 
     format!("{key}={value}")
 }
 
-/// The largest product of `nx` and `ny` values in `text` and `overrides` above a million: a
-/// grid so fine that building it in a fuzz loop takes seconds (a cost `[limits]` bounds only
-/// at the estimate, after setup).
+/// True when the largest `nx` and `ny` in `text` and `overrides` make a grid of more than a
+/// million nodes that the rectangle generator would build: it takes seconds and gigabytes, a
+/// cost `[limits]` bounds only at the estimate, after setup.
 fn too_big(text: &str, overrides: &[String]) -> bool {
-    let count = |key: &str| {
-        let from_text = text
-            .lines()
-            .filter_map(key_value)
-            .filter(|(k, _)| *k == key);
-        let from_sets = overrides
-            .iter()
-            .filter_map(|s| s.split_once('='))
-            .filter(|(k, _)| k.trim() == format!("mesh.{key}"));
-        from_text
-            .chain(from_sets)
-            .filter_map(|(_, v)| v.trim().parse::<u64>().ok())
-            .max()
-            .unwrap_or(1)
+    // A TOML integer: decimal with `_`, or hexadecimal, octal or binary.
+    let integer = |v: &str| {
+        let v = v.trim().replace('_', "");
+        let radix = [("0x", 16), ("0o", 8), ("0b", 2)];
+        match radix.iter().find(|(p, _)| v.starts_with(p)) {
+            Some(&(p, r)) => u64::from_str_radix(&v[p.len()..], r).ok(),
+            None => v.parse::<u64>().ok(),
+        }
     };
-    let cells = count("nx").saturating_mul(count("ny"));
-    cells > 1_000_000 && cells < u32::MAX as u64 / 8
+    let count = |key: &str| {
+        let sets = overrides.iter().filter_map(|s| s.split_once('='));
+        text.lines()
+            .filter_map(key_value)
+            .chain(sets)
+            .filter(|(k, _)| k.trim().rsplit('.').next() == Some(key))
+            .filter_map(|(_, v)| integer(v))
+            .max()
+            .unwrap_or(0)
+    };
+    let nodes = (count("nx") + 1).saturating_mul(count("ny") + 1);
+    nodes > 1_000_000 && nodes <= u32::MAX as u64 / 8
 }
 
 /// Loads `text` (read as `file`) with `overrides` and sets the problem up, as `sdg validate`
