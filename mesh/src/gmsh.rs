@@ -42,6 +42,16 @@ pub struct GmshError {
 /// Reads a planar triangulation from the MSH 4.1 ASCII file at `path` (see the module docs).
 pub fn read_msh(path: &Path) -> Result<Mesh, GmshError> {
     let file = path.display().to_string();
+    // A device or pipe (`/dev/zero`) may never end.
+    if let Ok(meta) = std::fs::metadata(path) {
+        if !meta.is_file() && !meta.is_dir() {
+            return Err(GmshError {
+                file,
+                line: 0,
+                reason: "not a regular file".into(),
+            });
+        }
+    }
     match std::fs::read(path) {
         Ok(bytes) => parse_msh(&String::from_utf8_lossy(&bytes), &file),
         Err(e) => Err(GmshError {
@@ -734,6 +744,15 @@ fn sorted([a, b]: [VertexId; 2]) -> [VertexId; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A device that never ends is refused before it is read.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn devices_are_not_read() {
+        let e = read_msh(Path::new("/dev/zero")).unwrap_err();
+        assert_eq!((e.file.as_str(), e.line), ("/dev/zero", 0));
+        assert_eq!(e.reason, "not a regular file");
+    }
 
     /// A unit square of 2 triangles: physical curves "left" (1, plus 7 on the same curve),
     /// "bottom" (2), "right" (3), "top" (4), an unnamed interior diagonal (6), an unused node 5

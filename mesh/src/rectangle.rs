@@ -89,7 +89,8 @@ impl Rectangle {
                 return Err(invalid(field, "must be at least 1"));
             }
         }
-        let nodes = (self.nx as u64 + 1) * (self.ny as u64 + 1);
+        // Saturating: (2^32)^2 wraps u64 to 0.
+        let nodes = (self.nx as u64 + 1).saturating_mul(self.ny as u64 + 1);
         if nodes > u32::MAX as u64 / 8 {
             return Err(invalid("nx", "too many cells for 32-bit indices"));
         }
@@ -245,6 +246,20 @@ fn unit_draw(seed: u64, vertex: VertexId, axis: u64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Found by `tests/fuzz_inputs.rs`: `nx = ny = u32::MAX` wrapped the node count to 0 and
+    /// went on to build 2^64 nodes.
+    #[test]
+    fn the_largest_counts_are_rejected() {
+        let r = Rectangle {
+            nx: u32::MAX,
+            ny: u32::MAX,
+            ..rect(Diagonal::Right)
+        };
+        let e = r.build().unwrap_err();
+        assert_eq!(e.field, "nx");
+        assert!(e.reason.contains("too many cells"), "{}", e.reason);
+    }
 
     fn rect(diagonal: Diagonal) -> Rectangle {
         Rectangle {

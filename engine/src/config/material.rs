@@ -41,13 +41,50 @@ impl Config {
             PlaneName::Stress => Plane::Stress,
             PlaneName::Antiplane => Plane::Antiplane,
         };
-        Material::new(m.young, m.poisson, m.density, plane).map_err(|e| ConfigError {
-            file: String::new(),
-            key: Some(format!("material.{}", e.field())),
-            reason: e
-                .to_string()
-                .split_once(": ")
-                .map_or(e.to_string(), |(_, r)| r.to_string()),
-        })
+        let material =
+            Material::new(m.young, m.poisson, m.density, plane).map_err(|e| ConfigError {
+                file: String::new(),
+                key: Some(format!("material.{}", e.field())),
+                reason: e
+                    .to_string()
+                    .split_once(": ")
+                    .map_or(e.to_string(), |(_, r)| r.to_string()),
+            })?;
+        // Each value in range, the wave speeds and impedances may still over- or underflow.
+        let (c_d, c_s) = (material.c_d(), material.c_s());
+        let speeds = [c_d, c_s, m.density * c_d, m.density * c_s];
+        if !speeds.iter().all(|x| x.is_finite() && *x > 0.0) {
+            return Err(ConfigError {
+                file: String::new(),
+                key: Some("material".into()),
+                reason: format!(
+                    "young = {:e} Pa over density = {:e} kg/m^3 gives wave speeds c_d = {c_d:e} \
+                     m/s, c_s = {c_s:e} m/s: they and the impedances must be positive and finite",
+                    m.young, m.density
+                ),
+            });
+        }
+        Ok(material)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::config::tests::{BASE, parse};
+
+    /// Found by `tests/fuzz_inputs.rs`: valid values whose wave speed is infinite or zero
+    /// reached tent pitching, which failed at run time (exit 1).
+    #[test]
+    fn wave_speeds_out_of_range_are_rejected() {
+        for set in [
+            ["material.density=5e-324", "material.young=3.24e9"],
+            ["material.density=1190.0", "material.young=5e-324"],
+            ["material.density=1e-10", "material.young=1e308"],
+        ] {
+            let e = parse(BASE, &set).unwrap_err();
+            assert_eq!(e.key.as_deref(), Some("material"), "{set:?}: {e}");
+            assert!(e.reason.contains("wave speeds"), "{set:?}: {e}");
+        }
+        assert!(parse(BASE, &["material.young=1e300", "material.density=1e300"]).is_ok());
     }
 }
