@@ -9,7 +9,6 @@ use sdg_solver::patch::{PatchReport, PatchSolver};
 
 use super::{InterfaceRecords, Outcome, Solve};
 use crate::adapt::Adapt;
-use crate::error::EngineError;
 use crate::frontier::{Coarsening, Frontier, Limits, Refined, refinement_edge_length};
 
 impl Solve<'_> {
@@ -272,12 +271,13 @@ fn midpoint(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
 }
 
 /// Bisects every triangle whose refinement edge is longer than `adapt.max_edge` (or a zone's at
-/// the edge's midpoint), on the flat initial front.
+/// the edge's midpoint), on the flat initial front; or says which key asks for what the mesh
+/// cannot give, and why.
 pub(super) fn refine_to_max_edge(
     state: &mut Frontier,
     adapt: &Adapt,
     max_star: usize,
-) -> Result<(), EngineError> {
+) -> Result<(), String> {
     let mut refined = Refined::default();
     let mut t: TriangleId = 0;
     while (t as usize) < state.mesh.triangles().len() {
@@ -292,11 +292,11 @@ pub(super) fn refine_to_max_edge(
         let before = state.mesh.triangles().len();
         state.refine(t, adapt.min_edge, max_star, &|_| 0.0, &mut refined);
         if state.mesh.triangles().len() == before {
-            return Err(EngineError::Runtime(format!(
-                "an edge of {limit} m (adapt.max_edge or a zone's) cannot be reached at \
+            return Err(format!(
+                "adapt.max_edge or adapt.zone: an edge of {limit} m cannot be reached at \
                  ({:e}, {:e}) m: a vertex star would exceed {max_star} triangles",
                 a[0], a[1]
-            )));
+            ));
         }
     }
     Ok(())

@@ -529,7 +529,10 @@ impl Start {
             pitcher,
         );
         if let Some(adapt) = &adapt {
-            refine_to_max_edge(&mut state, adapt, max_star)?;
+            // The config asks for what the mesh cannot give: bad input (exit 2).
+            refine_to_max_edge(&mut state, adapt, max_star).map_err(|reason| {
+                EngineError::Input(format!("{}: {reason}", problem.loaded.file.display()))
+            })?;
         }
         if let Some(fracture) = &problem.fracture {
             state.tips = fracture.initial_tips(&state.mesh);
