@@ -1,5 +1,5 @@
 //! Snapshots: time slices cut from the spacetime elements agree with the exact plane wave at
-//! every written point, and open in meshio.
+//! every written point (ASCII files), and open in meshio (binary files, the default).
 
 mod common;
 
@@ -29,6 +29,7 @@ fn snapshots_agree_with_the_exact_solution() {
     let overrides = common::set(&[
         ("time.end", "5e-7".into()),
         ("output.snapshot_times", format!("{times:?}")),
+        ("output.vtu", "\"ascii\"".into()),
     ]);
     let (summary, dir) = common::run(&text, &overrides);
     assert_eq!(summary.snapshots.len(), 3);
@@ -42,6 +43,7 @@ fn snapshots_agree_with_the_exact_solution() {
     let stress_scale = problem.material.c_d() * problem.material.density();
     for (t, file) in &summary.snapshots {
         let vtu = std::fs::read_to_string(dir.path().join(file)).unwrap();
+        assert!(!vtu.contains("format=\"binary\""));
         let points = data_array(&vtu[vtu.find("<Points>").unwrap()..], "<DataArray");
         let velocity = data_array(&vtu, "Name=\"velocity\"");
         let stress = data_array(&vtu, "Name=\"stress\"");
@@ -82,17 +84,32 @@ fn snapshots_open_in_meshio() {
         ("solver.order", "1".into()),
     ]);
     let (summary, dir) = common::run(&text, &overrides);
+    // Shapes, and the largest speed (exact whatever the summation order) to compare bit for bit.
     let script = "import sys, meshio\n\
                   m = meshio.read(sys.argv[1])\n\
-                  print(m.cells_dict['triangle'].shape[0], m.point_data['velocity'].shape[1], \
-                  m.point_data['stress'].shape[1], m.point_data['strain_energy_density'].ndim)";
+                  v = m.point_data['velocity']\n\
+                  print(m.cells_dict['triangle'].shape[0], v.shape[1], \
+                  m.point_data['stress'].shape[1], m.point_data['strain_energy_density'].ndim, \
+                  repr(float(abs(v).max())))";
     let snapshot = dir.path().join(&summary.snapshots[0].1);
-    let fields: Vec<usize> = common::python(script, &[&snapshot])
-        .split_whitespace()
-        .map(|w| w.parse().unwrap())
-        .collect();
+    let text = std::fs::read_to_string(&snapshot).unwrap();
+    assert!(text.contains("compressor=\"vtkZLibDataCompressor\""));
+    assert!(text.contains("format=\"binary\"") && !text.contains("format=\"ascii\""));
+    let out = common::python(script, &[&snapshot]);
+    let words: Vec<&str> = out.split_whitespace().collect();
+    let fields: Vec<usize> = words[..4].iter().map(|w| w.parse().unwrap()).collect();
     assert!(fields[0] >= 800, "{fields:?}");
     assert_eq!(&fields[1..], [3, 6, 1]);
+    let ours = sdg_engine::plot::VtuGrid::read(&snapshot).unwrap();
+    let velocity = &ours
+        .point_data
+        .iter()
+        .find(|f| f.name == "velocity")
+        .unwrap()
+        .values;
+    let max = velocity.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
+    assert!(max > 0.0);
+    assert_eq!(words[4].parse::<f64>().unwrap().to_bits(), max.to_bits());
     let pvd = std::fs::read_to_string(dir.path().join("snapshots.pvd")).unwrap();
     assert!(pvd.contains("snapshot_0000.vtu"));
 }

@@ -3,6 +3,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use crate::config::VtuFormat;
 use crate::error::EngineError;
 
 /// Writes `bytes` to `dir/name` through a temporary file and a rename, so that a failed or
@@ -69,7 +70,7 @@ impl Field {
 }
 
 /// An unstructured grid of one cell type with named fields, written as VTK XML
-/// (`.vtu`, ASCII, file version 1.0) that ParaView and meshio read.
+/// (`.vtu`, file version 1.0) that ParaView and meshio read.
 #[derive(Clone, Debug)]
 pub struct UnstructuredGrid {
     /// Cell type of every cell.
@@ -85,24 +86,30 @@ pub struct UnstructuredGrid {
 }
 
 impl UnstructuredGrid {
-    /// The grid as VTK XML text.
-    pub fn to_vtu(&self) -> String {
+    /// The grid as VTK XML text with its arrays in `format`. Floats read back bit for bit in
+    /// either format, and the same grid always gives the same text.
+    pub fn to_vtu(&self, format: VtuFormat) -> String {
         let nodes = self.cell_type.nodes();
         let cells = self.connectivity.len() / nodes;
-        let mut s = String::from(
+        let compressor = match format {
+            VtuFormat::Binary => " compressor=\"vtkZLibDataCompressor\"",
+            VtuFormat::Ascii => "",
+        };
+        let mut s = format!(
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" \
-             byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n",
+             byte_order=\"LittleEndian\" header_type=\"UInt64\"{compressor}>\n<UnstructuredGrid>\n"
         );
         let _ = writeln!(
             s,
             "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{cells}\">",
             self.points.len()
         );
+        let mut out = ArrayWriter { s, format };
         for (tag, data) in [
             ("PointData", &self.point_data),
             ("CellData", &self.cell_data),
         ] {
-            let _ = writeln!(s, "<{tag}>");
+            let _ = writeln!(out.s, "<{tag}>");
             for f in data {
                 let (name, components) = (&f.name, f.components);
                 let attrs = match components {
@@ -110,53 +117,125 @@ impl UnstructuredGrid {
                     _ => format!("Name=\"{name}\" NumberOfComponents=\"{components}\""),
                 };
                 let per_line = if components == 1 { 6 } else { components };
-                data_array(&mut s, "Float64", &attrs, f.values.iter(), per_line);
+                out.array(&attrs, f.values.iter().copied(), per_line);
             }
-            let _ = writeln!(s, "</{tag}>");
+            let _ = writeln!(out.s, "</{tag}>");
         }
-        s.push_str("<Points>\n");
-        let points = self.points.iter().flatten();
-        data_array(&mut s, "Float64", "NumberOfComponents=\"3\"", points, 3);
-        s.push_str("</Points>\n<Cells>\n");
-        let connectivity = self.connectivity.iter();
-        data_array(
-            &mut s,
-            "Int64",
-            "Name=\"connectivity\"",
-            connectivity,
-            nodes,
-        );
-        let offsets = (1..=cells).map(|c| c * nodes);
-        data_array(&mut s, "Int64", "Name=\"offsets\"", offsets, 10);
+        out.s.push_str("<Points>\n");
+        let points = self.points.iter().flatten().copied();
+        out.array("NumberOfComponents=\"3\"", points, 3);
+        out.s.push_str("</Points>\n<Cells>\n");
+        let connectivity = self.connectivity.iter().map(|&i| i64::from(i));
+        out.array("Name=\"connectivity\"", connectivity, nodes);
+        let offsets = (1..=cells).map(|c| i64::try_from(c * nodes).expect("offset fits i64"));
+        out.array("Name=\"offsets\"", offsets, 10);
         let types = std::iter::repeat_n(self.cell_type.vtk_id(), cells);
-        data_array(&mut s, "UInt8", "Name=\"types\"", types, 20);
-        s.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
-        s
+        out.array("Name=\"types\"", types, 20);
+        out.s
+            .push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+        out.s
     }
 }
 
-/// Appends an ASCII `DataArray` of type `ty` with extra attributes `attrs`, `per_line` values to
-/// a line. Floats use Rust's shortest round-trip form, so values read back exactly.
-fn data_array<T: std::fmt::Display>(
-    out: &mut String,
-    ty: &str,
-    attrs: &str,
-    values: impl Iterator<Item = T>,
-    per_line: usize,
-) {
-    let _ = writeln!(out, "<DataArray type=\"{ty}\" {attrs} format=\"ascii\">");
-    let mut count = 0;
-    for v in values {
-        if count > 0 {
-            out.push(if count % per_line == 0 { '\n' } else { ' ' });
+/// A value type of a `DataArray`: its VTK name, decimal form and little-endian bytes.
+trait VtkValue: std::fmt::Display {
+    const TYPE: &'static str;
+    fn put_le(&self, out: &mut Vec<u8>);
+}
+
+macro_rules! vtk_value {
+    ($t:ty, $name:literal) => {
+        impl VtkValue for $t {
+            const TYPE: &'static str = $name;
+            fn put_le(&self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
+            }
         }
-        let _ = write!(out, "{v}");
-        count += 1;
+    };
+}
+
+vtk_value!(f64, "Float64");
+vtk_value!(i64, "Int64");
+vtk_value!(u8, "UInt8");
+
+/// Uncompressed bytes per zlib block of a binary array (VTK's default).
+const BLOCK: usize = 1 << 15;
+/// zlib level of binary arrays: fast; floating-point bits compress little more at higher ones.
+const LEVEL: u8 = 1;
+
+/// Appends `DataArray` elements to VTK XML text.
+struct ArrayWriter {
+    s: String,
+    format: VtuFormat,
+}
+
+impl ArrayWriter {
+    /// Appends a `DataArray` of `values` with extra attributes `attrs`: in ASCII `per_line` values
+    /// to a line, floats in Rust's shortest round-trip form; in binary the zlib-compressed
+    /// little-endian bytes in VTK's block layout (UInt64 header `[blocks, block size, size of a
+    /// partial last block or 0, compressed size of each block]`), header and blocks base64
+    /// encoded one after the other.
+    fn array<T: VtkValue>(
+        &mut self,
+        attrs: &str,
+        values: impl Iterator<Item = T>,
+        per_line: usize,
+    ) {
+        let out = &mut self.s;
+        let ty = T::TYPE;
+        match self.format {
+            VtuFormat::Ascii => {
+                let _ = writeln!(out, "<DataArray type=\"{ty}\" {attrs} format=\"ascii\">");
+                let mut count = 0;
+                for v in values {
+                    if count > 0 {
+                        out.push(if count % per_line == 0 { '\n' } else { ' ' });
+                    }
+                    let _ = write!(out, "{v}");
+                    count += 1;
+                }
+                if count > 0 {
+                    out.push('\n');
+                }
+            }
+            VtuFormat::Binary => {
+                let _ = writeln!(out, "<DataArray type=\"{ty}\" {attrs} format=\"binary\">");
+                let mut raw = Vec::new();
+                values.for_each(|v| v.put_le(&mut raw));
+                let blocks: Vec<Vec<u8>> = raw
+                    .chunks(BLOCK)
+                    .map(|b| miniz_oxide::deflate::compress_to_vec_zlib(b, LEVEL))
+                    .collect();
+                let mut header = Vec::with_capacity(8 * (3 + blocks.len()));
+                let sizes = [blocks.len(), BLOCK, raw.len() % BLOCK]
+                    .into_iter()
+                    .chain(blocks.iter().map(Vec::len));
+                sizes.for_each(|n| header.extend_from_slice(&(n as u64).to_le_bytes()));
+                base64(out, &header);
+                base64(out, &blocks.concat());
+                out.push('\n');
+            }
+        }
+        out.push_str("</DataArray>\n");
     }
-    if count > 0 {
-        out.push('\n');
+}
+
+/// Appends the standard base64 encoding of `bytes` (with `=` padding) to `out`.
+pub(crate) fn base64(out: &mut String, bytes: &[u8]) {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    out.reserve(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let mut b = [0u8; 3];
+        b[..chunk.len()].copy_from_slice(chunk);
+        let bits = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
+        for k in 0..4 {
+            out.push(if k <= chunk.len() {
+                char::from(ALPHABET[(bits >> (18 - 6 * k) & 63) as usize])
+            } else {
+                '='
+            });
+        }
     }
-    out.push_str("</DataArray>\n");
 }
 
 #[cfg(test)]
@@ -176,13 +255,27 @@ mod tests {
                 values: vec![7.0, 8.0, 9.0],
             }],
         };
-        let text = grid.to_vtu();
+        let text = grid.to_vtu(VtuFormat::Ascii);
         assert!(text.contains("NumberOfPoints=\"4\" NumberOfCells=\"1\""));
         assert!(text.contains("Name=\"time\""));
         assert!(text.contains("Name=\"tent\" NumberOfComponents=\"3\" format=\"ascii\">\n7 8 9\n"));
         assert!(text.contains("0 0 0 0.5\n"));
         assert!(text.contains("Name=\"offsets\" format=\"ascii\">\n4\n"));
         assert!(text.contains("Name=\"types\" format=\"ascii\">\n10\n"));
+    }
+
+    #[test]
+    fn base64_is_the_standard_encoding() {
+        let encode = |bytes: &[u8]| {
+            let mut s = String::from(">");
+            base64(&mut s, bytes);
+            s
+        };
+        assert_eq!(encode(b""), ">");
+        assert_eq!(encode(b"Man"), ">TWFu");
+        assert_eq!(encode(b"Ma"), ">TWE=");
+        assert_eq!(encode(b"M"), ">TQ==");
+        assert_eq!(encode(&[0xfb, 0xff, 0xbf]), ">+/+/");
     }
 
     #[test]

@@ -251,7 +251,8 @@ pub fn mesh_job(
         estimate,
     };
     if let Some(s) = record.spacetime {
-        write_atomic(&dir, "spacetime.vtu", s.to_grid(c_max).to_vtu().as_bytes())?;
+        let vtu = s.to_grid(c_max).to_vtu(config.output.vtu);
+        write_atomic(&dir, "spacetime.vtu", vtu.as_bytes())?;
     }
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;

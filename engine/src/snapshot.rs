@@ -30,6 +30,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+use crate::config::VtuFormat;
 use crate::error::EngineError;
 use crate::output::{CellType, Field, UnstructuredGrid, write_atomic};
 use crate::plot::{FIELD_PNG_SIZE, FieldPlot, Values};
@@ -120,6 +121,9 @@ pub struct Snapshots {
     interface_files: Vec<(f64, String)>,
     /// Also draw each snapshot as `snapshot_NNNN.png`.
     png: bool,
+    /// Encoding of the `.vtu` files; not saved, a restart takes the current `output.vtu`.
+    #[serde(skip)]
+    vtu: VtuFormat,
 }
 
 impl std::fmt::Debug for Snapshots {
@@ -181,12 +185,19 @@ impl Snapshots {
             written: Vec::new(),
             interface_files: Vec::new(),
             png: false,
+            vtu: VtuFormat::default(),
         }
     }
 
     /// Also draw each snapshot as `snapshot_NNNN.png` (velocity magnitude, interfaces in red).
     pub fn with_png(mut self, png: bool) -> Self {
         self.png = png;
+        self
+    }
+
+    /// Writes the `.vtu` files in `format` (default binary).
+    pub fn with_vtu(mut self, format: VtuFormat) -> Self {
+        self.vtu = format;
         self
     }
 
@@ -276,9 +287,10 @@ impl Snapshots {
         }
     }
 
-    /// Writes the snapshots still to come to `dir` (a run restored from a checkpoint).
-    pub fn set_dir(&mut self, dir: &std::path::Path) {
+    /// Writes the snapshots still to come to `dir` in `vtu` (a run restored from a checkpoint).
+    pub fn set_output(&mut self, dir: &std::path::Path, vtu: VtuFormat) {
         self.dir = dir.to_path_buf();
+        self.vtu = vtu;
     }
 
     /// Writes every pending snapshot whose time is `<= front_min_time` (s), except that the
@@ -303,7 +315,7 @@ impl Snapshots {
             write_atomic(
                 &self.dir,
                 &name,
-                triangles_grid(&triangles).to_vtu().as_bytes(),
+                triangles_grid(&triangles).to_vtu(self.vtu).as_bytes(),
             )?;
             self.written.push((snap.time, name));
             if self.png && !triangles.is_empty() {
@@ -320,7 +332,7 @@ impl Snapshots {
                 write_atomic(
                     &self.dir,
                     &name,
-                    segments_grid(&segments).to_vtu().as_bytes(),
+                    segments_grid(&segments).to_vtu(self.vtu).as_bytes(),
                 )?;
                 self.interface_files.push((snap.time, name));
             }
@@ -618,29 +630,20 @@ mod tests {
         }
     }
 
-    /// The numbers of the `DataArray` whose opening tag contains `key`.
-    fn array(text: &str, key: &str) -> Vec<f64> {
-        let start = text.find(key).unwrap_or_else(|| panic!("no {key}"));
-        let mut body = &text[start..];
-        if key.starts_with('<') {
-            body = &body[body.find("<DataArray").unwrap()..];
-        }
-        let body = &body[body.find('>').unwrap() + 1..body.find("</DataArray>").unwrap()];
-        body.split_whitespace()
-            .map(|w| w.parse().unwrap())
-            .collect()
-    }
-
     /// Reads `file`, checks that the corner values are `linear` at `tau` and returns the total
     /// triangle area and the number of triangles.
     fn check_file(dir: &std::path::Path, file: &str, tau: f64) -> (f64, usize) {
-        let text = std::fs::read_to_string(dir.join(file)).unwrap();
-        let points = array(&text, "<Points>");
-        let velocity = array(&text, "Name=\"velocity\"");
-        let stress = array(&text, "Name=\"stress\"");
-        let displacement = array(&text, "Name=\"displacement\"");
-        let sed = array(&text, "Name=\"strain_energy_density\"");
-        let areas = array(&text, "Name=\"area\"");
+        let grid = crate::plot::VtuGrid::read(&dir.join(file)).unwrap();
+        let field = |name: &str| {
+            let mut fields = grid.point_data.iter().chain(&grid.cell_data);
+            fields.find(|f| f.name == name).unwrap().values.clone()
+        };
+        let points: Vec<f64> = grid.points.iter().flatten().copied().collect();
+        let velocity = field("velocity");
+        let stress = field("stress");
+        let displacement = field("displacement");
+        let sed = field("strain_energy_density");
+        let areas = field("area");
         let n = points.len() / 3;
         assert_eq!(n % 3, 0);
         assert_eq!(velocity.len(), 3 * n);
@@ -750,13 +753,16 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         // c_ref = 2: tau = 2 t.
         let times_s: Vec<f64> = times.iter().map(|t| t / 2.0).collect();
-        let mut snaps = Snapshots::new(&times_s, 2.0, dir.path().to_path_buf());
+        let mut snaps =
+            Snapshots::new(&times_s, 2.0, dir.path().to_path_buf()).with_vtu(VtuFormat::Ascii);
         for e in &elements {
             snaps.add_element(e, linear);
         }
         assert_eq!(snaps.flush(1.0).unwrap(), times.len());
         for (i, (time, file)) in snaps.written().iter().enumerate() {
             assert_eq!(*time, times_s[i]);
+            let text = std::fs::read_to_string(dir.path().join(file)).unwrap();
+            assert!(text.contains("format=\"ascii\"") && !text.contains("format=\"binary\""));
             let (area, _) = check_file(dir.path(), file, times[i]);
             assert!(
                 (area - 1.0).abs() <= 1e-12,

@@ -27,7 +27,7 @@ pub(crate) use mesh::rectangle_key;
 pub use mesh::{DiagonalName, MeshConfig, MeshKind, SegmentConfig};
 pub use settings::{
     AdaptConfig, CheckpointConfig, LimitsConfig, OutputConfig, PitchConfig, SchedulerConfig,
-    SolverConfig, TimeConfig, ZoneConfig,
+    SolverConfig, TimeConfig, VtuFormat, ZoneConfig,
 };
 
 use overrides::apply_override;

@@ -120,6 +120,21 @@ pub struct OutputConfig {
     /// `history.png` (energies against time). Default false.
     #[serde(default)]
     pub png: bool,
+    /// Encoding of every `.vtu` file written. Default binary.
+    #[serde(default)]
+    pub vtu: VtuFormat,
+}
+
+/// `output.vtu`: how VTK XML files store their arrays; the values are the same either way.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum VtuFormat {
+    /// Inline base64 of zlib-compressed little-endian bytes (`format="binary"`,
+    /// `vtkZLibDataCompressor`, `UInt64` headers): compact and fast.
+    #[default]
+    Binary,
+    /// Decimal text, shortest round-trip form: readable, larger and slower.
+    Ascii,
 }
 
 fn default_output_dir() -> PathBuf {
@@ -134,6 +149,7 @@ impl Default for OutputConfig {
             snapshot_times: Vec::new(),
             interface_probes: Vec::new(),
             png: false,
+            vtu: VtuFormat::default(),
         }
     }
 }

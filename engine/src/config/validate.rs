@@ -368,6 +368,7 @@ mod tests {
                 "output.interface_probes[0]",
                 "finite",
             ),
+            ("output.vtu=hex", "output.vtu", "unknown variant `hex`"),
             (
                 "mesh.interface.1.from=[0.008, 0.0001]",
                 "mesh.interface[1]",

@@ -533,33 +533,72 @@ fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::VtuFormat;
     use crate::output::{CellType, UnstructuredGrid};
 
     #[test]
-    fn our_ascii_files_read_back_exactly() {
+    fn our_files_read_back_bit_for_bit() {
+        // A strip of 2 n triangles: the binary arrays span several zlib blocks, the last one
+        // partial; awkward floats.
+        let n = 700;
+        let points: Vec<[f64; 3]> = (0..2 * (n + 1))
+            .map(|i| [(i / 2) as f64 / 3.0, (i % 2) as f64 * 0.1, -0.0])
+            .collect();
+        let connectivity = (0..n as u32)
+            .flat_map(|c| [2 * c, 2 * c + 2, 2 * c + 1, 2 * c + 1, 2 * c + 2, 2 * c + 3])
+            .collect();
+        let special = [f64::MAX, f64::MIN_POSITIVE, 5e-324, -0.0, 0.1 + 0.2, -1e300];
+        let velocity = (0..3 * points.len())
+            .map(|i| special.get(i).copied().unwrap_or((i as f64).sqrt().sin()))
+            .collect();
         let grid = UnstructuredGrid {
             cell_type: CellType::Triangle,
-            points: vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 0.1, 0.0],
-                [1.0, 1.0, 0.0],
-            ],
-            connectivity: vec![0, 1, 2, 1, 3, 2],
+            points,
+            connectivity,
             point_data: vec![Field {
                 name: "velocity".into(),
                 components: 3,
-                values: (0..12).map(|i| f64::from(i) / 3.0).collect(),
+                values: velocity,
             }],
-            cell_data: vec![Field::scalar("area", vec![0.05, 0.45])],
+            cell_data: vec![Field::scalar(
+                "area",
+                (0..2 * n).map(|i| (i as f64).exp()).collect(),
+            )],
         };
-        let read = VtuGrid::parse(grid.to_vtu().as_bytes()).unwrap();
-        assert_eq!(read.points, grid.points);
-        assert_eq!(read.connectivity, grid.connectivity);
-        assert_eq!(read.point_data, grid.point_data);
-        assert_eq!(read.cell_data, grid.cell_data);
-        assert_eq!(read.triangles(), [([0, 1, 2], 0), ([1, 3, 2], 1)]);
-        assert!(read.lines().is_empty());
+        let empty = UnstructuredGrid {
+            cell_type: CellType::Line,
+            points: Vec::new(),
+            connectivity: Vec::new(),
+            point_data: vec![Field::scalar("delta", Vec::new())],
+            cell_data: Vec::new(),
+        };
+        let bits = |fields: &[Field]| -> Vec<(String, usize, Vec<u64>)> {
+            fields
+                .iter()
+                .map(|f| {
+                    let values = f.values.iter().map(|v| v.to_bits()).collect();
+                    (f.name.clone(), f.components, values)
+                })
+                .collect()
+        };
+        for format in [VtuFormat::Ascii, VtuFormat::Binary] {
+            let text = grid.to_vtu(format);
+            assert_eq!(text, grid.to_vtu(format), "deterministic");
+            let read = VtuGrid::parse(text.as_bytes()).unwrap();
+            let flat = |p: &[[f64; 3]]| p.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(flat(&read.points), flat(&grid.points), "{format:?}");
+            assert_eq!(read.connectivity, grid.connectivity);
+            assert_eq!(bits(&read.point_data), bits(&grid.point_data), "{format:?}");
+            assert_eq!(bits(&read.cell_data), bits(&grid.cell_data), "{format:?}");
+            assert_eq!(read.triangles()[1], ([1, 2, 3], 1));
+            assert!(read.lines().is_empty());
+            let binary = text.contains("format=\"binary\"");
+            assert_eq!(binary, format == VtuFormat::Binary);
+            assert_eq!(binary, !text.contains("format=\"ascii\""));
+            let read = VtuGrid::parse(empty.to_vtu(format).as_bytes()).unwrap();
+            assert!(read.points.is_empty() && read.types.is_empty());
+            assert_eq!(bits(&read.point_data), bits(&empty.point_data));
+        }
     }
 
     #[test]
@@ -575,20 +614,8 @@ mod tests {
     fn binary_array(values: &[f64], zlib: bool) -> String {
         let data: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
         let encode = |bytes: &[u8]| {
-            const ABC: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
             let mut s = String::new();
-            for chunk in bytes.chunks(3) {
-                let mut b = [0u8; 3];
-                b[..chunk.len()].copy_from_slice(chunk);
-                let bits = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
-                for k in 0..4 {
-                    if k <= chunk.len() {
-                        s.push(ABC[(bits >> (18 - 6 * k) & 63) as usize] as char);
-                    } else {
-                        s.push('=');
-                    }
-                }
-            }
+            crate::output::base64(&mut s, bytes);
             s
         };
         if zlib {

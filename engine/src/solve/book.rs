@@ -158,12 +158,18 @@ pub(super) struct Book {
 
 impl Book {
     /// Makes a book read from a checkpoint ready to go on: scratch for `basis_len` basis
-    /// functions of `width` fields, snapshots written to `dir`.
-    pub(super) fn resume(&mut self, dir: &std::path::Path, basis_len: usize, width: usize) {
+    /// functions of `width` fields, snapshots written to `dir` in `vtu`.
+    pub(super) fn resume(
+        &mut self,
+        dir: &std::path::Path,
+        vtu: crate::config::VtuFormat,
+        basis_len: usize,
+        width: usize,
+    ) {
         self.phi = vec![0.0; basis_len];
         self.values = vec![0.0; width];
         self.coefficients = vec![0.0; basis_len * width];
-        self.snapshots.set_dir(dir);
+        self.snapshots.set_output(dir, vtu);
     }
 }
 

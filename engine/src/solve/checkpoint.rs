@@ -36,7 +36,13 @@ const PREAMBLE: usize = 8 + 4 + 8 + 4;
 /// zlib level: fast; the solution's floating-point bits compress little anyway.
 const LEVEL: u8 = 1;
 /// Configuration keys a restart may change: they do not enter the state.
-const FREE_KEYS: [&str; 4] = ["scheduler", "limits", "checkpoint", "output.dir"];
+const FREE_KEYS: [&str; 5] = [
+    "scheduler",
+    "limits",
+    "checkpoint",
+    "output.dir",
+    "output.vtu",
+];
 
 /// Requests to a running solve from outside its workers (signals, job control): it pauses at
 /// the next quiescent point, writes a checkpoint and goes on, or stops with exit code 3.
@@ -396,8 +402,13 @@ mod tests {
             config_difference(a, &other).as_deref(),
             Some("interface.1.strength")
         );
-        let other = a.replace("\"png\":true", "\"png\":true,\"vtu\":\"ascii\"");
-        assert_eq!(config_difference(a, &other).as_deref(), Some("output.vtu"));
+        let other = a.replace("\"png\":true", "\"png\":true,\"spacetime_mesh\":true");
+        assert_eq!(
+            config_difference(a, &other).as_deref(),
+            Some("output.spacetime_mesh")
+        );
+        let ascii = a.replace("\"png\":true", "\"png\":true,\"vtu\":\"ascii\"");
+        assert_eq!(config_difference(a, &ascii), None);
         let without_limits = a.replace(r#""scheduler":{"threads":1},"#, "");
         assert_eq!(config_difference(a, &without_limits), None);
     }

@@ -667,7 +667,8 @@ fn run_job(
             dofs: 0,
             max_slope_ratio: 0.0,
             snapshots: Snapshots::new(&config.output.snapshot_times, c_max, dir.clone())
-                .with_png(config.output.png),
+                .with_png(config.output.png)
+                .with_vtu(config.output.vtu),
             milestones: Milestones::new(
                 state.mesh.vertices().len(),
                 t_end,
@@ -703,7 +704,7 @@ fn run_job(
             counts = restored.counts;
             state = restored.frontier;
             let mut book = restored.book;
-            book.resume(&dir, basis.len(), width);
+            book.resume(&dir, config.output.vtu, basis.len(), width);
             let done: f64 = state.front.snapshot().iter().sum();
             book.progress =
                 Progress::new(options.progress, state.mesh.vertices().len() as f64 * t_end);
