@@ -124,6 +124,36 @@ pub struct Snapshots {
     /// Encoding of the `.vtu` files; not saved, a restart takes the current `output.vtu`.
     #[serde(skip)]
     vtu: VtuFormat,
+    /// The thread that writes the files, while it has work or until [`Snapshots::finish`].
+    #[serde(skip)]
+    writer: Option<Writer>,
+}
+
+/// Writing one snapshot's files.
+type Job = Box<dyn FnOnce() -> Result<(), EngineError> + Send>;
+
+/// A thread that runs [`Job`]s in the order they come, so that no worker waits for the disk
+/// or for a picture being drawn; it keeps the first error.
+struct Writer {
+    jobs: std::sync::mpsc::Sender<Job>,
+    thread: std::thread::JoinHandle<Result<(), EngineError>>,
+}
+
+impl Writer {
+    fn start() -> Self {
+        let (jobs, queue) = std::sync::mpsc::channel::<Job>();
+        let thread = std::thread::spawn(move || {
+            let mut result = Ok(());
+            for job in queue {
+                let done = job();
+                if result.is_ok() {
+                    result = done;
+                }
+            }
+            result
+        });
+        Self { jobs, thread }
+    }
 }
 
 impl std::fmt::Debug for Snapshots {
@@ -186,6 +216,7 @@ impl Snapshots {
             interface_files: Vec::new(),
             png: false,
             vtu: VtuFormat::default(),
+            writer: None,
         }
     }
 
@@ -293,9 +324,31 @@ impl Snapshots {
         self.vtu = vtu;
     }
 
+    /// Hands `job` to the writer thread, started if need be.
+    fn submit(&mut self, job: Job) {
+        let writer = self.writer.get_or_insert_with(Writer::start);
+        if let Err(std::sync::mpsc::SendError(job)) = writer.jobs.send(job) {
+            // The thread is gone (it panicked): write here; finish() reports the panic.
+            let _ = job();
+        }
+    }
+
+    /// Waits until every file handed to the writer thread is written; returns the first error
+    /// of a write. Files are complete on disk after it (before a checkpoint, at the end).
+    pub fn finish(&mut self) -> Result<(), EngineError> {
+        let Some(Writer { jobs, thread }) = self.writer.take() else {
+            return Ok(());
+        };
+        drop(jobs);
+        thread
+            .join()
+            .map_err(|_| EngineError::Runtime("the snapshot writer panicked".into()))?
+    }
+
     /// Writes every pending snapshot whose time is `<= front_min_time` (s), except that the
     /// start-time snapshot waits for `front_min_time > t_s` (see the module docs), frees its
-    /// triangles and rewrites `snapshots.pvd`. Returns how many were written.
+    /// triangles and rewrites `snapshots.pvd`. Returns how many are written: on a thread of
+    /// their own, complete after [`Snapshots::finish`], which reports a failed write.
     pub fn flush(&mut self, front_min_time: f64) -> Result<usize, EngineError> {
         let mut count = 0;
         while let Some(snap) = self.snapshots.get_mut(self.next) {
@@ -311,36 +364,42 @@ impl Snapshots {
                 snap.fallback = Vec::new();
                 std::mem::take(&mut snap.triangles)
             };
-            let name = format!("snapshot_{:04}.vtu", snap.index);
-            write_atomic(
-                &self.dir,
-                &name,
-                triangles_grid(&triangles).to_vtu(self.vtu).as_bytes(),
-            )?;
-            self.written.push((snap.time, name));
-            if self.png && !triangles.is_empty() {
-                let name = format!("snapshot_{:04}.png", snap.index);
-                let path = self.dir.join(&name);
-                // A picture that cannot be drawn must not end a run: warn and go on.
-                if let Err(e) = draw_png(&triangles, &snap.segments, snap.time, &path) {
-                    tracing::warn!("{}: {e}", path.display());
-                }
+            let segments = std::mem::take(&mut snap.segments);
+            let (index, time) = (snap.index, snap.time);
+            let name = format!("snapshot_{index:04}.vtu");
+            self.written.push((time, name.clone()));
+            let interface = format!("interface_{index:04}.vtu");
+            if !segments.is_empty() {
+                self.interface_files.push((time, interface.clone()));
             }
-            if !snap.segments.is_empty() {
-                let segments = std::mem::take(&mut snap.segments);
-                let name = format!("interface_{:04}.vtu", snap.index);
+            let (dir, vtu, png) = (self.dir.clone(), self.vtu, self.png);
+            self.submit(Box::new(move || {
                 write_atomic(
-                    &self.dir,
+                    &dir,
                     &name,
-                    segments_grid(&segments).to_vtu(self.vtu).as_bytes(),
+                    triangles_grid(&triangles).to_vtu(vtu).as_bytes(),
                 )?;
-                self.interface_files.push((snap.time, name));
-            }
+                if png && !triangles.is_empty() {
+                    let path = dir.join(format!("snapshot_{index:04}.png"));
+                    // A picture that cannot be drawn must not end a run: warn and go on.
+                    if let Err(e) = draw_png(&triangles, &segments, time, &path) {
+                        tracing::warn!("{}: {e}", path.display());
+                    }
+                }
+                if !segments.is_empty() {
+                    let grid = segments_grid(&segments);
+                    write_atomic(&dir, &interface, grid.to_vtu(vtu).as_bytes())?;
+                }
+                Ok(())
+            }));
             self.next += 1;
             count += 1;
         }
         if count > 0 {
-            write_atomic(&self.dir, "snapshots.pvd", self.pvd().as_bytes())?;
+            let (dir, pvd) = (self.dir.clone(), self.pvd());
+            self.submit(Box::new(move || {
+                write_atomic(&dir, "snapshots.pvd", pvd.as_bytes()).map(drop)
+            }));
         }
         Ok(count)
     }
@@ -696,6 +755,7 @@ mod tests {
             snaps.add_element(e, linear);
         }
         assert_eq!(snaps.flush(0.5).unwrap(), 2);
+        snaps.finish().unwrap();
         let names = ["snapshot_0000.vtu", "snapshot_0001.vtu"];
         assert_eq!(
             snaps.written(),
@@ -707,6 +767,7 @@ mod tests {
 
         assert_eq!(snaps.flush(2.0).unwrap(), 3);
         assert_eq!(snaps.flush(2.0).unwrap(), 0);
+        snaps.finish().unwrap();
         let pvd = std::fs::read_to_string(dir.path().join("snapshots.pvd")).unwrap();
         let listed = timesteps(&pvd);
         assert_eq!(listed.len(), 5);
@@ -759,6 +820,7 @@ mod tests {
             snaps.add_element(e, linear);
         }
         assert_eq!(snaps.flush(1.0).unwrap(), times.len());
+        snaps.finish().unwrap();
         for (i, (time, file)) in snaps.written().iter().enumerate() {
             assert_eq!(*time, times_s[i]);
             let text = std::fs::read_to_string(dir.path().join(file)).unwrap();
@@ -770,6 +832,21 @@ mod tests {
                 times[i]
             );
         }
+    }
+
+    #[test]
+    fn files_are_written_off_the_caller_and_their_errors_come_at_finish() {
+        let file = tempfile::NamedTempFile::new().unwrap();
+        // A folder inside a file cannot be made: every write fails.
+        let mut snaps = Snapshots::new(&[0.3], 1.0, file.path().join("out"));
+        for e in tets(&[[0.0; 4], [1.0; 4]]) {
+            snaps.add_element(&e, linear);
+        }
+        assert_eq!(snaps.flush(1.0).unwrap(), 1, "the caller does not wait");
+        assert_eq!(snaps.written().len(), 1);
+        let e = snaps.finish().unwrap_err();
+        assert!(e.to_string().contains("out"), "{e}");
+        assert!(snaps.finish().is_ok(), "reported once");
     }
 
     #[test]
@@ -809,6 +886,7 @@ mod tests {
             snaps.add_element(&e, linear);
         }
         snaps.flush(1.0).unwrap();
+        snaps.finish().unwrap();
         let path = dir.path().join(&snaps.written()[0].1);
         let script = "import sys, meshio\n\
                       m = meshio.read(sys.argv[1])\n\

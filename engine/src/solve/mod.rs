@@ -140,6 +140,9 @@ impl Solve<'_> {
         let config = &self.problem.loaded.config;
         let mut book = self.book.lock();
         book.progress.finish();
+        if let Err(e) = book.snapshots.finish() {
+            tracing::warn!("a snapshot could not be written: {e}");
+        }
         self.history_row(state, &mut book);
         write_atomic(dir, "history.csv", book.history.as_bytes())?;
         if config.output.png {
@@ -763,7 +766,11 @@ fn run_job(
         // Quiescent: no tent in flight, no event queued.
         let request = solve.control.take();
         let written = Instant::now();
-        let path = folder.write(config, counts, &state, &solve.book.lock())?;
+        let mut book = solve.book.lock();
+        // The snapshots the checkpoint counts as written must be on disk.
+        book.snapshots.finish()?;
+        let path = folder.write(config, counts, &state, &book)?;
+        drop(book);
         counts.written += 1;
         checkpoints.written += 1;
         checkpoints.write_seconds += written.elapsed().as_secs_f64();
@@ -795,6 +802,7 @@ fn run_job(
     book.progress.finish();
     solve.history_row(&state, &mut book);
     book.snapshots.flush(t_end)?;
+    book.snapshots.finish()?;
     tracing::info!(patches = stats.tents, wall_time_s, "solve finished");
 
     let Frontier {
