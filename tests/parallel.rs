@@ -115,3 +115,28 @@ fn deterministic_mode_is_bitwise_identical_with_contact_and_adaptivity() {
         }
     }
 }
+
+#[test]
+fn the_stage_timings_account_for_the_wall_time() {
+    let problem = plane_wave(&["mesh.nx=16", "mesh.ny=16", "solver.order=2"]);
+    for deterministic in [false, true] {
+        let (summary, _dir) = solve(&problem, 2, deterministic);
+        let t = summary.timings;
+        let stages = [
+            t.pitching_s,
+            t.assembly_s,
+            t.solve_s,
+            t.evaluation_s,
+            t.events_s,
+            t.waiting_s,
+            t.output_s,
+        ];
+        let threads_wall = summary.wall_time_s * summary.threads as f64;
+        let ratio = stages.iter().sum::<f64>() / threads_wall;
+        eprintln!("deterministic {deterministic}: {t:?}, sum / (wall x threads) = {ratio:.3}");
+        assert!(stages.iter().all(|&s| s >= 0.0) && t.assembly_s > 0.0 && t.solve_s > 0.0);
+        // Workers are solving, waiting or bookkeeping all the time; scheduling and claims
+        // between stages take the rest.
+        assert!((0.7..=1.3).contains(&ratio), "{ratio}");
+    }
+}

@@ -21,6 +21,7 @@ mod serial;
 mod sync;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
 
 use parking_lot::Mutex;
 use sdg_mesh::{Front, Mesh};
@@ -176,6 +177,28 @@ pub struct Stats {
     pub events: u64,
     /// The run paused at [`Work::pause`]'s request before the front reached the end time.
     pub paused: bool,
+    /// Time spent running events, with the state held exclusively.
+    pub event_time: Duration,
+    /// Time the workers spent without a tent, summed over workers: asleep with nothing ready,
+    /// waiting for the state's lock (events) or, in deterministic mode, at the round's
+    /// barriers while others solve, the main thread records and events run.
+    pub wait_time: Duration,
+}
+
+/// Nanoseconds summed from several threads.
+#[derive(Debug, Default)]
+struct Clock(std::sync::atomic::AtomicU64);
+
+impl Clock {
+    /// Adds the time since `start`.
+    fn add_since(&self, start: std::time::Instant) {
+        let ns = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
+        self.0.fetch_add(ns, Ordering::Relaxed);
+    }
+
+    fn total(&self) -> Duration {
+        Duration::from_nanos(self.0.load(Ordering::Relaxed))
+    }
 }
 
 /// What stopped a run before the front reached the end time.

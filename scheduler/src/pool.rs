@@ -15,7 +15,9 @@ use crossbeam_deque::{Injector, Steal, Stealer, Worker};
 use parking_lot::{Condvar, Mutex, RwLock};
 
 use crate::claim::ClaimTable;
-use crate::{Events, RunError, State, Stats, VertexId, Work, below_end, is_ready, panic_message};
+use crate::{
+    Clock, Events, RunError, State, Stats, VertexId, Work, below_end, is_ready, panic_message,
+};
 
 /// The state and the claims on its vertices: shared by tents, exclusive for events.
 struct Locked<'s, S> {
@@ -45,6 +47,8 @@ struct Shared<'s, 'a, W: Work<'a>> {
     events: Events<'a, W::State>,
     events_run: AtomicU64,
     tents: Vec<AtomicU64>,
+    event_time: Clock,
+    wait_time: Clock,
 }
 
 pub(crate) fn run<'a, W: Work<'a>>(
@@ -79,6 +83,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
         events: Events::default(),
         events_run: AtomicU64::new(0),
         tents: (0..threads).map(|_| AtomicU64::new(0)).collect(),
+        event_time: Clock::default(),
+        wait_time: Clock::default(),
     };
     for v in ready {
         shared.queued.fetch_add(1, Ordering::SeqCst);
@@ -108,12 +114,14 @@ pub(crate) fn run<'a, W: Work<'a>>(
     // Events queued by the last tents, which the workers may have left when the front reached
     // the end: no tent is in flight any more, so they run here in queue order.
     let locked = shared.locked.into_inner();
+    let draining = std::time::Instant::now();
     for action in shared.events.take() {
         let changed = catch_unwind(AssertUnwindSafe(|| action(locked.state)))
             .map_err(|payload| RunError::Panic(panic_message(payload)))?;
         count_remaining(&shared.remaining, changed.below_end);
         shared.events_run.fetch_add(1, Ordering::Relaxed);
     }
+    shared.event_time.add_since(draining);
     let remaining = shared.remaining.load(Ordering::SeqCst);
     let paused = shared.paused.load(Ordering::SeqCst);
     if remaining > 0 && !paused {
@@ -130,6 +138,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
         rounds: 0,
         events: shared.events_run.load(Ordering::Relaxed),
         paused: paused && remaining > 0,
+        event_time: shared.event_time.total(),
+        wait_time: shared.wait_time.total(),
     })
 }
 
@@ -204,7 +214,9 @@ fn sleep<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>) {
         return;
     }
     *sleeping += 1;
+    let asleep = std::time::Instant::now();
     shared.wake.wait(&mut sleeping);
+    shared.wait_time.add_since(asleep);
     *sleeping -= 1;
 }
 
@@ -223,7 +235,9 @@ fn tent<'a, W: Work<'a>>(
     scratch: &mut W::Scratch,
     v: VertexId,
 ) {
+    let asked = std::time::Instant::now();
     let locked = shared.locked.read();
+    shared.wait_time.add_since(asked);
     let state = &*locked.state;
     if !is_ready(state, shared.t_end, v) {
         return;
@@ -289,11 +303,14 @@ fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<Vertex
     if shared.events.pending.load(Ordering::Acquire) == 0 {
         return;
     }
+    let asked = std::time::Instant::now();
     let mut locked = shared.locked.write();
+    shared.wait_time.add_since(asked);
     let actions = shared.events.take();
     if actions.is_empty() {
         return;
     }
+    let running = std::time::Instant::now();
     let mut touched = Vec::new();
     for action in actions {
         let changed = action(locked.state);
@@ -306,6 +323,7 @@ fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<Vertex
     }
     let end_reached = shared.remaining.load(Ordering::SeqCst) == 0;
     drop(locked);
+    shared.event_time.add_since(running);
     if end_reached {
         wake_all(shared);
     }

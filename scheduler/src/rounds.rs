@@ -13,7 +13,9 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use parking_lot::{Mutex, RwLock};
 
-use crate::{Events, RunError, State, Stats, VertexId, Work, below_end, is_ready, panic_message};
+use crate::{
+    Clock, Events, RunError, State, Stats, VertexId, Work, below_end, is_ready, panic_message,
+};
 
 /// What a worker's tent gave: its outcome or error, or the message of its panic.
 type Tried<O, E> = Result<Result<O, E>, String>;
@@ -47,15 +49,25 @@ pub(crate) fn run<'a, W: Work<'a>>(
         ..Stats::default()
     };
     let per_thread: Vec<AtomicUsize> = (0..threads).map(|_| AtomicUsize::new(0)).collect();
+    let (event_time, wait_time) = (Clock::default(), Clock::default());
     let mut ready: Vec<(f64, VertexId)> = Vec::with_capacity(n);
     let mut taken = vec![false; n];
     let outcome = std::thread::scope(|s| {
         for (id, mut scratch) in scratch.into_iter().enumerate() {
-            let (round, barrier, done, events, per_thread, state) =
-                (&round, &barrier, &done, &events, &per_thread, &state);
+            let (round, barrier, done, events, per_thread, state, wait_time) = (
+                &round,
+                &barrier,
+                &done,
+                &events,
+                &per_thread,
+                &state,
+                &wait_time,
+            );
             s.spawn(move || {
                 loop {
+                    let idle = std::time::Instant::now();
                     barrier.wait();
+                    wait_time.add_since(idle);
                     if done.load(Ordering::Acquire) {
                         return;
                     }
@@ -76,7 +88,9 @@ pub(crate) fn run<'a, W: Work<'a>>(
                             per_thread[id].fetch_add(1, Ordering::Relaxed);
                         }
                     }
+                    let idle = std::time::Instant::now();
                     barrier.wait();
+                    wait_time.add_since(idle);
                 }
             });
         }
@@ -140,11 +154,13 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 stats.rounds += 1;
                 drop(r);
                 let mut guard = state.write();
+                let running = std::time::Instant::now();
                 for action in events.take() {
                     action(&mut **guard);
                     events.pending.fetch_sub(1, Ordering::AcqRel);
                     stats.events += 1;
                 }
+                event_time.add_since(running);
                 n = guard.mesh().vertices().len();
                 taken.resize(n, false);
             }
@@ -157,5 +173,10 @@ pub(crate) fn run<'a, W: Work<'a>>(
     for (count, total) in per_thread.iter().zip(&mut stats.tents_per_thread) {
         *total = count.load(Ordering::Relaxed) as u64;
     }
-    outcome.map(|paused| Stats { paused, ..stats })
+    outcome.map(|paused| Stats {
+        paused,
+        event_time: event_time.total(),
+        wait_time: wait_time.total(),
+        ..stats
+    })
 }

@@ -72,6 +72,7 @@ pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
                     "peak_memory_bytes",
                     "estimate",
                     "checkpoint",
+                    "timings",
                 ] {
                     json.as_object_mut().unwrap().remove(key);
                 }

@@ -138,6 +138,9 @@ pub(super) struct Book {
     pub(super) elements: u64,
     pub(super) dofs: u64,
     pub(super) max_slope_ratio: f64,
+    /// Wall time by stage so far, but the scheduler's (events, waiting).
+    #[serde(default)]
+    pub(super) timings: super::Timings,
     pub(super) snapshots: Snapshots,
     pub(super) milestones: Milestones,
     #[serde(skip)]
@@ -177,6 +180,9 @@ impl Solve<'_> {
     /// Adds a solved patch to the totals.
     pub(super) fn add_patch(&self, book: &mut Book, report: &PatchReport) {
         book.patches += 1;
+        book.timings.assembly_s += report.assembly_s;
+        book.timings.solve_s += report.solve_s;
+        book.timings.evaluation_s += report.evaluation_s;
         book.elements += report.elements as u64;
         book.dofs += report.dofs as u64;
         book.totals.energy_in += report.energy_in;

@@ -102,6 +102,7 @@ impl Control {
 
 /// Counts of the run so far that live outside the bookkeeping.
 #[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub(super) struct Counts {
     /// Tents, topology events and deterministic rounds so far.
     pub(super) tents: u64,
@@ -109,6 +110,9 @@ pub(super) struct Counts {
     pub(super) rounds: u64,
     /// Wall time of the solve so far, s, over every restart.
     pub(super) wall_time_s: f64,
+    /// The scheduler's events and waiting so far, s, summed over threads.
+    pub(super) events_s: f64,
+    pub(super) waiting_s: f64,
     /// Checkpoints written so far: the number of the next file.
     pub(super) written: u64,
 }

@@ -51,7 +51,9 @@ pub use live::{Live, solve_job_with};
 use propagation::Extension;
 pub use propagation::FractureSummary;
 use summary::state_hash;
-pub use summary::{CheckpointSummary, EnergySummary, ErrorSummary, InterfaceSummary, RunSummary};
+pub use summary::{
+    CheckpointSummary, EnergySummary, ErrorSummary, InterfaceSummary, RunSummary, Timings,
+};
 
 /// The read-only context and the bookkeeping of a solve.
 struct Solve<'a> {
@@ -179,6 +181,8 @@ enum Outcome {
     Accepted {
         t_old: f64,
         t_new: f64,
+        /// Wall time computing the tent height, s.
+        pitching_s: f64,
         report: PatchReport,
         interface: InterfaceRecords,
         /// The crack tip at the vertex extends.
@@ -275,9 +279,11 @@ impl<'a> Work<'a> for Solve<'a> {
                 return Ok((front.time(v), outcome));
             }
         }
+        let pitching = Instant::now();
         let t_new = state.pitcher.pole_height(mesh, front, v).ok_or_else(|| {
             EngineError::Runtime(format!("vertex {v} was claimed but cannot be pitched"))
         })?;
+        let pitching_s = pitching.elapsed().as_secs_f64();
         let tent = Tent {
             vertex: v,
             t_old: front.time(v),
@@ -364,6 +370,7 @@ impl<'a> Work<'a> for Solve<'a> {
         let outcome = Outcome::Accepted {
             t_old: tent.t_old,
             t_new,
+            pitching_s,
             report,
             interface: self.interface_records(mesh, solver),
             extension,
@@ -378,23 +385,27 @@ impl<'a> Work<'a> for Solve<'a> {
         o: Outcome,
         events: &Events<'a, Frontier>,
     ) -> Result<(), EngineError> {
-        let (t_old, t_new, report) = match o {
+        let (t_old, t_new, pitching_s, report) = match o {
             Outcome::Accepted {
                 t_old,
                 t_new,
+                pitching_s,
                 report,
                 interface,
                 extension,
             } => {
                 if !interface.is_empty() {
-                    interface.add_to(&mut self.book.lock());
+                    let mut book = self.book.lock();
+                    let started = Instant::now();
+                    interface.add_to(&mut book);
+                    book.timings.output_s += started.elapsed().as_secs_f64();
                 }
                 if let Some(extension) = extension {
                     events.push(Box::new(move |state: &mut Frontier| {
                         self.extend(state, v, &extension)
                     }));
                 }
-                (t_old, t_new, report)
+                (t_old, t_new, pitching_s, report)
             }
             Outcome::Coarsen {
                 coarsening,
@@ -428,7 +439,9 @@ impl<'a> Work<'a> for Solve<'a> {
         let mut guard = self.book.lock();
         let book = &mut *guard;
         self.add_patch(book, &report);
+        book.timings.pitching_s += pitching_s;
         book.max_slope_ratio = book.max_slope_ratio.max(slope);
+        let started = Instant::now();
         self.add_to_snapshots(book, &state.solution, mesh.vertex_triangles(v));
         book.progress.advance(t_new - t_old, book.patches);
         let mut passed = std::mem::take(&mut book.passed);
@@ -436,6 +449,7 @@ impl<'a> Work<'a> for Solve<'a> {
         for &(t, _) in passed.iter().filter(|p| p.1 == Milestone::Snapshot) {
             book.snapshots.flush(t)?;
         }
+        book.timings.output_s += started.elapsed().as_secs_f64();
         // One row for however many history milestones passed at once.
         if passed.iter().any(|p| p.1 == Milestone::History) {
             events.push(Box::new(move |state: &mut Frontier| {
@@ -669,6 +683,7 @@ fn run_job(
             elements: 0,
             dofs: 0,
             max_slope_ratio: 0.0,
+            timings: Timings::default(),
             snapshots: Snapshots::new(&config.output.snapshot_times, c_max, dir.clone())
                 .with_png(config.output.png)
                 .with_vtu(config.output.vtu),
@@ -760,6 +775,8 @@ fn run_job(
         counts.tents += stats.tents;
         counts.events += stats.events;
         counts.rounds += stats.rounds;
+        counts.events_s += stats.event_time.as_secs_f64();
+        counts.waiting_s += stats.wait_time.as_secs_f64();
         if !stats.paused {
             break;
         }
@@ -798,6 +815,7 @@ fn run_job(
     }
     let wall_time_s = counts.wall_time_s;
     let stats = counts;
+    let finishing = Instant::now();
     let mut book = solve.book.lock();
     book.progress.finish();
     solve.history_row(&state, &mut book);
@@ -868,7 +886,7 @@ fn run_job(
         }
     });
     let (min_edge, max_edge) = mesh.edge_length_range();
-    let summary = RunSummary {
+    let mut summary = RunSummary {
         command: "run",
         config_file: problem.loaded.file.clone(),
         vertices: mesh.vertices().len(),
@@ -906,6 +924,11 @@ fn run_job(
         coarsenings: book.coarsenings,
         events: stats.events,
         checkpoint: checkpoints,
+        timings: Timings {
+            events_s: stats.events_s,
+            waiting_s: stats.waiting_s,
+            ..book.timings
+        },
         min_edge,
         max_edge,
     };
@@ -944,6 +967,7 @@ fn run_job(
         let csv = propagation::cracks_csv(mesh, &cracks);
         write_atomic(&dir, "cracks.csv", csv.as_bytes())?;
     }
+    summary.timings.output_s += finishing.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;
     Ok((summary, dir))

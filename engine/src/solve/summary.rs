@@ -136,6 +136,31 @@ pub struct RunSummary {
     pub max_edge: f64,
     /// Checkpoints of this process and the one it restarted from.
     pub checkpoint: CheckpointSummary,
+    /// Where the wall time went.
+    pub timings: Timings,
+}
+
+/// `timings` in `summary.json`: where the wall time went, s, summed over the worker threads
+/// (and the main thread's bookkeeping), measured, so not the same from run to run.
+#[derive(Clone, Copy, Debug, Default, Serialize, serde::Deserialize)]
+pub struct Timings {
+    /// Computing tent heights.
+    pub pitching_s: f64,
+    /// Assembling patch systems.
+    pub assembly_s: f64,
+    /// Solving them: ring eliminations and Newton iterations.
+    pub solve_s: f64,
+    /// Evaluating solved patches: energies, displacements, interface states.
+    pub evaluation_s: f64,
+    /// Scheduler events (refinement, coarsening, crack growth, history rows), with the state
+    /// held exclusively.
+    pub events_s: f64,
+    /// Workers without a tent: asleep with nothing ready, waiting for the state's lock, or at
+    /// the deterministic rounds' barriers.
+    pub waiting_s: f64,
+    /// Snapshot slices, probes and the files written at the end (snapshot files are written
+    /// by a thread of their own, not counted).
+    pub output_s: f64,
 }
 
 /// `checkpoint` in `summary.json`.

@@ -15,6 +15,8 @@
 //! ([`crate::interface`]): bonded faces keep the linear path, free faces are traction-free on
 //! both sides (still linear), and contact faces make the patch a Newton solve ([`contact`]).
 
+use std::time::Instant;
+
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::{MatMut, MatRef, Par};
@@ -72,6 +74,7 @@ pub struct ElementReport {
 
 /// Totals over one patch.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct PatchReport {
     /// Elements solved.
     pub elements: usize,
@@ -100,6 +103,12 @@ pub struct PatchReport {
     /// of the faces' separation and of the elements' displacement jump (see
     /// `ContactFaces::cohesive_mismatch`), scaled units like `dissipation`.
     pub cohesive_mismatch: f64,
+    /// Wall time assembling the patch's system, s (measured: not the same from run to run).
+    pub assembly_s: f64,
+    /// Wall time solving it (the ring elimination, or the Newton iterations), s.
+    pub solve_s: f64,
+    /// Wall time evaluating the results (energies, displacements, interface states), s.
+    pub evaluation_s: f64,
 }
 
 /// The state of a contact interface at one point, physical units, in the frame of the face
@@ -549,6 +558,7 @@ impl PatchSolver {
         initial: Initial,
         solution: &FrontSolution,
     ) -> Result<PatchReport, NewtonFailure> {
+        let started = Instant::now();
         let c = self.system.c_ref();
         let d = self.used;
         let n = self.basis.len();
@@ -666,17 +676,21 @@ impl PatchSolver {
         }
 
         ring_order(&self.slots[..d], &mut self.order);
+        let assembled = Instant::now();
         let newton_iterations = if self.contact.faces().is_empty() {
             self.blocks.solve(&self.order[..d]);
             0
         } else {
             self.solve_newton()?
         };
+        let solved = Instant::now();
 
         let mut report = PatchReport {
             elements: d,
             dofs: d * m,
             newton_iterations,
+            assembly_s: (assembled - started).as_secs_f64(),
+            solve_s: (solved - assembled).as_secs_f64(),
             ..Default::default()
         };
         for i in 0..d {
@@ -705,6 +719,7 @@ impl PatchSolver {
             }
             u
         });
+        report.evaluation_s = solved.elapsed().as_secs_f64();
         Ok(report)
     }
 
