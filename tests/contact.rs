@@ -99,23 +99,18 @@ fn interface_rows(dir: &Path) -> Vec<(f64, f64, f64, String)> {
         .collect()
 }
 
-/// Where the 1D reference's contact area fraction changes most: the load's ramp ends (where the
-/// C1 ramps' curvature jumps) reach the interface at `t0 + k` (k in us), and the interface
-/// closes again (the seed's shock) when the reference traction first drops below half its peak
-/// after the first separation.
-fn rough_times(reference: &Reference, t0: f64) -> Vec<f64> {
-    let mut times: Vec<f64> = [0.0, 0.2, 1.4, 1.6, 1.9, 2.1, 3.4, 3.6, 3.9, 4.1]
-        .iter()
-        .map(|k| t0 + k * 1e-6)
-        .collect();
+/// When the interface closes again after its first separation (the seed's shock): the 1D
+/// reference's traction jumps there, first below half its peak.
+fn closing_shock(reference: &Reference, t0: f64) -> f64 {
     let opened = reference
         .iter()
         .position(|p| p.0 > t0 + 1.5e-6 && p.2 == 0.0)
         .expect("the interface opens");
-    if let Some(p) = reference[opened..].iter().find(|p| p.2 < -1e8) {
-        times.push(p.0);
-    }
-    times
+    reference[opened..]
+        .iter()
+        .find(|p| p.2 < -1e8)
+        .expect("the interface closes")
+        .0
 }
 
 #[test]
@@ -123,6 +118,12 @@ fn contact_separation_follows_the_1d_reference() {
     let (c, _) = p_wave();
     let t0 = 0.002 / c;
     let t_end = 4.5e-6;
+    // 62.5 um cells (ny = 64) at p = 3: at 125 um the kinks of the load's C1 ramps (their
+    // curvature jumps) cost 1.4% of the peak traction where they reach the interface.
+    let ny = 64;
+    // The closing shock is a jump of the exact traction: a sample within one element's transit
+    // time of it compares the jump's two sides, whatever the resolution.
+    let near_shock = 0.004 / ny as f64 / c;
     // The seed's two regularization sets (3.4.1): r_c (m) and s_s (Pa).
     for (r_c, s_s) in [(-1e-6, 6e5), (-1e-7, 6e4)] {
         let problem = common::shipped(
@@ -131,6 +132,7 @@ fn contact_separation_follows_the_1d_reference() {
                 &format!("time.end={t_end}"),
                 &format!("interface.0.r_c={r_c}"),
                 &format!("interface.0.s_s={s_s}"),
+                &format!("mesh.ny={ny}"),
             ],
         );
         let (summary, dir) = common::solve(&problem, 2, true);
@@ -146,16 +148,16 @@ fn contact_separation_follows_the_1d_reference() {
             reference.iter().map(|p| get(p).abs()).fold(0.0, f64::max)
         };
         let (delta_peak, s_peak) = (peak(|p| p.1), peak(|p| p.2));
-        let rough = rough_times(&reference, t0);
-        let smooth = |t: f64| rough.iter().all(|r| (t - r).abs() > 0.05e-6);
-        let (mut delta_err, mut s_err, mut s_err_smooth) = (0.0f64, 0.0f64, 0.0f64);
+        let shock = closing_shock(&reference, t0);
+        let (mut delta_err, mut s_err, mut s_err_shock) = (0.0f64, 0.0f64, 0.0f64);
         for &(t, s, delta, _) in &rows {
             let (_, d_ref, s_ref) = at(t);
             delta_err = delta_err.max((delta - d_ref).abs() / delta_peak);
             let e = (s - s_ref).abs() / s_peak;
-            s_err = s_err.max(e);
-            if smooth(t) {
-                s_err_smooth = s_err_smooth.max(e);
+            if (t - shock).abs() < near_shock {
+                s_err_shock = s_err_shock.max(e);
+            } else {
+                s_err = s_err.max(e);
             }
         }
         // Mode changes: separation starts when the tensile load arrives (t0 + 1.5 us, the
@@ -170,9 +172,9 @@ fn contact_separation_follows_the_1d_reference() {
         eprintln!(
             "r_c {r_c} m, s_s {s_s} Pa: {} rows, {} patches ({} nonlinear, {:.2} solves each, at \
              most {}); largest errors over the peaks: delta {delta_err:.2e} (peak {delta_peak:.3e} \
-             m), s_n {s_err:.2e} ({s_err_smooth:.2e} away from the load's ramp ends and the \
-             closing shock; peak {s_peak:.3e} Pa); separation from/to at {changes:?}; energy \
-             balance {:.1e}",
+             m), s_n {s_err:.2e} ({s_err_shock:.2e} within {near_shock:.1e} s of the closing \
+             shock at {shock:.4e} s; peak {s_peak:.3e} Pa); separation from/to at {changes:?}; \
+             energy balance {:.1e}",
             rows.len(),
             summary.patches,
             summary.interface.nonlinear_patches,
@@ -182,10 +184,7 @@ fn contact_separation_follows_the_1d_reference() {
         );
         assert!(rows.len() > 100);
         assert!(delta_err < 0.01, "{delta_err}");
-        assert!(
-            s_err_smooth < 0.01 && s_err < 0.02,
-            "{s_err_smooth} {s_err}"
-        );
+        assert!(s_err < 0.01, "{s_err}");
         let opened = [
             (t0 + 1.5e-6, true),
             (t0 + 2.5e-6, false),
