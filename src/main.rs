@@ -34,6 +34,29 @@ enum Command {
     /// Draw a field of a VTU file (a snapshot, or any triangle grid) as PNG, or the crack tips of
     /// one or more runs.
     Plot(PlotArgs),
+    /// Predict the speedup on more workers by replaying a trace of `sdg run --trace`.
+    Scaling(ScalingArgs),
+}
+
+// `scaling`: a trace and the worker counts to replay it on.
+#[derive(Debug, Args)]
+struct ScalingArgs {
+    /// A trace written by `sdg run --trace FILE`.
+    trace: PathBuf,
+    /// Worker counts, comma-separated.
+    #[arg(
+        long,
+        value_name = "N,...",
+        value_delimiter = ',',
+        default_value = "1,2,4,8,16,32,64,128,256"
+    )]
+    workers: Vec<NonZeroUsize>,
+    /// Claiming a tent, us (`cargo bench --bench scheduler` on this machine: 0.27).
+    #[arg(long, value_name = "US", default_value_t = 0.27)]
+    overhead_us: f64,
+    /// Draw the predicted speedup into this PNG file.
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
 }
 
 // What every command that reads a config takes: all that `validate` takes.
@@ -96,6 +119,10 @@ struct RunArgs {
     /// Checkpoint and stop with exit code 3 after this much wall time, s.
     #[arg(long, value_name = "SECONDS")]
     max_wall_time: Option<f64>,
+    /// Record every tent and event (vertex, dependencies, cost) in this CSV file, for
+    /// `sdg scaling`.
+    #[arg(long, value_name = "FILE")]
+    trace: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -130,7 +157,9 @@ fn main() -> ExitCode {
     let (level, format) = match &cli.command {
         Command::Run(RunArgs { job, .. }) | Command::Mesh(job) => (job.log_level, job.log_format),
         // No log options: warnings as text, should there be any.
-        Command::Validate(_) | Command::Plot(_) => (tracing::Level::WARN, LogFormat::Text),
+        Command::Validate(_) | Command::Plot(_) | Command::Scaling(_) => {
+            (tracing::Level::WARN, LogFormat::Text)
+        }
     };
     let logs = tracing_subscriber::fmt()
         .with_max_level(level)
@@ -148,6 +177,7 @@ fn main() -> ExitCode {
         Command::Mesh(job) => mesh(job),
         Command::Validate(args) => validate(args),
         Command::Plot(args) => plot(args),
+        Command::Scaling(args) => scaling(args),
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
@@ -290,6 +320,7 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
     let options = RunOptions {
         restart: args.restart.clone(),
         max_wall_time_s: args.max_wall_time,
+        trace: args.trace.clone(),
         control: Some(control),
         ..options(job)
     };
@@ -315,6 +346,43 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
             dir.display()
         );
     }
+    Ok(())
+}
+
+fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
+    if !(args.overhead_us.is_finite() && args.overhead_us >= 0.0) {
+        return Err(EngineError::Input(format!(
+            "--overhead-us: must be a time >= 0 in us, got {}",
+            args.overhead_us
+        )));
+    }
+    let workers: Vec<usize> = args.workers.iter().map(|w| w.get()).collect();
+    let (predictions, critical) = sdg_engine::trace::scaling_job(
+        &args.trace,
+        &workers,
+        args.overhead_us * 1e-6,
+        args.out.as_deref(),
+    )?;
+    let one = sdg_engine::trace::replay(
+        &sdg_engine::trace::read(&args.trace)?,
+        1,
+        args.overhead_us * 1e-6,
+    )
+    .wall_time_s;
+    println!("workers  wall time (s)  speedup  mean ready tents");
+    for p in &predictions {
+        println!(
+            "{:>7}  {:>13.4}  {:>7.2}  {:>16.1}",
+            p.workers,
+            p.wall_time_s,
+            one / p.wall_time_s,
+            p.mean_ready
+        );
+    }
+    println!(
+        "critical path {critical:.4} s: at most {:.2}x over one worker",
+        one / critical
+    );
     Ok(())
 }
 

@@ -628,3 +628,62 @@ fn a_run_stops_when_its_wall_time_is_up() {
     assert!(out_dir.join("history.csv").exists());
     assert!(out_dir.join("checkpoints/checkpoint_000000.sdgc").exists());
 }
+
+#[test]
+fn a_traced_run_replays_on_more_workers() {
+    let (dir, config) = config_file(CONFIG);
+    let out_dir = dir.path().join("out");
+    let trace = dir.path().join("trace.csv");
+    let out = sdg(&[
+        "run",
+        &config,
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--threads",
+        "1",
+        "--quiet",
+        "--trace",
+        trace.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("summary.json")).unwrap()).unwrap();
+    let patches = summary["patches"].as_u64().unwrap();
+    let text = std::fs::read_to_string(&trace).unwrap();
+    let tents = text.lines().filter(|l| l.contains(",patch,")).count() as u64;
+    assert_eq!(tents, patches, "one line per patch");
+    let png = dir.path().join("scaling.png");
+    let out = sdg(&[
+        "scaling",
+        trace.to_str().unwrap(),
+        "--workers",
+        "1,2,64",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8(out.stdout).unwrap();
+    let speedups: Vec<f64> = table
+        .lines()
+        .skip(1)
+        .take(3)
+        .map(|l| l.split_whitespace().nth(2).unwrap().parse().unwrap())
+        .collect();
+    eprintln!("{table}");
+    // Two workers at most halve the time; no number of workers beats the critical path.
+    let bound: f64 = table
+        .split("at most ")
+        .nth(1)
+        .and_then(|rest| rest.split('x').next())
+        .and_then(|x| x.parse().ok())
+        .expect("the critical path's bound");
+    assert_eq!(speedups[0], 1.0);
+    assert!((1.0..=2.0).contains(&speedups[1]), "{speedups:?}");
+    assert!(speedups[2] <= bound + 0.01, "{speedups:?} {bound}");
+    assert!(png.is_file());
+    std::fs::write(&trace, "id,kind\n").unwrap();
+    expect_input_error(
+        &["scaling", trace.to_str().unwrap()],
+        &["trace.csv:1", "header"],
+    );
+}

@@ -16,6 +16,7 @@ pub mod run;
 pub mod snapshot;
 pub mod solve;
 pub mod spacetime;
+pub mod trace;
 
 pub use config::{Config, ConfigError, LoadedConfig};
 pub use error::EngineError;

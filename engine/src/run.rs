@@ -33,6 +33,8 @@ pub struct RunOptions {
     pub restart: Option<PathBuf>,
     /// Checkpoint and stop (exit code 3) after this much wall time, s.
     pub max_wall_time_s: Option<f64>,
+    /// Record every tent and event in this file (`sdg scaling` replays it).
+    pub trace: Option<PathBuf>,
     /// Where requests to checkpoint or stop come from (the signal listener); a run makes its
     /// own when `None`.
     pub control: Option<std::sync::Arc<crate::solve::Control>>,

@@ -31,6 +31,7 @@ use crate::problem::Problem;
 use crate::progress::Progress;
 use crate::run::{RunOptions, scheduler_error};
 use crate::snapshot::Snapshots;
+use crate::trace::{self, Tracer};
 
 mod adaptivity;
 mod book;
@@ -77,6 +78,8 @@ struct Solve<'a> {
     /// (`checkpoint.every_wall_s`), ns after it; `u64::MAX` for none.
     started: Instant,
     next_wall_checkpoint_ns: AtomicU64,
+    /// Records every tent and event with `--trace`.
+    tracer: Option<Tracer>,
 }
 
 /// The scaled initial state at `x`.
@@ -124,6 +127,136 @@ impl Solve<'_> {
     }
 }
 
+impl Solve<'_> {
+    /// Runs the event `action`, traced with `--trace`.
+    fn traced<T>(&self, action: impl FnOnce() -> T) -> T {
+        match &self.tracer {
+            Some(tracer) => tracer.event(action),
+            None => action(),
+        }
+    }
+
+    /// [`Work::tent`] without its trace.
+    fn solve_tent(
+        &self,
+        state: &Frontier,
+        solver: &mut PatchSolver,
+        v: VertexId,
+    ) -> Result<(f64, Outcome), EngineError> {
+        let (mesh, front) = (&state.mesh, &state.front);
+        let star = mesh.vertex_triangles(v);
+        if star.len() > self.max_star {
+            return Err(EngineError::Runtime(format!(
+                "vertex {v} has {} triangles, more than the {} the patch solvers hold",
+                star.len(),
+                self.max_star
+            )));
+        }
+        if let Some(adapt) = &self.adapt {
+            if let Some(outcome) = self.try_coarsening(adapt, state, solver, v) {
+                return Ok((front.time(v), outcome));
+            }
+        }
+        let pitching = Instant::now();
+        let t_new = state.pitcher.pole_height(mesh, front, v).ok_or_else(|| {
+            EngineError::Runtime(format!("vertex {v} was claimed but cannot be pitched"))
+        })?;
+        let pitching_s = pitching.elapsed().as_secs_f64();
+        let tent = Tent {
+            vertex: v,
+            t_old: front.time(v),
+            t_new,
+        };
+        let solved = solver.solve(
+            mesh,
+            front,
+            &tent,
+            &self.problem.boundary,
+            self.initial,
+            &state.solution,
+        );
+        let report = match solved {
+            Ok(report) => report,
+            Err(failure) => {
+                // Not converged: refine around the vertex when adaptivity can, else stop.
+                let star: Vec<_> = self
+                    .adapt
+                    .iter()
+                    .flat_map(|adapt| {
+                        star.iter()
+                            .filter(|&&t| self.may_refine(adapt, state, t))
+                            .map(|&t| (t, mesh.triangles()[t as usize]))
+                    })
+                    .collect();
+                let [x, y] = mesh.vertex(v);
+                tracing::debug!(
+                    vertex = v,
+                    x,
+                    y,
+                    t = tent.t_old,
+                    %failure,
+                    refine = star.len(),
+                    "patch not converged"
+                );
+                if star.is_empty() {
+                    return Err(EngineError::Runtime(format!(
+                        "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {failure}",
+                        tent.t_old
+                    )));
+                }
+                return Ok((tent.t_old, Outcome::Rejected { star }));
+            }
+        };
+        if let Some(quantity) = self.guard(&report) {
+            let [x, y] = mesh.vertex(v);
+            self.control.fail(format!(
+                "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {quantity}",
+                tent.t_old
+            ));
+            return Ok((tent.t_old, Outcome::Failed));
+        }
+        if let Some(adapt) = &self.adapt {
+            let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
+            let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
+            if !state.insists(v) && eta > adapt.tol {
+                let star = star
+                    .iter()
+                    .filter(|&&t| self.may_refine(adapt, state, t))
+                    .map(|&t| (t, mesh.triangles()[t as usize]))
+                    .collect::<Vec<_>>();
+                if !star.is_empty() {
+                    tracing::debug!(
+                        vertex = v,
+                        eta,
+                        bulk = report.dissipation,
+                        cohesive = report.cohesive_mismatch,
+                        "patch above the tolerance"
+                    );
+                    return Ok((tent.t_old, Outcome::Rejected { star }));
+                }
+            }
+            for &t in star {
+                state.set_calm(t, eta < adapt.lower);
+            }
+        }
+        solver.commit(&state.solution);
+        front.set_time(v, t_new);
+        let extension =
+            self.problem.fracture.as_ref().and_then(|fracture| {
+                self.extension(fracture, state, solver, v, [tent.t_old, t_new])
+            });
+        let outcome = Outcome::Accepted {
+            t_old: tent.t_old,
+            t_new,
+            pitching_s,
+            report,
+            interface: self.interface_records(mesh, solver),
+            extension,
+        };
+        Ok((t_new, outcome))
+    }
+}
+
 /// When a run that starts now must stop: at `limits.max_wall_time_s` or `--max-wall-time`
 /// (`max_wall_time_s`), the earlier; with the reason it stops.
 fn deadline(limit_s: f64, max_wall_time_s: Option<f64>) -> Option<(Instant, String)> {
@@ -151,6 +284,14 @@ impl Solve<'_> {
             plot::write_history_png(dir, &book.history);
         }
         self.write_probes(dir, &mut book)
+    }
+
+    /// Writes the trace of `--trace`.
+    fn write_trace(&self, options: &RunOptions) -> Result<(), EngineError> {
+        match (&self.tracer, &options.trace) {
+            (Some(tracer), Some(path)) => tracer.write(path),
+            _ => Ok(()),
+        }
     }
 
     /// Writes `interface.csv` when probes are configured.
@@ -265,117 +406,23 @@ impl<'a> Work<'a> for Solve<'a> {
         v: VertexId,
         _: &Events<'a, Frontier>,
     ) -> Result<(f64, Outcome), EngineError> {
-        let (mesh, front) = (&state.mesh, &state.front);
-        let star = mesh.vertex_triangles(v);
-        if star.len() > self.max_star {
-            return Err(EngineError::Runtime(format!(
-                "vertex {v} has {} triangles, more than the {} the patch solvers hold",
-                star.len(),
-                self.max_star
-            )));
-        }
-        if let Some(adapt) = &self.adapt {
-            if let Some(outcome) = self.try_coarsening(adapt, state, solver, v) {
-                return Ok((front.time(v), outcome));
-            }
-        }
-        let pitching = Instant::now();
-        let t_new = state.pitcher.pole_height(mesh, front, v).ok_or_else(|| {
-            EngineError::Runtime(format!("vertex {v} was claimed but cannot be pitched"))
-        })?;
-        let pitching_s = pitching.elapsed().as_secs_f64();
-        let tent = Tent {
-            vertex: v,
-            t_old: front.time(v),
-            t_new,
+        let Some(tracer) = &self.tracer else {
+            return self.solve_tent(state, solver, v);
         };
-        let solved = solver.solve(
-            mesh,
-            front,
-            &tent,
-            &self.problem.boundary,
-            self.initial,
-            &state.solution,
-        );
-        let report = match solved {
-            Ok(report) => report,
-            Err(failure) => {
-                // Not converged: refine around the vertex when adaptivity can, else stop.
-                let star: Vec<_> = self
-                    .adapt
-                    .iter()
-                    .flat_map(|adapt| {
-                        star.iter()
-                            .filter(|&&t| self.may_refine(adapt, state, t))
-                            .map(|&t| (t, mesh.triangles()[t as usize]))
-                    })
-                    .collect();
-                let [x, y] = mesh.vertex(v);
-                tracing::debug!(
-                    vertex = v,
-                    x,
-                    y,
-                    t = tent.t_old,
-                    %failure,
-                    refine = star.len(),
-                    "patch not converged"
-                );
-                if star.is_empty() {
-                    return Err(EngineError::Runtime(format!(
-                        "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {failure}",
-                        tent.t_old
-                    )));
+        let begun = tracer.begin(&state.mesh, v);
+        let result = self.solve_tent(state, solver, v);
+        if let Ok((_, outcome)) = &result {
+            let (kind, changed) = match outcome {
+                Outcome::Accepted { report, .. } if report.newton_iterations > 0 => {
+                    (trace::Kind::Newton, true)
                 }
-                return Ok((tent.t_old, Outcome::Rejected { star }));
-            }
-        };
-        if let Some(quantity) = self.guard(&report) {
-            let [x, y] = mesh.vertex(v);
-            self.control.fail(format!(
-                "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {quantity}",
-                tent.t_old
-            ));
-            return Ok((tent.t_old, Outcome::Failed));
+                Outcome::Accepted { .. } => (trace::Kind::Patch, true),
+                Outcome::Coarsen { .. } => (trace::Kind::Coarsen, false),
+                Outcome::Rejected { .. } | Outcome::Failed => (trace::Kind::Rejected, false),
+            };
+            tracer.end(begun, v, kind, changed);
         }
-        if let Some(adapt) = &self.adapt {
-            let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
-            let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
-            if !state.insists(v) && eta > adapt.tol {
-                let star = star
-                    .iter()
-                    .filter(|&&t| self.may_refine(adapt, state, t))
-                    .map(|&t| (t, mesh.triangles()[t as usize]))
-                    .collect::<Vec<_>>();
-                if !star.is_empty() {
-                    tracing::debug!(
-                        vertex = v,
-                        eta,
-                        bulk = report.dissipation,
-                        cohesive = report.cohesive_mismatch,
-                        "patch above the tolerance"
-                    );
-                    return Ok((tent.t_old, Outcome::Rejected { star }));
-                }
-            }
-            for &t in star {
-                state.set_calm(t, eta < adapt.lower);
-            }
-        }
-        solver.commit(&state.solution);
-        front.set_time(v, t_new);
-        let extension =
-            self.problem.fracture.as_ref().and_then(|fracture| {
-                self.extension(fracture, state, solver, v, [tent.t_old, t_new])
-            });
-        let outcome = Outcome::Accepted {
-            t_old: tent.t_old,
-            t_new,
-            pitching_s,
-            report,
-            interface: self.interface_records(mesh, solver),
-            extension,
-        };
-        Ok((t_new, outcome))
+        result
     }
 
     fn record(
@@ -402,7 +449,7 @@ impl<'a> Work<'a> for Solve<'a> {
                 }
                 if let Some(extension) = extension {
                     events.push(Box::new(move |state: &mut Frontier| {
-                        self.extend(state, v, &extension)
+                        self.traced(|| self.extend(state, v, &extension))
                     }));
                 }
                 (t_old, t_new, pitching_s, report)
@@ -413,7 +460,7 @@ impl<'a> Work<'a> for Solve<'a> {
                 interface,
             } => {
                 events.push(Box::new(move |state: &mut Frontier| {
-                    self.coarsen(state, &coarsening, &report, interface)
+                    self.traced(|| self.coarsen(state, &coarsening, &report, interface))
                 }));
                 return Ok(());
             }
@@ -424,7 +471,7 @@ impl<'a> Work<'a> for Solve<'a> {
                 book.rejected += 1;
                 let at = state.mesh.vertex(v);
                 events.push(Box::new(move |state: &mut Frontier| {
-                    self.refine(state, v, at, &star)
+                    self.traced(|| self.refine(state, v, at, &star))
                 }));
                 return Ok(());
             }
@@ -453,7 +500,7 @@ impl<'a> Work<'a> for Solve<'a> {
         // One row for however many history milestones passed at once.
         if passed.iter().any(|p| p.1 == Milestone::History) {
             events.push(Box::new(move |state: &mut Frontier| {
-                self.history_row(state, &mut self.book.lock());
+                self.traced(|| self.history_row(state, &mut self.book.lock()));
                 Changed::default()
             }));
         }
@@ -461,7 +508,9 @@ impl<'a> Work<'a> for Solve<'a> {
             self.control.checkpoint();
         }
         if passed.iter().any(|p| p.1 == Milestone::Intervention) {
-            events.push(Box::new(move |state: &mut Frontier| self.intervene(state)));
+            events.push(Box::new(move |state: &mut Frontier| {
+                self.traced(|| self.intervene(state))
+            }));
         }
         passed.clear();
         book.passed = passed;
@@ -710,6 +759,7 @@ fn run_job(
         deadline: deadline(config.limits.max_wall_time_s, options.max_wall_time_s),
         started: Instant::now(),
         next_wall_checkpoint_ns: AtomicU64::new(u64::MAX),
+        tracer: options.trace.as_ref().map(|_| Tracer::new()),
     };
     let mut counts = Counts::default();
     let restarted = match restored {
@@ -967,6 +1017,7 @@ fn run_job(
         let csv = propagation::cracks_csv(mesh, &cracks);
         write_atomic(&dir, "cracks.csv", csv.as_bytes())?;
     }
+    solve.write_trace(options)?;
     summary.timings.output_s += finishing.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;
