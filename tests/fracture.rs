@@ -226,3 +226,43 @@ fn the_branching_plate_is_loaded_as_the_seed_says() {
         "{cracks:?}"
     );
 }
+
+#[test]
+fn without_adaptivity_crack_splits_keep_a_quarter_of_the_shortest_edge() {
+    // Without a floor, a crack running through ever smaller triangles split them down to 40 nm
+    // in asynchronous runs of crack_growth, and its tents shrank with them.
+    let problem = shipped("crack_growth.toml", &["time.end=2e-7"]);
+    let found = std::sync::Arc::new(std::sync::Mutex::new(None));
+    let report = found.clone();
+    let options = sdg_engine::RunOptions {
+        output_dir: Some(tempfile::tempdir().unwrap().keep()),
+        threads: Some(1),
+        deterministic: true,
+        ..Default::default()
+    };
+    sdg_engine::solve_job_with(&problem, &options, 0.0, move |live| {
+        let mesh = live.mesh();
+        let floor = mesh.edge_length_range().0 / 4.0;
+        let front = live.front();
+        // An interior triangle whose refinement edge the pitcher lets split anywhere.
+        let t = (0..mesh.triangles().len() as u32)
+            .find(|&t| {
+                let e = mesh.triangle_edges(t)[mesh.refinement_edge(t)];
+                !mesh.edges()[e as usize].is_boundary()
+                    && [0.1, 0.5]
+                        .iter()
+                        .all(|&f| live.pitcher().may_split_at(mesh, |v| front.time(v), t, f))
+            })
+            .expect("a triangle to split");
+        let e = mesh.triangle_edges(t)[mesh.refinement_edge(t)];
+        let length = mesh.edge_length(e);
+        // A piece of a tenth of the edge is below the floor here; half the edge is not.
+        let tiny = 0.9 * floor / length;
+        assert!(tiny < 0.5 && 0.5 * length >= floor);
+        let refused = live.split_at(t, tiny).unwrap();
+        let split = live.split_at(t, 0.5).unwrap();
+        *report.lock().unwrap() = Some((refused, split));
+    })
+    .unwrap();
+    assert_eq!(*found.lock().unwrap(), Some((false, true)));
+}

@@ -213,8 +213,8 @@ impl Solve<'_> {
     /// Splits an edge of triangle `t` at `fraction` of its length from its smaller-id end (its
     /// refinement edge, or with `corner` the edge opposite that corner: see
     /// [`Frontier::split_at`]), after bisecting what the closure needs, within the limits of
-    /// refinement (`adapt.min_edge` for every piece of an edge, none without adaptivity; the
-    /// patch solvers' star capacity; the pitcher's causality), and books the new vertices like
+    /// refinement ([`Solve::min_edge`] for every piece of an edge; the patch solvers' star
+    /// capacity; the pitcher's causality), and books the new vertices like
     /// refinement does. Returns whether `t` was split (a refused step leaves `t` whole and
     /// keeps the closure's bisections done before it), what changed for the scheduler and the
     /// new vertices. Runs as an event: `state` is held exclusively.
@@ -226,7 +226,7 @@ impl Solve<'_> {
         fraction: f64,
     ) -> Result<(bool, Changed, Vec<VertexId>), SplitError> {
         let limits = Limits {
-            min_edge: self.adapt.as_ref().map_or(0.0, |adapt| adapt.min_edge),
+            min_edge: self.min_edge,
             max_star: self.max_star,
         };
         let mut refined = Refined::default();

@@ -62,6 +62,11 @@ struct Solve<'a> {
     adapt: Option<Adapt>,
     /// Triangles a vertex star may have: the patch solvers' capacity.
     max_star: usize,
+    /// No split for crack alignment makes a piece of an edge shorter than this, m:
+    /// `adapt.min_edge`, or without adaptivity a quarter of the initial mesh's shortest edge
+    /// (cracks running through ever smaller triangles would otherwise shrink the tents without
+    /// bound).
+    min_edge: f64,
     /// `Book::energy_max` as bits, read by tents without the book's lock.
     energy_reference: AtomicU64,
     initial: Initial<'a>,
@@ -708,10 +713,14 @@ fn run_job(
         system,
         |x| initial_state(problem, initial, x),
     );
+    let min_edge = adapt
+        .as_ref()
+        .map_or(problem.mesh.edge_length_range().0 / 4.0, |a| a.min_edge);
     let solve = Solve {
         problem,
         adapt,
         max_star,
+        min_edge,
         energy_reference: AtomicU64::new(energy0.total.to_bits()),
         initial,
         basis: basis.clone(),
