@@ -147,6 +147,7 @@ fn transmitting_side_absorbs_the_pulse() {
             solution,
             run.solver.basis(),
             &run.system,
+            2,
             |x| run.system.to_scaled(&pulse.state(x, 0.0)),
         )
         .total

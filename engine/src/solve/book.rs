@@ -245,6 +245,7 @@ impl Solve<'_> {
             &state.solution,
             &self.basis,
             system,
+            self.threads,
             |x| initial_state(self.problem, self.initial, x),
         );
         let totals = &book.totals;

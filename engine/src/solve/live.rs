@@ -97,6 +97,7 @@ impl Live<'_> {
             &self.state.solution,
             &solve.basis,
             &solve.problem.system,
+            solve.threads,
             |x| initial_state(solve.problem, solve.initial, x),
         )
     }

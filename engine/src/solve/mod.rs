@@ -62,6 +62,8 @@ struct Solve<'a> {
     adapt: Option<Adapt>,
     /// Triangles a vertex star may have: the patch solvers' capacity.
     max_star: usize,
+    /// Worker threads: events that integrate over the whole front use them all.
+    threads: usize,
     /// No split for crack alignment makes a piece of an edge shorter than this, m:
     /// `adapt.min_edge`, or without adaptivity a quarter of the initial mesh's shortest edge
     /// (cracks running through ever smaller triangles would otherwise shrink the tents without
@@ -711,6 +713,7 @@ fn run_job(
         &state.solution,
         &basis,
         system,
+        scheduler.threads,
         |x| initial_state(problem, initial, x),
     );
     let min_edge = adapt
@@ -720,6 +723,7 @@ fn run_job(
         problem,
         adapt,
         max_star,
+        threads: scheduler.threads,
         min_edge,
         energy_reference: AtomicU64::new(energy0.total.to_bits()),
         initial,
@@ -888,9 +892,15 @@ fn run_job(
         solution,
         ..
     } = &state;
-    let e = front_energy(mesh, front, solution, &basis, system, |x| {
-        initial_state(problem, initial, x)
-    });
+    let e = front_energy(
+        mesh,
+        front,
+        solution,
+        &basis,
+        system,
+        scheduler.threads,
+        |x| initial_state(problem, initial, x),
+    );
     let initial_j = rho * book.initial_energy;
     let work = rho * book.totals.boundary_work;
     let dissipation = rho * book.totals.dissipation;
