@@ -133,23 +133,12 @@ fn a_killed_crack_run_restarts_bitwise_on_two_threads() {
 #[test]
 fn a_killed_adaptive_contact_run_restarts_bitwise_on_one_thread() {
     // Refinement, coarsening, contact faces solved by Newton, interface probes.
-    killed_and_restarted(
-        "stick_slip.toml",
-        &[
-            "mesh.nx=8",
-            "mesh.ny=8",
-            "time.end=1e-6",
-            "solver.order=2",
-            "adapt.enabled=true",
-            "adapt.tol=1e-2",
-            "adapt.min_edge=1.25e-4",
-            "output.snapshot_times=[5e-7, 1e-6]",
-            "output.interface_probes=[[0.00075, 0.002]]",
-            "checkpoint.every_sim_s=3e-7",
-        ],
-        "2",
-        "1",
-    );
+    let overrides = [
+        &common::STICK_SLIP_ADAPTIVE[..],
+        &["checkpoint.every_sim_s=3e-7"],
+    ]
+    .concat();
+    killed_and_restarted("stick_slip.toml", &overrides, "2", "1");
 }
 
 #[test]

@@ -68,20 +68,7 @@ fn asynchronous_mode_is_as_accurate_as_a_serial_run() {
 /// 23.2 s).
 #[test]
 fn deterministic_mode_is_bitwise_identical_with_contact_and_adaptivity() {
-    let problem = common::shipped(
-        "stick_slip.toml",
-        &[
-            "mesh.nx=8",
-            "mesh.ny=8",
-            "time.end=1e-6",
-            "solver.order=2",
-            "adapt.enabled=true",
-            "adapt.tol=1e-2",
-            "adapt.min_edge=1.25e-4",
-            "output.snapshot_times=[5e-7, 1e-6]",
-            "output.interface_probes=[[0.00075, 0.002]]",
-        ],
-    );
+    let problem = common::shipped("stick_slip.toml", &common::STICK_SLIP_ADAPTIVE);
     let (reference, dir) = solve(&problem, 1, true);
     let expected = outputs(dir.path());
     eprintln!(

@@ -85,6 +85,20 @@ pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
     files
 }
 
+/// `stick_slip.toml` made small and adaptive: refinement, coarsening, Newton contact patches,
+/// two snapshots and a probe in about 10 s (the runs that must stay bitwise identical).
+pub const STICK_SLIP_ADAPTIVE: [&str; 9] = [
+    "mesh.nx=8",
+    "mesh.ny=8",
+    "time.end=1e-6",
+    "solver.order=2",
+    "adapt.enabled=true",
+    "adapt.tol=1e-2",
+    "adapt.min_edge=1.25e-4",
+    "output.snapshot_times=[5e-7, 1e-6]",
+    "output.interface_probes=[[0.00075, 0.002]]",
+];
+
 /// The shipped config `configs/NAME` with `overrides`, set up.
 pub fn shipped(name: &str, overrides: &[&str]) -> Problem {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
