@@ -46,6 +46,48 @@ pub fn triangle(degree: usize) -> Rule<2> {
     rule
 }
 
+/// Values at `rule`'s points of an orthonormal basis of the polynomials of total degree <=
+/// `degree` on the reference triangle, orthonormal in `rule`'s discrete inner product (exact
+/// for `rule` of degree >= `2 degree`): `values[q * dim + f]`, `dim = (degree+1)(degree+2)/2`.
+/// Built by Gram-Schmidt (twice, for round-off) from the monomials.
+pub fn triangle_orthonormal(rule: &Rule<2>, degree: usize) -> Vec<f64> {
+    let points = rule.points.len();
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    for total in 0..=degree {
+        for b in 0..=total {
+            let mut column: Vec<f64> = rule
+                .points
+                .iter()
+                .map(|p| p[0].powi((total - b) as i32) * p[1].powi(b as i32))
+                .collect();
+            for _ in 0..2 {
+                for done in &columns {
+                    let dot: f64 = (0..points)
+                        .map(|q| rule.weights[q] * column[q] * done[q])
+                        .sum();
+                    for (c, d) in column.iter_mut().zip(done) {
+                        *c -= dot * d;
+                    }
+                }
+            }
+            let norm = (0..points)
+                .map(|q| rule.weights[q] * column[q] * column[q])
+                .sum::<f64>()
+                .sqrt();
+            column.iter_mut().for_each(|c| *c /= norm);
+            columns.push(column);
+        }
+    }
+    let dim = columns.len();
+    let mut values = vec![0.0; points * dim];
+    for (f, column) in columns.iter().enumerate() {
+        for (q, &v) in column.iter().enumerate() {
+            values[q * dim + f] = v;
+        }
+    }
+    values
+}
+
 /// Rule on the reference tetrahedron {x, y, z >= 0, x + y + z <= 1} (weights sum to 1/6),
 /// exact for every polynomial of total degree <= `degree`; `(degree / 2 + 1)^3` points.
 pub fn tetrahedron(degree: usize) -> Rule<3> {
@@ -137,6 +179,41 @@ fn jacobi(n: usize, alpha: f64, x: f64) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn triangle_orthonormal_basis_is_orthonormal_and_spans_the_polynomials() {
+        for degree in 0..=4 {
+            let rule = triangle(2 * degree + 2);
+            let dim = (degree + 1) * (degree + 2) / 2;
+            let psi = triangle_orthonormal(&rule, degree);
+            let inner = |f: &dyn Fn(usize) -> f64, g: &dyn Fn(usize) -> f64| -> f64 {
+                (0..rule.points.len())
+                    .map(|q| rule.weights[q] * f(q) * g(q))
+                    .sum()
+            };
+            for a in 0..dim {
+                for b in 0..dim {
+                    let dot = inner(&|q| psi[q * dim + a], &|q| psi[q * dim + b]);
+                    let want = if a == b { 1.0 } else { 0.0 };
+                    assert!(
+                        (dot - want).abs() < 1e-12,
+                        "degree {degree}: ({a}, {b}) {dot}"
+                    );
+                }
+            }
+            // x^degree + y^degree is reproduced by its projection.
+            let f = |q: usize| {
+                rule.points[q][0].powi(degree as i32) + rule.points[q][1].powi(degree as i32)
+            };
+            let coefficients: Vec<f64> =
+                (0..dim).map(|a| inner(&f, &|q| psi[q * dim + a])).collect();
+            for q in 0..rule.points.len() {
+                let projected: f64 = (0..dim).map(|a| coefficients[a] * psi[q * dim + a]).sum();
+                assert!((projected - f(q)).abs() < 1e-12, "degree {degree}");
+            }
+        }
+    }
+
     use super::*;
 
     fn factorial(n: usize) -> f64 {

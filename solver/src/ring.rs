@@ -6,26 +6,46 @@
 //! `d` elements of `m` unknowns costs about `d` times a few `m^3` operations instead of the
 //! `(d m)^3` of a dense factorization.
 //!
-//! Blocks are `m x m` column-major buffers from a pool sized once, so solving allocates nothing.
+//! A coupling block between two elements acts only through the traces on their shared face, and
+//! the upwind flux passes only the incoming waves: it has low rank `r` (at p = 3 in plane strain,
+//! 2 waves times the 10 face polynomials: `r = 20` of `m = 100`). Such blocks are kept as factors
+//! `U V^T` ([`BlockSystem::add_term`]); the elimination keeps the fill in that form, so each
+//! Schur update costs `m^2 r` instead of `m^3`. Diagonal blocks are dense, and a factored block
+//! whose rank would pass `m / 2` becomes dense.
+//!
+//! Blocks live in one pool of `m x m` slots (column-major), sized once, so solving allocates
+//! nothing.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 
+/// What a block of the system holds: a dense `m x m` slot, or factors `U V^T` of some rank in a
+/// slot (`U` in its first `m x m/2` values, `V` in the next).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Block {
+    Dense(usize),
+    Factored(usize, usize),
+}
+
 /// A block-sparse linear system of up to `max_blocks` block rows of size up to `max_size`.
 pub struct BlockSystem {
     max_blocks: usize,
     blocks: usize,
     size: usize,
-    /// Pool index of block `(i, j)` at `i * max_blocks + j`.
-    index: Vec<Option<usize>>,
+    /// Block `(i, j)` at `i * max_blocks + j`.
+    index: Vec<Option<Block>>,
     pool: Vec<f64>,
     used: usize,
     rhs: Vec<f64>,
     perm: Vec<usize>,
     perm_inv: Vec<usize>,
+    /// Scratch: an `m x m` product, a term's two factors, a small `r x r` product, a vector.
     product: Vec<f64>,
+    left: Vec<f64>,
+    right: Vec<f64>,
+    small: Vec<f64>,
     column: Vec<f64>,
     stack: MemBuffer,
     /// A copy of the assembled system for Newton iterations ([`Self::save`]); grown on first use.
@@ -35,7 +55,7 @@ pub struct BlockSystem {
 /// An assembled, unfactored system: the used blocks, their index and the right-hand side.
 #[derive(Debug, Default)]
 struct Saved {
-    index: Vec<Option<usize>>,
+    index: Vec<Option<Block>>,
     pool: Vec<f64>,
     used: usize,
     rhs: Vec<f64>,
@@ -48,6 +68,16 @@ impl std::fmt::Debug for BlockSystem {
             .field("size", &self.size)
             .finish_non_exhaustive()
     }
+}
+
+/// An `r x c` column-major view of `values`.
+fn view(values: &[f64], r: usize, c: usize) -> MatRef<'_, f64> {
+    MatRef::from_column_major_slice(values, r, c)
+}
+
+/// An `r x c` column-major mutable view of `values`.
+fn view_mut(values: &mut [f64], r: usize, c: usize) -> MatMut<'_, f64> {
+    MatMut::from_column_major_slice_mut(values, r, c)
 }
 
 impl BlockSystem {
@@ -64,17 +94,21 @@ impl BlockSystem {
             ),
             solve::solve_in_place_scratch::<usize, f64>(max_size, max_size, Par::Seq),
         ]);
+        let square = max_size * max_size;
         Self {
             max_blocks,
             blocks: 0,
             size: 0,
             index: vec![None; max_blocks * max_blocks],
-            pool: vec![0.0; capacity * max_size * max_size],
+            pool: vec![0.0; capacity * square],
             used: 0,
             rhs: vec![0.0; max_blocks * max_size],
             perm: vec![0; max_blocks * max_size],
             perm_inv: vec![0; max_size],
-            product: vec![0.0; max_size * max_size],
+            product: vec![0.0; square],
+            left: vec![0.0; square],
+            right: vec![0.0; square],
+            small: vec![0.0; square],
             column: vec![0.0; max_size],
             stack: MemBuffer::new(req),
             saved: Saved::default(),
@@ -111,22 +145,37 @@ impl BlockSystem {
     /// `out = b - A x` for the system kept by [`Self::save`]; `x` and `out` hold one vector of
     /// all block rows.
     pub fn residual(&self, x: &[f64], out: &mut [f64]) {
-        let (m, n) = (self.size, self.size * self.size);
+        let (m, n, h) = (self.size, self.size * self.size, self.v_offset());
         let saved = &self.saved;
         out[..saved.rhs.len()].copy_from_slice(&saved.rhs);
         for i in 0..self.blocks {
             for j in 0..self.blocks {
-                let Some(k) = saved.index[i * self.max_blocks + j] else {
+                let Some(block) = saved.index[i * self.max_blocks + j] else {
                     continue;
                 };
-                let block = &saved.pool[k * n..(k + 1) * n];
-                let row = &mut out[i * m..(i + 1) * m];
-                for (c, &xc) in x[j * m..(j + 1) * m].iter().enumerate() {
-                    if xc == 0.0 {
-                        continue;
+                let (row, x) = (&mut out[i * m..(i + 1) * m], &x[j * m..(j + 1) * m]);
+                match block {
+                    Block::Dense(k) => {
+                        let a = view(&saved.pool[k * n..(k + 1) * n], m, m);
+                        matmul(
+                            view_mut(row, m, 1),
+                            Accum::Add,
+                            a,
+                            view(x, m, 1),
+                            -1.0,
+                            Par::Seq,
+                        );
                     }
-                    for (o, a) in row.iter_mut().zip(&block[c * m..(c + 1) * m]) {
-                        *o -= a * xc;
+                    Block::Factored(k, r) => {
+                        // row -= U (V^T x), one column of U and V at a time.
+                        let slot = &saved.pool[k * n..(k + 1) * n];
+                        let (u, v) = (&slot[..m * r], &slot[h..h + m * r]);
+                        for (uc, vc) in u.chunks_exact(m).zip(v.chunks_exact(m)) {
+                            let t: f64 = vc.iter().zip(x).map(|(a, b)| a * b).sum();
+                            for (o, a) in row.iter_mut().zip(uc) {
+                                *o -= a * t;
+                            }
+                        }
                     }
                 }
             }
@@ -143,26 +192,106 @@ impl BlockSystem {
         self.rhs[..blocks * size].fill(0.0);
     }
 
-    fn block_index(&mut self, i: usize, j: usize) -> usize {
-        let slot = &mut self.index[i * self.max_blocks + j];
-        match *slot {
-            Some(k) => k,
+    /// The most columns a factored block keeps; beyond, a dense block is cheaper.
+    fn rank_capacity(&self) -> usize {
+        self.size / 2
+    }
+
+    fn new_slot(&mut self) -> usize {
+        let k = self.used;
+        self.used += 1;
+        k
+    }
+
+    /// The dense slot of block `(i, j)`: created zero, or multiplied out from its factors.
+    fn dense_slot(&mut self, i: usize, j: usize) -> usize {
+        match self.index[i * self.max_blocks + j] {
+            Some(Block::Dense(k)) => k,
+            Some(Block::Factored(..)) => self.densify(i, j),
             None => {
-                let k = self.used;
-                self.used += 1;
-                *slot = Some(k);
+                let k = self.new_slot();
                 let n = self.size * self.size;
                 self.pool[k * n..(k + 1) * n].fill(0.0);
+                self.index[i * self.max_blocks + j] = Some(Block::Dense(k));
                 k
             }
         }
     }
 
-    /// Block `(i, j)`, column-major, created zero on first use.
+    /// Replaces the factored block `(i, j)` by the dense product of its factors; returns its slot.
+    fn densify(&mut self, i: usize, j: usize) -> usize {
+        let Some(Block::Factored(k, r)) = self.index[i * self.max_blocks + j] else {
+            unreachable!("only factored blocks are made dense");
+        };
+        let (m, n, h) = (self.size, self.size * self.size, self.v_offset());
+        let slot = &self.pool[k * n..(k + 1) * n];
+        matmul(
+            view_mut(&mut self.product[..n], m, m),
+            Accum::Replace,
+            view(&slot[..m * r], m, r),
+            view(&slot[h..h + m * r], m, r).transpose(),
+            1.0,
+            Par::Seq,
+        );
+        self.pool[k * n..(k + 1) * n].copy_from_slice(&self.product[..n]);
+        self.index[i * self.max_blocks + j] = Some(Block::Dense(k));
+        k
+    }
+
+    /// Where a factored slot's `V` starts.
+    fn v_offset(&self) -> usize {
+        self.size * self.rank_capacity()
+    }
+
+    /// Block `(i, j)` as a dense column-major slice, created zero on first use (a factored
+    /// block is multiplied out).
     pub fn block_mut(&mut self, i: usize, j: usize) -> &mut [f64] {
-        let k = self.block_index(i, j);
+        let k = self.dense_slot(i, j);
         let n = self.size * self.size;
         &mut self.pool[k * n..(k + 1) * n]
+    }
+
+    /// Zeroed factors `U` and `V` (`m x r` column-major each) of a term for [`Self::add_term`].
+    pub fn term_mut(&mut self, r: usize) -> (&mut [f64], &mut [f64]) {
+        let m = self.size;
+        let (u, v) = (&mut self.left[..m * r], &mut self.right[..m * r]);
+        u.fill(0.0);
+        v.fill(0.0);
+        (u, v)
+    }
+
+    /// Adds `scale U V^T`, the rank-`r` term left by [`Self::term_mut`], to block `(i, j)`:
+    /// appended to its factors while their rank stays within `m / 2`, else added densely.
+    pub fn add_term(&mut self, i: usize, j: usize, r: usize, scale: f64) {
+        if r == 0 {
+            return;
+        }
+        let (m, n, h) = (self.size, self.size * self.size, self.v_offset());
+        let at = i * self.max_blocks + j;
+        let current = self.index[at];
+        let room = match current {
+            None if i != j && r <= self.rank_capacity() => Some((self.new_slot(), 0)),
+            Some(Block::Factored(k, rank)) if rank + r <= self.rank_capacity() => Some((k, rank)),
+            _ => None,
+        };
+        if let Some((k, rank)) = room {
+            let slot = &mut self.pool[k * n..(k + 1) * n];
+            for (u, l) in slot[m * rank..m * (rank + r)].iter_mut().zip(&self.left) {
+                *u = scale * l;
+            }
+            slot[h + m * rank..h + m * (rank + r)].copy_from_slice(&self.right[..m * r]);
+            self.index[at] = Some(Block::Factored(k, rank + r));
+        } else {
+            let k = self.dense_slot(i, j);
+            matmul(
+                view_mut(&mut self.pool[k * n..(k + 1) * n], m, m),
+                Accum::Add,
+                view(&self.left[..m * r], m, r),
+                view(&self.right[..m * r], m, r).transpose(),
+                scale,
+                Par::Seq,
+            );
+        }
     }
 
     /// Right-hand side of block row `i`; after [`Self::solve`], the solution.
@@ -175,34 +304,161 @@ impl BlockSystem {
         &self.rhs[..self.blocks * self.size]
     }
 
-    fn has(&self, i: usize, j: usize) -> bool {
-        self.index[i * self.max_blocks + j].is_some()
+    /// `rhs_row += alpha B x` for block `B` and `x` in `self.column`.
+    fn apply(&mut self, block: Block, row: usize, alpha: f64) {
+        let (m, n, h) = (self.size, self.size * self.size, self.v_offset());
+        let out = view_mut(&mut self.rhs[row * m..(row + 1) * m], m, 1);
+        let x = view(&self.column[..m], m, 1);
+        match block {
+            Block::Dense(k) => {
+                matmul(
+                    out,
+                    Accum::Add,
+                    view(&self.pool[k * n..(k + 1) * n], m, m),
+                    x,
+                    alpha,
+                    Par::Seq,
+                );
+            }
+            Block::Factored(k, r) => {
+                let slot = &self.pool[k * n..(k + 1) * n];
+                matmul(
+                    view_mut(&mut self.small[..r], r, 1),
+                    Accum::Replace,
+                    view(&slot[h..h + m * r], m, r).transpose(),
+                    x,
+                    1.0,
+                    Par::Seq,
+                );
+                matmul(
+                    out,
+                    Accum::Add,
+                    view(&slot[..m * r], m, r),
+                    view(&self.small[..r], r, 1),
+                    alpha,
+                    Par::Seq,
+                );
+            }
+        }
+    }
+
+    /// Subtracts `A W` from block `(i, j)`, for `A = A_ie` and `W = D_ee^-1 A_ej` (either dense
+    /// or factored): the product of a factored block with anything is factored, of rank at
+    /// most the factored one's.
+    fn subtract_product(&mut self, i: usize, j: usize, a: Block, w: Block) {
+        let (m, n, h) = (self.size, self.size * self.size, self.v_offset());
+        let pool = &self.pool;
+        let u = |k: usize, r: usize| view(&pool[k * n..k * n + m * r], m, r);
+        let v = |k: usize, r: usize| view(&pool[k * n + h..k * n + h + m * r], m, r);
+        let dense = |k: usize| view(&pool[k * n..(k + 1) * n], m, m);
+        let rank = match (a, w) {
+            (Block::Factored(ka, ra), Block::Factored(kw, rw)) => {
+                // A W = U_a (V_a^T U_w) V_w^T: multiply the small middle into the lower rank.
+                matmul(
+                    view_mut(&mut self.small[..ra * rw], ra, rw),
+                    Accum::Replace,
+                    v(ka, ra).transpose(),
+                    u(kw, rw),
+                    1.0,
+                    Par::Seq,
+                );
+                let middle = view(&self.small[..ra * rw], ra, rw);
+                if ra <= rw {
+                    self.left[..m * ra].copy_from_slice(&pool[ka * n..ka * n + m * ra]);
+                    matmul(
+                        view_mut(&mut self.right[..m * ra], m, ra),
+                        Accum::Replace,
+                        v(kw, rw),
+                        middle.transpose(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    ra
+                } else {
+                    matmul(
+                        view_mut(&mut self.left[..m * rw], m, rw),
+                        Accum::Replace,
+                        u(ka, ra),
+                        middle,
+                        1.0,
+                        Par::Seq,
+                    );
+                    self.right[..m * rw].copy_from_slice(&pool[kw * n + h..kw * n + h + m * rw]);
+                    rw
+                }
+            }
+            (Block::Dense(ka), Block::Factored(kw, rw)) => {
+                matmul(
+                    view_mut(&mut self.left[..m * rw], m, rw),
+                    Accum::Replace,
+                    dense(ka),
+                    u(kw, rw),
+                    1.0,
+                    Par::Seq,
+                );
+                self.right[..m * rw].copy_from_slice(&pool[kw * n + h..kw * n + h + m * rw]);
+                rw
+            }
+            (Block::Factored(ka, ra), Block::Dense(kw)) => {
+                self.left[..m * ra].copy_from_slice(&pool[ka * n..ka * n + m * ra]);
+                matmul(
+                    view_mut(&mut self.right[..m * ra], m, ra),
+                    Accum::Replace,
+                    dense(kw).transpose(),
+                    v(ka, ra),
+                    1.0,
+                    Par::Seq,
+                );
+                ra
+            }
+            (Block::Dense(ka), Block::Dense(kw)) => {
+                let c = self.dense_slot(i, j);
+                self.product[..n].copy_from_slice(&self.pool[ka * n..(ka + 1) * n]);
+                let (dst, src) = two_blocks(&mut self.pool, c, kw, n);
+                matmul(
+                    view_mut(dst, m, m),
+                    Accum::Add,
+                    view(&self.product[..n], m, m),
+                    view(src, m, m),
+                    -1.0,
+                    Par::Seq,
+                );
+                return;
+            }
+        };
+        self.add_term(i, j, rank, -1.0);
     }
 
     /// Solves in place by block Gaussian elimination in the given order of block rows (a
     /// permutation of `0..blocks`); each diagonal block is factored with partial pivoting.
     pub fn solve(&mut self, order: &[usize]) {
         let (m, n) = (self.size, self.size * self.size);
+        let mb = self.max_blocks;
         for (k, &e) in order.iter().enumerate() {
             let later = &order[k + 1..];
-            let d = self.block_index(e, e);
-            let stack = MemStack::new(&mut self.stack);
-            let (_, perm) = factor::lu_in_place(
-                MatMut::from_column_major_slice_mut(&mut self.pool[d * n..(d + 1) * n], m, m),
-                &mut self.perm[e * m..(e + 1) * m],
-                &mut self.perm_inv[..m],
-                Par::Seq,
-                stack,
-                Default::default(),
-            );
-            let (pool, rhs) = (&mut self.pool, &mut self.rhs);
-            let (before, rest) = pool.split_at_mut(d * n);
-            let (lu, after) = rest.split_at_mut(n);
-            let lu = MatRef::from_column_major_slice(lu, m, m);
-            // Row e: every later block and the right-hand side times D_ee^-1.
-            for &j in later {
-                if let Some(b) = self.index[e * self.max_blocks + j] {
-                    let block = if b < d {
+            let d = self.dense_slot(e, e);
+            {
+                let stack = MemStack::new(&mut self.stack);
+                let (_, perm) = factor::lu_in_place(
+                    view_mut(&mut self.pool[d * n..(d + 1) * n], m, m),
+                    &mut self.perm[e * m..(e + 1) * m],
+                    &mut self.perm_inv[..m],
+                    Par::Seq,
+                    stack,
+                    Default::default(),
+                );
+                let (before, rest) = self.pool.split_at_mut(d * n);
+                let (lu, after) = rest.split_at_mut(n);
+                let lu = view(lu, m, m);
+                // Row e: every later block (a factored one's U) and the right-hand side times
+                // D_ee^-1.
+                for &j in later {
+                    let (b, columns) = match self.index[e * mb + j] {
+                        None => continue,
+                        Some(Block::Dense(b)) => (b, m),
+                        Some(Block::Factored(b, r)) => (b, r),
+                    };
+                    let slot = if b < d {
                         &mut before[b * n..(b + 1) * n]
                     } else {
                         &mut after[(b - d - 1) * n..(b - d) * n]
@@ -211,68 +467,41 @@ impl BlockSystem {
                         lu,
                         lu,
                         perm,
-                        MatMut::from_column_major_slice_mut(block, m, m),
+                        view_mut(&mut slot[..m * columns], m, columns),
                         Par::Seq,
                         stack,
                     );
                 }
+                solve::solve_in_place(
+                    lu,
+                    lu,
+                    perm,
+                    view_mut(&mut self.rhs[e * m..(e + 1) * m], m, 1),
+                    Par::Seq,
+                    stack,
+                );
             }
-            solve::solve_in_place(
-                lu,
-                lu,
-                perm,
-                MatMut::from_column_major_slice_mut(&mut rhs[e * m..(e + 1) * m], m, 1),
-                Par::Seq,
-                stack,
-            );
             // Schur complement on the later rows that couple to e.
             for &i in later {
-                let Some(a) = self.index[i * self.max_blocks + e] else {
+                let Some(a) = self.index[i * mb + e] else {
                     continue;
                 };
-                self.product[..n].copy_from_slice(&self.pool[a * n..(a + 1) * n]);
                 self.column[..m].copy_from_slice(&self.rhs[e * m..(e + 1) * m]);
-                matmul(
-                    MatMut::from_column_major_slice_mut(&mut self.rhs[i * m..(i + 1) * m], m, 1),
-                    Accum::Add,
-                    MatRef::from_column_major_slice(&self.product[..n], m, m),
-                    MatRef::from_column_major_slice(&self.column[..m], m, 1),
-                    -1.0,
-                    Par::Seq,
-                );
+                self.apply(a, i, -1.0);
                 for &j in later {
-                    let Some(b) = self.index[e * self.max_blocks + j] else {
-                        continue;
-                    };
-                    let c = self.block_index(i, j);
-                    let (dst, src) = two_blocks(&mut self.pool, c, b, n);
-                    matmul(
-                        MatMut::from_column_major_slice_mut(dst, m, m),
-                        Accum::Add,
-                        MatRef::from_column_major_slice(&self.product[..n], m, m),
-                        MatRef::from_column_major_slice(src, m, m),
-                        -1.0,
-                        Par::Seq,
-                    );
+                    if let Some(w) = self.index[e * mb + j] {
+                        self.subtract_product(i, j, a, w);
+                    }
                 }
             }
         }
         // Back substitution: x_e = y_e - sum over later j of (D_ee^-1 A_ej) x_j.
         for (k, &e) in order.iter().enumerate().rev() {
             for &j in &order[k + 1..] {
-                if !self.has(e, j) {
-                    continue;
+                if let Some(w) = self.index[e * mb + j] {
+                    self.column[..m].copy_from_slice(&self.rhs[j * m..(j + 1) * m]);
+                    self.apply(w, e, -1.0);
                 }
-                let b = self.index[e * self.max_blocks + j].expect("checked");
-                self.column[..m].copy_from_slice(&self.rhs[j * m..(j + 1) * m]);
-                matmul(
-                    MatMut::from_column_major_slice_mut(&mut self.rhs[e * m..(e + 1) * m], m, 1),
-                    Accum::Add,
-                    MatRef::from_column_major_slice(&self.pool[b * n..(b + 1) * n], m, m),
-                    MatRef::from_column_major_slice(&self.column[..m], m, 1),
-                    -1.0,
-                    Par::Seq,
-                );
             }
         }
     }
@@ -320,62 +549,135 @@ mod tests {
         x
     }
 
-    #[test]
-    fn ring_and_chain_systems_match_a_dense_solve() {
-        let mut seed = 12345u64;
-        let mut rand = move || {
+    /// A pseudo-random number in `[-0.5, 0.5)`.
+    fn generator(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
             seed = seed
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        let mut system = BlockSystem::new(8, 6);
-        for (blocks, closed) in [(6, true), (5, false), (1, false), (2, true), (8, true)] {
-            let m = 6;
-            let n = blocks * m;
-            let mut dense = vec![vec![0.0; n]; n];
-            let mut b = vec![0.0; n];
-            system.reset(blocks, m);
-            let mut couple = |i: usize, j: usize, system: &mut BlockSystem, diagonal: bool| {
+        }
+    }
+
+    /// How the test couples two blocks.
+    #[derive(Clone, Copy, Debug)]
+    enum Coupling {
+        Dense,
+        /// Terms `U V^T` of these ranks, added one after the other.
+        Factored(&'static [usize]),
+    }
+
+    /// Assembles a ring or chain system of random blocks into `system`; returns it dense with
+    /// its right-hand side.
+    fn assemble(
+        system: &mut BlockSystem,
+        (blocks, closed, m): (usize, bool, usize),
+        coupling: Coupling,
+        seed: u64,
+    ) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let mut rand = generator(seed);
+        let n = blocks * m;
+        let mut dense = vec![vec![0.0; n]; n];
+        system.reset(blocks, m);
+        let mut couple = |i: usize, j: usize, system: &mut BlockSystem| match coupling {
+            Coupling::Factored(ranks) if i != j => {
+                for &rank in ranks {
+                    let scale = 2.0 * rand();
+                    let (u, v) = system.term_mut(rank);
+                    u.iter_mut().for_each(|x| *x = rand());
+                    v.iter_mut().for_each(|x| *x = rand());
+                    for r in 0..m {
+                        for c in 0..m {
+                            dense[i * m + r][j * m + c] +=
+                                scale * (0..rank).map(|s| u[s * m + r] * v[s * m + c]).sum::<f64>();
+                        }
+                    }
+                    system.add_term(i, j, rank, scale);
+                }
+            }
+            _ => {
                 let block = system.block_mut(i, j);
                 for c in 0..m {
                     for r in 0..m {
-                        let v = rand() + if diagonal && r == c { 4.0 } else { 0.0 };
+                        let v = rand() + if i == j && r == c { 4.0 } else { 0.0 };
                         block[c * m + r] += v;
                         dense[i * m + r][j * m + c] += v;
                     }
                 }
-            };
-            for i in 0..blocks {
-                couple(i, i, &mut system, true);
-                if i + 1 < blocks || (closed && blocks > 2) {
-                    let j = (i + 1) % blocks;
-                    couple(i, j, &mut system, false);
-                    couple(j, i, &mut system, false);
-                }
             }
-            for i in 0..blocks {
-                for (r, x) in system.rhs_mut(i).iter_mut().enumerate() {
-                    *x = rand();
-                    b[i * m + r] = *x;
-                }
+        };
+        for i in 0..blocks {
+            couple(i, i, system);
+            if i + 1 < blocks || (closed && blocks > 2) {
+                let j = (i + 1) % blocks;
+                couple(i, j, system);
+                couple(j, i, system);
             }
-            system.save();
-            // A scrambled ring order still solves correctly (with more fill).
-            let order: Vec<usize> = (0..blocks).rev().collect();
-            system.solve(&order);
-            let expected = dense_solve(&dense, &b);
-            for (x, e) in system.rhs().iter().zip(&expected) {
-                assert!((x - e).abs() < 1e-10, "{blocks} blocks: {x} vs {e}");
+        }
+        let mut b = vec![0.0; n];
+        for i in 0..blocks {
+            for (r, x) in system.rhs_mut(i).iter_mut().enumerate() {
+                *x = rand();
+                b[i * m + r] = *x;
             }
-            // The saved system gives the solution's residual and solves again after restore.
-            let x = system.rhs().to_vec();
-            let mut r = vec![1.0; n];
-            system.residual(&x, &mut r);
-            assert!(r.iter().all(|v| v.abs() < 1e-12), "{blocks} blocks: {r:?}");
-            system.restore();
-            system.solve(&order);
-            assert_eq!(system.rhs(), &x[..]);
+        }
+        (dense, b)
+    }
+
+    /// Solves a random ring or chain system in a scrambled order (more fill than ring order)
+    /// against a dense solve; the copy kept by [`BlockSystem::save`] gives the solution's
+    /// residual and solves again after restore.
+    fn check(shape: (usize, bool, usize), coupling: Coupling, seed: u64) {
+        let mut system = BlockSystem::new(8, 12);
+        let label = format!("{shape:?}, {coupling:?}");
+        let order: Vec<usize> = (0..shape.0).rev().collect();
+        let (dense, b) = assemble(&mut system, shape, coupling, seed);
+        if let (Coupling::Factored(&[rank]), (blocks, _, m)) = (coupling, shape) {
+            if blocks > 1 {
+                let kept = system.index[1];
+                assert_eq!(
+                    kept,
+                    Some(Block::Factored(kept.map_or(0, slot), rank)),
+                    "{label}"
+                );
+                assert!(rank <= m / 2);
+            }
+        }
+        let expected = dense_solve(&dense, &b);
+        system.solve(&order);
+        for (x, e) in system.rhs().iter().zip(&expected) {
+            assert!((x - e).abs() < 1e-10, "{label}: {x} vs {e}");
+        }
+        assemble(&mut system, shape, coupling, seed);
+        system.save();
+        system.solve(&order);
+        for (x, e) in system.rhs().iter().zip(&expected) {
+            assert!((x - e).abs() < 1e-10, "{label}, saved: {x} vs {e}");
+        }
+        let x = system.rhs().to_vec();
+        let mut r = vec![1.0; b.len()];
+        system.residual(&x, &mut r);
+        assert!(r.iter().all(|v| v.abs() < 1e-12), "{label}: {r:?}");
+        system.restore();
+        system.solve(&order);
+        assert_eq!(system.rhs(), &x[..]);
+    }
+
+    fn slot(block: Block) -> usize {
+        match block {
+            Block::Dense(k) | Block::Factored(k, _) => k,
+        }
+    }
+
+    #[test]
+    fn ring_and_chain_systems_match_a_dense_solve() {
+        for (blocks, closed) in [(6, true), (5, false), (1, false), (2, true), (8, true)] {
+            check((blocks, closed, 6), Coupling::Dense, 12345);
+            // Rank 2 of 6 (capacity 3): factored fill, some made dense when ranks add up.
+            check((blocks, closed, 6), Coupling::Factored(&[2]), 777);
+            // Ranks 1 + 1 appended, then 2 more: made dense at assembly.
+            check((blocks, closed, 6), Coupling::Factored(&[1, 1, 2]), 778);
+            check((blocks, closed, 12), Coupling::Factored(&[3]), 779);
         }
     }
 }
