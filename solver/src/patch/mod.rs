@@ -197,6 +197,13 @@ impl Slot {
     }
 }
 
+/// A face quadrature rule and the reference tables at its points.
+#[derive(Clone, Debug)]
+struct FaceQuadrature {
+    rule: Rule<2>,
+    tables: FaceTables,
+}
+
 /// The inflow face of a tent element whose tent vertex is corner `corner` of its triangle, its
 /// corners in the triangle's own vertex order: quadrature points on a front triangle are then the
 /// same whichever vertex pitches it, so integrals of initial data match
@@ -250,7 +257,10 @@ fn face_points(
 pub struct PatchSolver {
     system: System,
     basis: Basis,
-    face_rule: Rule<2>,
+    /// Face rules: of degree `2p` for polynomial integrands (between solved elements), and
+    /// `2p + 2` for boundary and initial data and nonlinear faces.
+    exact: FaceQuadrature,
+    data: FaceQuadrature,
     /// `H[r][k * n + l] = int_ref phi_k d(phi_l)/d(xi_r)`.
     h_ref: [Vec<f64>; 3],
     slots: Vec<Slot>,
@@ -261,8 +271,6 @@ pub struct PatchSolver {
     stack: MemBuffer,
     small: Vec<f64>,
     small_rhs: Vec<f64>,
-    /// Basis values and face matrices on the reference element's faces.
-    tables: FaceTables,
     /// Basis values of another element at a face's points, when not tabulated (`points x n`),
     /// and its traces (`n x face_dim`).
     other_values: Vec<f64>,
@@ -322,13 +330,16 @@ impl PatchSolver {
                 solve::solve_in_place_scratch::<usize, f64>(m, 2, Par::Seq),
             ])
         };
-        let face_rule = quadrature::triangle(2 * order + 2);
-        let tables = FaceTables::new(&basis, &face_rule);
+        let [exact, data] = [2 * order, 2 * order + 2].map(|degree| {
+            let rule = quadrature::triangle(degree);
+            let tables = FaceTables::new(&basis, &rule);
+            FaceQuadrature { rule, tables }
+        });
         Self {
-            other_values: vec![0.0; tables.points() * n],
-            trace: vec![0.0; n * tables.face_dim()],
-            tables,
-            face_rule,
+            other_values: vec![0.0; data.tables.points() * n],
+            trace: vec![0.0; n * data.tables.face_dim()],
+            exact,
+            data,
             h_ref,
             slots: vec![Slot::default(); max_star],
             blocks: BlockSystem::new(max_star, n * fields),
@@ -369,7 +380,7 @@ impl PatchSolver {
             // Scratch of Newton patches, only for runs that have them.
             let (max_star, n) = (self.slots.len(), self.basis.len());
             let size = max_star * n * self.system.fields();
-            let points = self.face_rule.points.len();
+            let points = self.data.rule.points.len();
             let order = self.basis.degree();
             self.contact = ContactFaces::new(max_star, order, points, n, size / max_star);
             self.iterate = vec![0.0; size];
@@ -604,19 +615,20 @@ impl PatchSolver {
                 let own = FaceTables::triple(face.0);
                 let (_, _, _, nrm, area2) = face_geometry(&slot.vertices, face);
                 let an = self.system.a_n(nrm);
-                let under = below_values(
-                    &self.tables,
-                    &self.basis,
-                    &mut self.other_values,
-                    &self.face_rule,
-                    &slot,
-                    face,
-                    self.inflow.below(source),
-                );
+                let below = self.inflow.below(source);
+                // Polynomial data from a solved element below; initial data otherwise.
+                let quadrature = if below.is_some() {
+                    &self.exact
+                } else {
+                    &self.data
+                };
+                let (rule, tables) = (&quadrature.rule, &quadrature.tables);
+                let scratch = &mut self.other_values;
+                let under = below_values(tables, &self.basis, scratch, rule, &slot, face, below);
                 let system = &self.system;
-                let mut points = self.tables.values(own).chunks_exact(n).enumerate();
+                let mut points = tables.values(own).chunks_exact(n).enumerate();
                 let rhs = self.blocks.rhs_mut(i);
-                face_points(&self.face_rule, &slot.vertices, face, |x, w, _| {
+                face_points(rule, &slot.vertices, face, |x, w, _| {
                     let (q, phi) = points.next().expect("one per rule point");
                     let q_prev = inflow_state(
                         system,
@@ -631,7 +643,7 @@ impl PatchSolver {
                         }
                     }
                 });
-                diagonal[terms] = (self.tables.mass(own), an.map(|row| row.map(|x| -area2 * x)));
+                diagonal[terms] = (tables.mass(own), an.map(|row| row.map(|x| -area2 * x)));
                 terms += 1;
             }
             let system = &self.system;
@@ -654,12 +666,12 @@ impl PatchSolver {
                 let self_block: Matrix = std::array::from_fn(|r| {
                     std::array::from_fn(|c| area2 * (m_a[r][c] - a_m[r][c]))
                 });
-                diagonal[terms] = (self.tables.mass(own), self_block);
+                diagonal[terms] = (self.exact.tables.mass(own), self_block);
                 terms += 1;
                 let Some(j) = neighbour else {
-                    let mut points = self.tables.values(own).chunks_exact(n);
+                    let mut points = self.data.tables.values(own).chunks_exact(n);
                     let rhs = self.blocks.rhs_mut(i);
-                    face_points(&self.face_rule, &slot.vertices, face, |x, w, _| {
+                    face_points(&self.data.rule, &slot.vertices, face, |x, w, _| {
                         let phi = points.next().expect("one per rule point");
                         let sides = boundary.sides(
                             system,
@@ -683,15 +695,15 @@ impl PatchSolver {
                 };
                 // Face mass (T_i T_j^T area2) (x) (L R^T): rank face_dim x rank(m_b).
                 let trace_j = neighbour_trace(
-                    &self.tables,
+                    &self.exact.tables,
                     &self.basis,
                     &mut self.other_values,
                     &mut self.trace,
-                    &self.face_rule,
+                    &self.exact.rule,
                     (&slot, face),
                     &self.slots[j],
                 );
-                let (trace_i, nf) = (self.tables.trace(own), self.tables.face_dim());
+                let (trace_i, nf) = (self.exact.tables.trace(own), self.exact.tables.face_dim());
                 let (rank, l, r) = low_rank(&m_b, fields);
                 let (u, v) = self.blocks.term_mut(nf * rank);
                 for (k, (ti, tj)) in trace_i
@@ -791,7 +803,7 @@ impl PatchSolver {
                     None => FaceShape::tent(corners, side.edge),
                     Some(half) => FaceShape::coarsening(corners, [side.edge, half]),
                 };
-                let (rule, geometry_b) = (&self.face_rule, self.slots[j].geometry);
+                let (rule, geometry_b) = (&self.data.rule, self.slots[j].geometry);
                 let index = self.contact.add(
                     (i, j),
                     (&slot.geometry, &geometry_b),
@@ -997,9 +1009,9 @@ impl PatchSolver {
             let out = &mut self.output[i * n * width + k * width..][..fields];
             out.copy_from_slice(&solution[i * m + k * fields..][..fields]);
         }
-        let (system, tables) = (&self.system, &self.tables);
-        // The element's state at rule point q of its face `face`.
-        let own = |face: Face, q: usize| {
+        let system = &self.system;
+        // The element's state at point q of the rule of `tables` on its face `face`.
+        let own = |tables: &FaceTables, face: Face, q: usize| {
             let phi = tables.at(FaceTables::triple(face.0), q);
             combine(&solution[i * m..(i + 1) * m], phi, fields)
         };
@@ -1012,11 +1024,11 @@ impl PatchSolver {
             }
             scale += face[0].hypot(face[1]);
         };
-        let face_rule = &self.face_rule;
+        let (exact, data) = (&self.exact, &self.data);
         let mut face_momentum = [0.0; 2];
         let mut point = 0..;
-        face_points(face_rule, &slot.vertices, TOP, |_, w, nrm| {
-            let q = own(TOP, point.next().expect("unbounded"));
+        face_points(&exact.rule, &slot.vertices, TOP, |_, w, nrm| {
+            let q = own(&exact.tables, TOP, point.next().expect("unbounded"));
             let aq = system.apply(&system.a_n(nrm), &q);
             r.energy_out += 0.5 * w * system.dot(&q, &aq);
             for (f, a) in face_momentum.iter_mut().zip(&aq[..nv]) {
@@ -1025,18 +1037,14 @@ impl PatchSolver {
         });
         add_momentum(face_momentum);
         for &(face, source) in slot.inflows() {
-            let under = below_values(
-                tables,
-                &self.basis,
-                &mut self.other_values,
-                face_rule,
-                &slot,
-                face,
-                self.inflow.below(source),
-            );
+            let below = self.inflow.below(source);
+            let quadrature = if below.is_some() { exact } else { data };
+            let (rule, tables) = (&quadrature.rule, &quadrature.tables);
+            let scratch = &mut self.other_values;
+            let under = below_values(tables, &self.basis, scratch, rule, &slot, face, below);
             face_momentum = [0.0; 2];
             let mut point = 0..;
-            face_points(face_rule, &slot.vertices, face, |x, w, nrm| {
+            face_points(rule, &slot.vertices, face, |x, w, nrm| {
                 let p = point.next().expect("unbounded");
                 let an = system.a_n(nrm);
                 let q_prev = inflow_state(
@@ -1045,7 +1053,7 @@ impl PatchSolver {
                     initial,
                     x,
                 );
-                let q = own(face, p);
+                let q = own(tables, face, p);
                 let aq_prev = system.apply(&an, &q_prev);
                 r.energy_in -= 0.5 * w * system.dot(&q_prev, &aq_prev);
                 let jump = std::array::from_fn(|k| q[k] - q_prev[k]);
@@ -1067,6 +1075,11 @@ impl PatchSolver {
                     &face.targets_b
                 }
             });
+            // Polynomial integrands between linear elements; boundary data and nonlinear faces
+            // (whose states the contact faces hold at the data rule's points) take the other.
+            let polynomial = law.is_some_and(|law| !law.is_nonlinear());
+            let quadrature = if polynomial { exact } else { data };
+            let (rule, tables) = (&quadrature.rule, &quadrature.tables);
             let across = side.neighbour.map(|j| {
                 let other = &self.slots[j];
                 let (scratch, basis) = (&mut self.other_values, &self.basis);
@@ -1075,7 +1088,7 @@ impl PatchSolver {
                     tables,
                     basis,
                     scratch,
-                    face_rule,
+                    rule,
                     at,
                     &other.geometry,
                     &other.vertices,
@@ -1083,9 +1096,9 @@ impl PatchSolver {
             });
             face_momentum = [0.0; 2];
             let mut point = 0;
-            face_points(face_rule, &slot.vertices, side.face, |x, w, nrm| {
+            face_points(rule, &slot.vertices, side.face, |x, w, nrm| {
                 let normal = [nrm[0], nrm[1]];
-                let a = system.frame(&own(side.face, point), normal);
+                let a = system.frame(&own(tables, side.face, point), normal);
                 let star_trace = match (side.neighbour, law) {
                     (Some(_), Some(law)) if law.is_nonlinear() => {
                         contact.expect("contact faces are registered")[point].star
@@ -1166,23 +1179,23 @@ impl PatchSolver {
             }
         }
         for &(face, source) in slot.inflows() {
-            let under = below_values(
-                &self.tables,
-                &self.basis,
-                &mut self.other_values,
-                &self.face_rule,
-                &slot,
-                face,
-                self.inflow.below(source),
-            );
+            let below = self.inflow.below(source);
+            let quadrature = if below.is_some() {
+                &self.exact
+            } else {
+                &self.data
+            };
+            let (rule, tables) = (&quadrature.rule, &quadrature.tables);
+            let scratch = &mut self.other_values;
+            let under = below_values(tables, &self.basis, scratch, rule, &slot, face, below);
             let (_, _, _, nrm, area2) = face_geometry(&slot.vertices, face);
             let own = FaceTables::triple(face.0);
-            for (s, mass) in small.iter_mut().zip(self.tables.mass(own)) {
+            for (s, mass) in small.iter_mut().zip(tables.mass(own)) {
                 // The mass is symmetric: row-major or column-major alike.
                 *s -= area2 * nrm[2] * mass;
             }
-            let mut points = self.tables.values(own).chunks_exact(n).enumerate();
-            face_points(&self.face_rule, &slot.vertices, face, |x, w, nrm| {
+            let mut points = tables.values(own).chunks_exact(n).enumerate();
+            face_points(rule, &slot.vertices, face, |x, w, nrm| {
                 let (q, phi) = points.next().expect("one per rule point");
                 let under = under.map(|(v, c)| (&v[q * n..][..n], c));
                 let u_prev = inflow_displacement(&self.system, under, initial, x);
