@@ -615,16 +615,15 @@ impl PatchSolver {
                 let own = FaceTables::triple(face.0);
                 let (_, _, _, nrm, area2) = face_geometry(&slot.vertices, face);
                 let an = self.system.a_n(nrm);
-                let below = self.inflow.below(source);
-                // Polynomial data from a solved element below; initial data otherwise.
-                let quadrature = if below.is_some() {
-                    &self.exact
-                } else {
-                    &self.data
-                };
+                let (quadrature, under) = inflow_values(
+                    [&self.exact, &self.data],
+                    &self.basis,
+                    &mut self.other_values,
+                    &slot,
+                    face,
+                    self.inflow.below(source),
+                );
                 let (rule, tables) = (&quadrature.rule, &quadrature.tables);
-                let scratch = &mut self.other_values;
-                let under = below_values(tables, &self.basis, scratch, rule, &slot, face, below);
                 let system = &self.system;
                 let mut points = tables.values(own).chunks_exact(n).enumerate();
                 let rhs = self.blocks.rhs_mut(i);
@@ -1037,11 +1036,15 @@ impl PatchSolver {
         });
         add_momentum(face_momentum);
         for &(face, source) in slot.inflows() {
-            let below = self.inflow.below(source);
-            let quadrature = if below.is_some() { exact } else { data };
+            let (quadrature, under) = inflow_values(
+                [exact, data],
+                &self.basis,
+                &mut self.other_values,
+                &slot,
+                face,
+                self.inflow.below(source),
+            );
             let (rule, tables) = (&quadrature.rule, &quadrature.tables);
-            let scratch = &mut self.other_values;
-            let under = below_values(tables, &self.basis, scratch, rule, &slot, face, below);
             face_momentum = [0.0; 2];
             let mut point = 0..;
             face_points(rule, &slot.vertices, face, |x, w, nrm| {
@@ -1179,15 +1182,15 @@ impl PatchSolver {
             }
         }
         for &(face, source) in slot.inflows() {
-            let below = self.inflow.below(source);
-            let quadrature = if below.is_some() {
-                &self.exact
-            } else {
-                &self.data
-            };
+            let (quadrature, under) = inflow_values(
+                [&self.exact, &self.data],
+                &self.basis,
+                &mut self.other_values,
+                &slot,
+                face,
+                self.inflow.below(source),
+            );
             let (rule, tables) = (&quadrature.rule, &quadrature.tables);
-            let scratch = &mut self.other_values;
-            let under = below_values(tables, &self.basis, scratch, rule, &slot, face, below);
             let (_, _, _, nrm, area2) = face_geometry(&slot.vertices, face);
             let own = FaceTables::triple(face.0);
             for (s, mass) in small.iter_mut().zip(tables.mass(own)) {
@@ -1389,29 +1392,36 @@ fn combine(coefficients: &[f64], phi: &[f64], fields: usize) -> State {
     q
 }
 
-/// The basis values at `face`'s rule points of the element below it (`points x n`, from the
-/// tables, or evaluated into `scratch` if its vertices do not match) with its coefficients; none
-/// for initial data.
-fn below_values<'a>(
-    tables: &'a FaceTables,
+/// The element below an inflow face: its basis values at the face's rule points (`n` per
+/// point) and its coefficients.
+type Below<'a> = (&'a [f64], &'a [f64]);
+
+/// The quadrature of an inflow face (`exact` below a solved element, whose trace is a
+/// polynomial, `data` on initial data) and, below a solved element, its basis values at the
+/// rule's points of `face` (`points x n`, from the tables, or evaluated into `scratch` if its
+/// vertices do not match) with its coefficients.
+fn inflow_values<'a, 'q: 'a>(
+    [exact, data]: [&'q FaceQuadrature; 2],
     basis: &Basis,
     scratch: &'a mut [f64],
-    rule: &Rule<2>,
     slot: &Slot,
     face: Face,
-    under: Option<(&Geometry, &'a [f64])>,
-) -> Option<(&'a [f64], &'a [f64])> {
-    let (geometry, coefficients) = under?;
+    below: Option<(&Geometry, &'a [f64])>,
+) -> (&'q FaceQuadrature, Option<Below<'a>>) {
+    let Some((geometry, coefficients)) = below else {
+        return (data, None);
+    };
+    let vertices = geometry.vertices();
     let values = other_values(
-        tables,
+        &exact.tables,
         basis,
         scratch,
-        rule,
+        &exact.rule,
         (slot, face),
         geometry,
-        &geometry.vertices(),
+        &vertices,
     );
-    Some((values, coefficients))
+    (exact, Some((values, coefficients)))
 }
 
 /// The basis values at the rule points of `slot`'s `face` of the element with `geometry` and
