@@ -275,6 +275,9 @@ pub struct PatchSolver {
     /// and its traces (`n x face_dim`).
     other_values: Vec<f64>,
     trace: Vec<f64>,
+    /// The state and displacement below each inflow face at its rule points, from the
+    /// assembly for the energy terms and the displacement: `2 x data points` per slot.
+    below_states: Vec<(State, [f64; 2])>,
     phi: Vec<f64>,
     values: Vec<f64>,
     output: Vec<f64>,
@@ -337,6 +340,7 @@ impl PatchSolver {
         });
         Self {
             other_values: vec![0.0; data.tables.points() * n],
+            below_states: vec![([0.0; MAX_FIELDS], [0.0; 2]); max_star * 2 * data.tables.points()],
             trace: vec![0.0; n * data.tables.face_dim()],
             exact,
             data,
@@ -611,10 +615,12 @@ impl PatchSolver {
                 terms += 1;
             }
             // Inflow faces: the target is the earlier side's trace.
-            for &(face, source) in slot.inflows() {
+            let stride = self.data.tables.points();
+            for (f, &(face, source)) in slot.inflows().iter().enumerate() {
                 let own = FaceTables::triple(face.0);
                 let (_, _, _, nrm, area2) = face_geometry(&slot.vertices, face);
                 let an = self.system.a_n(nrm);
+                let kept = &mut self.below_states[(2 * i + f) * stride..][..stride];
                 let (quadrature, under) = inflow_values(
                     [&self.exact, &self.data],
                     &self.basis,
@@ -629,12 +635,9 @@ impl PatchSolver {
                 let rhs = self.blocks.rhs_mut(i);
                 face_points(rule, &slot.vertices, face, |x, w, _| {
                     let (q, phi) = points.next().expect("one per rule point");
-                    let q_prev = inflow_state(
-                        system,
-                        under.map(|(v, c)| (&v[q * n..][..n], c)),
-                        initial,
-                        x,
-                    );
+                    let under = under.map(|(v, c)| (&v[q * n..][..n], c));
+                    let q_prev = inflow_state(system, under, initial, x);
+                    kept[q] = (q_prev, inflow_displacement(system, under, initial, x));
                     let aq = system.apply(&an, &q_prev);
                     for (k, p) in phi.iter().enumerate() {
                         for (r, a) in rhs[k * fields..][..fields].iter_mut().zip(&aq) {
@@ -747,7 +750,7 @@ impl PatchSolver {
             ..Default::default()
         };
         for i in 0..d {
-            let r = self.element_post(i, boundary, initial);
+            let r = self.element_post(i, boundary);
             report.energy_in += r.energy_in;
             report.energy_out += r.energy_out;
             report.boundary_work += r.boundary_work;
@@ -757,7 +760,7 @@ impl PatchSolver {
             report.dissipation += r.dissipation;
             report.momentum_residual = report.momentum_residual.max(r.momentum_residual);
             self.reports[i] = r;
-            self.displacement(i, initial);
+            self.displacement(i);
         }
         self.faces.clear();
         self.faces.extend(self.contact.finish());
@@ -995,7 +998,7 @@ impl PatchSolver {
 
     /// Energy terms and diagnostics of element `i` after the solve; also copies its field
     /// coefficients into the output buffer.
-    fn element_post(&mut self, i: usize, boundary: &Boundary, initial: Initial) -> ElementReport {
+    fn element_post(&mut self, i: usize, boundary: &Boundary) -> ElementReport {
         let n = self.basis.len();
         let fields = self.system.fields();
         let nv = self.system.displacement_components();
@@ -1035,27 +1038,22 @@ impl PatchSolver {
             }
         });
         add_momentum(face_momentum);
-        for &(face, source) in slot.inflows() {
-            let (quadrature, under) = inflow_values(
-                [exact, data],
-                &self.basis,
-                &mut self.other_values,
-                &slot,
-                face,
-                self.inflow.below(source),
-            );
+        let stride = data.tables.points();
+        for (f, &(face, source)) in slot.inflows().iter().enumerate() {
+            // The rule and the states below of the assembly.
+            let quadrature = if self.inflow.solved[source] {
+                exact
+            } else {
+                data
+            };
             let (rule, tables) = (&quadrature.rule, &quadrature.tables);
+            let kept = &self.below_states[(2 * i + f) * stride..][..stride];
             face_momentum = [0.0; 2];
             let mut point = 0..;
-            face_points(rule, &slot.vertices, face, |x, w, nrm| {
+            face_points(rule, &slot.vertices, face, |_, w, nrm| {
                 let p = point.next().expect("unbounded");
                 let an = system.a_n(nrm);
-                let q_prev = inflow_state(
-                    system,
-                    under.map(|(v, c)| (&v[p * n..][..n], c)),
-                    initial,
-                    x,
-                );
+                let q_prev = kept[p].0;
                 let q = own(tables, face, p);
                 let aq_prev = system.apply(&an, &q_prev);
                 r.energy_in -= 0.5 * w * system.dot(&q_prev, &aq_prev);
@@ -1159,7 +1157,7 @@ impl PatchSolver {
 
     /// Solves `du/dtau = v / c_ref` on element `i` (upwind in time from the element below) and
     /// stores the displacement coefficients in the output buffer.
-    fn displacement(&mut self, i: usize, initial: Initial) {
+    fn displacement(&mut self, i: usize) {
         let n = self.basis.len();
         let fields = self.system.fields();
         let nv = self.system.displacement_components();
@@ -1181,16 +1179,16 @@ impl PatchSolver {
                 rhs[d * n + k] = det * self.output[i * n * width + k * width + d] / c;
             }
         }
-        for &(face, source) in slot.inflows() {
-            let (quadrature, under) = inflow_values(
-                [&self.exact, &self.data],
-                &self.basis,
-                &mut self.other_values,
-                &slot,
-                face,
-                self.inflow.below(source),
-            );
+        let stride = self.data.tables.points();
+        for (f, &(face, source)) in slot.inflows().iter().enumerate() {
+            // The rule and the displacements below of the assembly.
+            let quadrature = if self.inflow.solved[source] {
+                &self.exact
+            } else {
+                &self.data
+            };
             let (rule, tables) = (&quadrature.rule, &quadrature.tables);
+            let kept = &self.below_states[(2 * i + f) * stride..][..stride];
             let (_, _, _, nrm, area2) = face_geometry(&slot.vertices, face);
             let own = FaceTables::triple(face.0);
             for (s, mass) in small.iter_mut().zip(tables.mass(own)) {
@@ -1198,10 +1196,9 @@ impl PatchSolver {
                 *s -= area2 * nrm[2] * mass;
             }
             let mut points = tables.values(own).chunks_exact(n).enumerate();
-            face_points(rule, &slot.vertices, face, |x, w, nrm| {
+            face_points(rule, &slot.vertices, face, |_, w, nrm| {
                 let (q, phi) = points.next().expect("one per rule point");
-                let under = under.map(|(v, c)| (&v[q * n..][..n], c));
-                let u_prev = inflow_displacement(&self.system, under, initial, x);
+                let u_prev = kept[q].1;
                 for (k, p) in phi.iter().enumerate() {
                     for d in 0..nv {
                         rhs[d * n + k] -= w * nrm[2] * p * u_prev[d];
