@@ -40,7 +40,7 @@ const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 3] = [
 ];
 
 /// Shipped configs checked against references by other tests: (file, test).
-const CHECKED_ELSEWHERE: [(&str, &str); 9] = [
+const CHECKED_ELSEWHERE: [(&str, &str); 11] = [
     ("crack_growth.toml", "tests/fracture.rs"),
     ("crack_branching.toml", "tests/fracture.rs"),
     ("contact_separation.toml", "tests/contact.rs"),
@@ -48,6 +48,8 @@ const CHECKED_ELSEWHERE: [(&str, &str); 9] = [
     ("cohesive_wave.toml", "tests/cohesive.rs"),
     ("decohesion.toml", "tests/cohesive.rs"),
     ("mode1_lefm.toml", "tests/cohesive.rs"),
+    ("mode1_lefm_high.toml", "tests/cohesive.rs"),
+    ("mode1_lefm_low.toml", "tests/cohesive.rs"),
     ("damage_interface.toml", "tests/damage.rs"),
     ("damage_mode1.toml", "tests/damage.rs"),
 ];
