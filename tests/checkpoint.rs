@@ -215,7 +215,19 @@ fn damaged_and_foreign_checkpoints_are_refused() {
 /// time, as a bug or an unstable law would leave it; returns the error, the options and the
 /// output folder.
 fn poisoned(value: f64) -> (String, sdg_engine::RunOptions, tempfile::TempDir) {
-    let problem = common::shipped("plane_wave.toml", &["mesh.nx=8", "mesh.ny=8"]);
+    poisoned_run("plane_wave.toml", &["mesh.nx=8", "mesh.ny=8"], value, 0.5)
+}
+
+/// Runs the shipped `config` with `overrides` and `value` written into the element under
+/// triangle 0 at `fraction` of the end time; returns the error, the options and the output
+/// folder.
+fn poisoned_run(
+    config: &str,
+    overrides: &[&str],
+    value: f64,
+    fraction: f64,
+) -> (String, sdg_engine::RunOptions, tempfile::TempDir) {
+    let problem = common::shipped(config, overrides);
     let t_end = problem.loaded.config.time.end;
     let dir = tempfile::tempdir().unwrap();
     let options = sdg_engine::RunOptions {
@@ -232,7 +244,7 @@ fn poisoned(value: f64) -> (String, sdg_engine::RunOptions, tempfile::TempDir) {
         coefficients[0] = value;
         solution.store(0, &geometry, &coefficients);
     };
-    let err = sdg_engine::solve_job_with(&problem, &options, 0.5 * t_end, poison)
+    let err = sdg_engine::solve_job_with(&problem, &options, fraction * t_end, poison)
         .unwrap_err()
         .to_string();
     eprintln!("{err}");
@@ -270,4 +282,20 @@ fn an_energy_blow_up_stops_the_run() {
     let (err, _, dir) = poisoned(1e6);
     assert!(err.contains("energy blow-up"), "{err}");
     assert_eq!(checkpoints(&dir.path().join("checkpoints")).len(), 1);
+}
+
+/// A run that stops early leaves the crack tips it has crossed so far: decohesion's interface
+/// comes apart at 1.108 us, and a bad patch at 1.12 us stops the run with `crack_tips.csv` (and
+/// its picture) beside the history.
+#[test]
+fn a_stopped_cohesive_run_leaves_its_crack_tips() {
+    let (err, _, dir) = poisoned_run("decohesion.toml", &["time.end=1.4e-6"], f64::NAN, 0.8);
+    assert!(err.contains("a non-finite value"), "{err}");
+    let tips = common::csv_columns(&dir.path().join("crack_tips.csv"), &["t_s"]);
+    assert!(!tips.is_empty(), "the tips crossed before the stop");
+    assert!(
+        tips.iter().all(|t| (1.0e-6..1.12e-6).contains(&t[0])),
+        "{tips:?}"
+    );
+    assert!(dir.path().join("crack_tips.png").is_file());
 }

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use parking_lot::Mutex;
 
-use sdg_mesh::{Front, Pitcher, TagId, Tent, TriangleId};
+use sdg_mesh::{Front, Mesh, Pitcher, TagId, Tent, TriangleId};
 use sdg_scheduler::{Changed, Events, VertexId, Work};
 use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, Geometry};
@@ -277,7 +277,8 @@ fn deadline(limit_s: f64, max_wall_time_s: Option<f64>) -> Option<(Instant, Stri
 
 impl Solve<'_> {
     /// Writes what a run that stops before the end has produced so far: the history up to now
-    /// (a row for the front as it is) and the probes; complete snapshots are already written.
+    /// (a row for the front as it is), the probes, the crack tips crossed so far and the
+    /// fracture events; complete snapshots are already written.
     fn write_partial_outputs(&self, state: &Frontier, dir: &Path) -> Result<(), EngineError> {
         let config = &self.problem.loaded.config;
         let mut book = self.book.lock();
@@ -290,7 +291,59 @@ impl Solve<'_> {
         if config.output.png {
             plot::write_history_png(dir, &book.history);
         }
+        if let Some((csv, _)) = self.crack_tips(&state.mesh, &book) {
+            self.write_crack_tips(dir, &csv, config.time.end)?;
+        }
+        if self.problem.fracture.is_some() {
+            let events = propagation::events_csv(&book.fracture_events);
+            write_atomic(dir, "events.csv", events.as_bytes())?;
+        }
         self.write_probes(dir, &mut book)
+    }
+
+    /// `crack_tips.csv` and its summary from the tip crossings recorded so far: per crack
+    /// branch with `[fracture]` (the crossings of one tag would mix the tips of its branches),
+    /// else per cohesive or damage interface tag; `None` when the run tracks no crack tips.
+    fn crack_tips(&self, mesh: &Mesh, book: &Book) -> Option<(String, CrackSummary)> {
+        let c_r = self.problem.material.c_r();
+        if self.problem.fracture.is_some() {
+            let crossings: Vec<Crossing> = book.crossings.iter().map(|&(_, c)| c).collect();
+            let branches = propagation::branch_tips(&book.fracture_events, &crossings);
+            Some(propagation::branch_tips_csv(&branches, c_r))
+        } else if self.problem.interfaces.any_cohesive() {
+            let names = mesh.tag_names();
+            let crossings: Vec<_> = book
+                .crossings
+                .iter()
+                .map(|(tag, c)| {
+                    let name = tag.map_or("untagged", |t| names[t as usize].as_str());
+                    (name.to_string(), *c)
+                })
+                .collect();
+            Some(crack_output::write(&crossings, c_r))
+        } else {
+            None
+        }
+    }
+
+    /// Writes `crack_tips.csv` (its text `csv`) and, with `output.png`, its picture: the branch
+    /// tips' speeds with `[fracture]`, else the tips against LEFM in the normalized units of
+    /// `[loading]` up to the end time `t_end` (s).
+    fn write_crack_tips(&self, dir: &Path, csv: &str, t_end: f64) -> Result<(), EngineError> {
+        let problem = self.problem;
+        write_atomic(dir, "crack_tips.csv", csv.as_bytes())?;
+        if problem.loaded.config.output.png && problem.fracture.is_some() {
+            plot::write_tip_speed_png(dir, csv, problem.material.c_r());
+        } else if problem.loaded.config.output.png {
+            let normalization = problem.loading.map(|l| plot::Normalization {
+                tau: l.scales.tau,
+                c_r: l.scales.c_r,
+                arrival: l.arrival_time,
+                end: t_end,
+            });
+            plot::write_crack_png(dir, csv, normalization);
+        }
+        Ok(())
     }
 
     /// Writes the trace of `--trace`.
@@ -925,28 +978,7 @@ fn run_job(
             / book.nonlinear_patches.max(1) as f64,
         newton_iterations_max: book.newton_max,
     };
-    let c_r = problem.material.c_r();
-    let (crack_csv, crack) = if problem.fracture.is_some() {
-        // Per branch: the crossings of one tag would mix the tips of its branches.
-        let crossings: Vec<Crossing> = book.crossings.iter().map(|&(_, c)| c).collect();
-        let branches = propagation::branch_tips(&book.fracture_events, &crossings);
-        let (csv, summary) = propagation::branch_tips_csv(&branches, c_r);
-        (Some(csv), Some(summary))
-    } else if problem.interfaces.any_cohesive() {
-        let names = mesh.tag_names();
-        let crossings: Vec<_> = book
-            .crossings
-            .iter()
-            .map(|(tag, c)| {
-                let name = tag.map_or("untagged", |t| names[t as usize].as_str());
-                (name.to_string(), *c)
-            })
-            .collect();
-        let (csv, summary) = crack_output::write(&crossings, c_r);
-        (Some(csv), Some(summary))
-    } else {
-        (None, None)
-    };
+    let (crack_csv, crack) = solve.crack_tips(mesh, &book).unzip();
     let error = problem.exact.as_ref().map(|w| {
         let e = slice_errors(mesh, solution, &basis, system, t_end, w);
         ErrorSummary {
@@ -1007,22 +1039,14 @@ fn run_job(
     }
     solve.write_probes(&dir, &mut book)?;
     if let Some(csv) = crack_csv {
-        write_atomic(&dir, "crack_tips.csv", csv.as_bytes())?;
-        if config.output.png && problem.fracture.is_some() {
-            plot::write_tip_speed_png(&dir, &csv, c_r);
-        } else if config.output.png {
-            let normalization = problem.loading.map(|l| plot::Normalization {
-                tau: l.scales.tau,
-                c_r: l.scales.c_r,
-                arrival: l.arrival_time,
-                end: t_end,
-            });
-            plot::write_crack_png(&dir, &csv, normalization);
-        }
+        solve.write_crack_tips(&dir, &csv, t_end)?;
     }
     if let Some(fracture) = &problem.fracture {
-        let events = propagation::events_csv(&book.fracture_events);
-        write_atomic(&dir, "events.csv", events.as_bytes())?;
+        write_atomic(
+            &dir,
+            "events.csv",
+            propagation::events_csv(&book.fracture_events).as_bytes(),
+        )?;
         let cracks =
             propagation::crack_edges(mesh, solution, fracture, config.solver.order, |tag| {
                 match problem.interfaces.law(tag) {
