@@ -339,7 +339,7 @@ fn lefm_time_to(a: f64, length: f64) -> f64 {
 
 /// The crack of `mode1_lefm.toml` starts when LEFM says: the times at which it has grown 5, 10
 /// and 20 um (a few probe spacings of the refined tip) against the reference's, to t' = 1.85.
-/// The full run to t' = 3.5 is `mode1_crack_follows_lefm` below (11 minutes, not in CI).
+/// The full run to t' = 3.5 is `mode1_crack_follows_lefm` below (9 minutes, not in CI).
 #[test]
 fn mode1_crack_starts_when_lefm_says() {
     let (tau, t0, c_r) = mode1_scales();
@@ -359,9 +359,9 @@ fn mode1_crack_starts_when_lefm_says() {
 
 /// The acceptance on `mode1_lefm.toml` (seed 2.5.3, sigma' = 0.1): the tip within 5% of
 /// LEFM for t' >= 3, slower than c_R, and the fracture energy about phi per unit extension.
-/// `cargo test --release --test cohesive -- --ignored --nocapture` (11 minutes on 2 cores).
+/// `cargo test --release --test cohesive -- --ignored --nocapture` (9 minutes on 1 thread).
 #[test]
-#[ignore = "11 minutes on 2 cores: run on demand"]
+#[ignore = "9 minutes on 1 thread: run on demand"]
 fn mode1_crack_follows_lefm() {
     let (tau, t0, c_r) = mode1_scales();
     let problem = common::shipped("mode1_lefm.toml", &[]);
