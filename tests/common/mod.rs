@@ -124,6 +124,24 @@ pub fn pmma_p_wave() -> (f64, f64) {
     (c, rho * c)
 }
 
+/// Checks a run loaded by incoming plane waves, ended before they reach anything: the load's
+/// work equals the closed form `work` (J/m) within 1e-5, the travelling waves carry as much
+/// kinetic as strain energy, and the energy balance closes to 1e-12.
+pub fn assert_plane_wave_load(summary: &RunSummary, work: f64) {
+    let energy = &summary.energy;
+    eprintln!(
+        "load's work {:.6e} J/m, closed form {work:.6e}",
+        energy.boundary_work
+    );
+    assert!(
+        (energy.boundary_work / work - 1.0).abs() < 1e-5,
+        "{} J/m against {work} J/m",
+        energy.boundary_work
+    );
+    assert!((energy.final_kinetic / energy.final_strain - 1.0).abs() < 1e-3);
+    assert!(energy.balance_residual_rel.abs() < 1e-12, "{energy:?}");
+}
+
 /// `key=value` overrides from pairs.
 pub fn set(pairs: &[(&str, String)]) -> Vec<String> {
     pairs.iter().map(|(k, v)| format!("{k}={v}")).collect()
