@@ -48,6 +48,29 @@ fn refinement_and_coarsening_conserve_momentum_and_energy_and_beat_the_unrefined
     assert!(a.stress_l2_rel < 0.25 * c.stress_l2_rel, "{a:?} vs {c:?}");
 }
 
+/// With `min_edge` above half the initial edges (2 mm) nothing can be bisected: every patch over
+/// the tolerance is accepted anyway, and the summary counts them instead of staying silent; with
+/// a tolerance above the largest of them, none is counted.
+#[test]
+fn patches_over_the_tolerance_at_the_refinement_floor_are_counted() {
+    let mut overrides = SHORT.to_vec();
+    overrides.push("adapt.min_edge=1.5e-3");
+    let (floor, _dir) = solve(&shipped("adaptive_pulse.toml", &overrides), 2, true);
+    eprintln!(
+        "floor: {} of {} patches over the tolerance, largest {:.1} x tol",
+        floor.unresolved_patches, floor.patches, floor.unresolved_max
+    );
+    assert_eq!((floor.refinements, floor.rejected_patches), (0, 0));
+    assert!(floor.unresolved_patches > 20, "{floor:?}");
+    assert!(floor.unresolved_max > 10.0, "{floor:?}");
+
+    let tol = format!("adapt.tol={:e}", 2.0 * floor.unresolved_max * 1e-2);
+    overrides.push(&tol);
+    let (loose, _dir) = solve(&shipped("adaptive_pulse.toml", &overrides), 2, true);
+    assert_eq!((loose.unresolved_patches, loose.unresolved_max), (0, 0.0));
+    assert_eq!(loose.state_hash, floor.state_hash);
+}
+
 #[test]
 fn adaptive_deterministic_runs_are_bitwise_identical_for_1_2_and_4_threads() {
     let problem = shipped(

@@ -120,6 +120,13 @@ pub(super) struct Book {
     pub(super) rejected: u64,
     pub(super) refinements: u64,
     pub(super) coarsenings: u64,
+    /// Patches accepted with the indicator above the tolerance: no triangle of their star could
+    /// be bisected (edge at `min_edge`, star at capacity, or causality).
+    #[serde(default)]
+    pub(super) unresolved: u64,
+    /// The largest indicator of those patches, in units of the tolerance.
+    #[serde(default)]
+    pub(super) unresolved_max: f64,
     /// Interface probe samples: `(probe index, sample)`.
     pub(super) samples: Vec<(usize, InterfaceSample)>,
     /// Crack-tracking crossings of cohesive faces with the tag of their edge.

@@ -222,6 +222,7 @@ impl Solve<'_> {
             ));
             return Ok((tent.t_old, Outcome::Failed));
         }
+        let mut unresolved = None;
         if let Some(adapt) = &self.adapt {
             let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
             let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
@@ -245,6 +246,9 @@ impl Solve<'_> {
             for &t in star {
                 state.set_calm(t, eta < adapt.lower);
             }
+            if eta > adapt.tol {
+                unresolved = Some(eta / adapt.tol);
+            }
         }
         solver.commit(&state.solution);
         front.set_time(v, t_new);
@@ -259,6 +263,7 @@ impl Solve<'_> {
             report,
             interface: self.interface_records(mesh, solver),
             extension,
+            unresolved,
         };
         Ok((t_new, outcome))
     }
@@ -388,6 +393,9 @@ enum Outcome {
         interface: InterfaceRecords,
         /// The crack tip at the vertex extends.
         extension: Option<Extension>,
+        /// The indicator over the tolerance when it was above and no star triangle could be
+        /// bisected.
+        unresolved: Option<f64>,
     },
     /// The indicator rejected the patch: nothing advanced; these star triangles (with their
     /// corners, to notice a change) are to be bisected.
@@ -500,7 +508,13 @@ impl<'a> Work<'a> for Solve<'a> {
                 report,
                 interface,
                 extension,
+                unresolved,
             } => {
+                if let Some(ratio) = unresolved {
+                    let mut book = self.book.lock();
+                    book.unresolved += 1;
+                    book.unresolved_max = book.unresolved_max.max(ratio);
+                }
                 if !interface.is_empty() {
                     let mut book = self.book.lock();
                     let started = Instant::now();
@@ -787,6 +801,8 @@ fn run_job(
             rejected: 0,
             refinements: 0,
             coarsenings: 0,
+            unresolved: 0,
+            unresolved_max: 0.0,
             samples: Vec::new(),
             crossings: Vec::new(),
             fracture_events: Vec::new(),
@@ -938,6 +954,15 @@ fn run_job(
     book.snapshots.flush(t_end)?;
     book.snapshots.finish()?;
     tracing::info!(patches = stats.tents, wall_time_s, "solve finished");
+    if book.unresolved as f64 > 0.01 * book.patches as f64 {
+        tracing::warn!(
+            unresolved_patches = book.unresolved,
+            patches = book.patches,
+            largest_over_tol = book.unresolved_max,
+            "more than 1% of the patches were accepted above adapt.tol because refinement was at \
+             its floor (adapt.min_edge): the run is less resolved than its tolerance asks"
+        );
+    }
 
     let Frontier {
         mesh,
@@ -1022,6 +1047,8 @@ fn run_job(
         snapshots: book.snapshots.written().to_vec(),
         refinements: book.refinements,
         rejected_patches: book.rejected,
+        unresolved_patches: book.unresolved,
+        unresolved_max: book.unresolved_max,
         coarsenings: book.coarsenings,
         events: stats.events,
         checkpoint: checkpoints,
