@@ -355,6 +355,17 @@ fn mode1_crack_starts_when_lefm_says() {
     }
     assert!(summary.energy.balance_residual_rel.abs() < 1e-6);
     assert!(summary.coarsenings > 0);
+    assert_fracture_energy_never_negative(dir.path());
+}
+
+/// The work of the cohesive tractions (`history.csv`) is the law's potential plus what the
+/// faces dissipate, so never negative. A tip edge as long as the process zone broke this
+/// (docs/verification.md, sigma' = 10^-1.5): the faces there gained energy.
+fn assert_fracture_energy_never_negative(dir: &Path) {
+    let history = common::csv_columns(&dir.join("history.csv"), &["fracture_energy_j"]);
+    let lowest = history.iter().map(|r| r[0]).fold(f64::INFINITY, f64::min);
+    let largest = history.iter().map(|r| r[0]).fold(0.0, f64::max);
+    assert!(lowest >= -1e-9 * largest, "{lowest} (largest {largest})");
 }
 
 /// The acceptance on `mode1_lefm.toml` (seed 2.5.3, sigma' = 0.1): the tip within 5% of
@@ -430,6 +441,7 @@ fn mode1_crack_at_high_load_starts_at_once() {
     assert!(early > 0.5, "{early}");
     assert!(fastest < 1.0, "{fastest}");
     assert!(summary.energy.balance_residual_rel.abs() < 1e-6);
+    assert_fracture_energy_never_negative(dir.path());
 }
 
 /// The seed's point against Xu and Needleman (2.6): even at sigma' = 10^(-1/128) every recorded
@@ -488,6 +500,7 @@ fn mode1_crack_at_low_load_releases_phi() {
     assert!((g - 1.0).abs() < 0.05, "{g}");
     assert!((a / a_ref - 1.0).abs() < 0.05, "{a} vs {a_ref}");
     assert!(summary.energy.balance_residual_rel.abs() < 1e-6);
+    assert_fracture_energy_never_negative(dir.path());
 }
 
 /// `configs/mode1_lefm_low.toml` is loaded as the seed says: to the time the waves meet on the
