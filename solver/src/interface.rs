@@ -625,7 +625,30 @@ impl Contact {
     /// Side a's targets from the arriving characteristics `w_a`, `w_b` (normal, tangential) and
     /// the interface state (normal separation `delta`, tangential slip: m; damage).
     pub fn targets(&self, w_a: [f64; 2], w_b: [f64; 2], state: [f64; STATE_COMPONENTS]) -> Targets {
-        let mut out = self.contact_targets(w_a, w_b, [state[0], state[1]]);
+        self.targets_with(w_a, w_b, state, None)
+    }
+
+    /// [`Self::targets`] with the cohesive traction `traction` (scaled units) given instead of
+    /// the law's at the separation; the derivatives then leave out its dependence on the state
+    /// (`d star / d traction` is `1 - eta` for tractions, `(1 - eta) / Z` for velocities).
+    pub fn targets_with_traction(
+        &self,
+        w_a: [f64; 2],
+        w_b: [f64; 2],
+        state: [f64; STATE_COMPONENTS],
+        traction: [f64; 2],
+    ) -> Targets {
+        self.targets_with(w_a, w_b, state, Some(traction))
+    }
+
+    fn targets_with(
+        &self,
+        w_a: [f64; 2],
+        w_b: [f64; 2],
+        state: [f64; STATE_COMPONENTS],
+        traction: Option<[f64; 2]>,
+    ) -> Targets {
+        let mut out = self.contact_targets(w_a, w_b, [state[0], state[1]], traction);
         if let Some(law) = &self.damage {
             law.blend(&mut out, self.z, w_a, w_b, state[2]);
         }
@@ -650,7 +673,13 @@ impl Contact {
 
     /// The contact law's targets (star values and their derivatives, area fractions) for the
     /// separation `sep` (normal, slip; m), before any damage blending and rates.
-    fn contact_targets(&self, w_a: [f64; 2], w_b: [f64; 2], sep: [f64; 2]) -> Targets {
+    fn contact_targets(
+        &self,
+        w_a: [f64; 2],
+        w_b: [f64; 2],
+        sep: [f64; 2],
+        traction: Option<[f64; 2]>,
+    ) -> Targets {
         let delta = sep[0];
         let [z0, z1] = self.z;
         let si = [0.5 * (w_a[0] + w_b[0]), 0.5 * (w_a[1] + w_b[1])];
@@ -659,9 +688,12 @@ impl Contact {
             (w_b[1] - w_a[1]) / (2.0 * z1),
         ];
         // Separated part: the cohesive traction tc (or none), side a's outgoing characteristic.
-        let (tc, dtc) = self
-            .cohesive
-            .map_or(([0.0; 2], [[0.0; 2]; 2]), |x| x.traction(sep));
+        let (tc, dtc) = match traction {
+            Some(tc) => (tc, [[0.0; 2]; 2]),
+            None => self
+                .cohesive
+                .map_or(([0.0; 2], [[0.0; 2]; 2]), |x| x.traction(sep)),
+        };
         let v3 = [(tc[0] - w_a[0]) / z0, (tc[1] - w_a[1]) / z1];
         let (eta_d, deta_d) = fraction(delta, self.r[0], self.r[1]);
         let (eta_s, deta_s) = fraction(si[0], self.s[0], self.s[1]);

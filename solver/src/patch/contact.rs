@@ -90,6 +90,13 @@ pub(super) struct ContactFace {
     w_b: Vec<[f64; 2]>,
     pub(super) targets_a: Vec<Targets>,
     pub(super) targets_b: Vec<Targets>,
+    /// Cohesive faces: `P[p][q]` (points x points) maps the law's traction at the points to
+    /// its projection onto the face's polynomials at `p` (the face rule's L2 projection), the
+    /// projected traction per point, and its derivatives `d T_k(p) / d d_(e, l)` with respect
+    /// to the state's coefficients, at `((p 2 + k) 2 + e) nf + l`.
+    projection: Vec<f64>,
+    traction: Vec<[f64; 2]>,
+    slopes: Vec<f64>,
 }
 
 impl ContactFace {
@@ -117,7 +124,7 @@ impl ContactFace {
     /// derivative `M0 - int psi psi (d rate / d state) / c` (row-major, `ns nf` square);
     /// returns `|G|`.
     fn separation_residual(
-        &self,
+        &mut self,
         c: f64,
         d: &[f64; STATE_COMPONENTS * MAX_FACE_BASIS],
         g: &mut [f64],
@@ -126,6 +133,7 @@ impl ContactFace {
         let n2 = g.len();
         let ns = self.law.components();
         let nf = n2 / ns;
+        let projected = self.project_traction(nf, d, jacobian.is_some());
         for (row, gk) in g.iter_mut().enumerate() {
             let (comp, k) = (row / nf, row % nf);
             let md: f64 = (0..nf)
@@ -144,9 +152,7 @@ impl ContactFace {
         }
         for p in 0..self.weights.len() {
             let psi = &self.psi[p * nf..(p + 1) * nf];
-            let t = self
-                .law
-                .targets(self.w_a[p], self.w_b[p], self.separation_at(nf, p, d));
+            let t = self.targets_at(p, projected, self.separation_at(nf, p, d), false);
             let w = self.weights[p] / c;
             for comp in 0..ns {
                 for k in 0..nf {
@@ -166,9 +172,104 @@ impl ContactFace {
                         }
                     }
                 }
+                if projected {
+                    self.add_projected_slopes(p, w, &t, jac, n2);
+                }
             }
         }
         g.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+
+    /// True for a cohesive face without damage: its target traction is the law's traction
+    /// projected onto the face's polynomials (see [`Self::project_traction`]).
+    fn projects(&self) -> bool {
+        self.law.cohesive.is_some() && self.law.damage.is_none()
+    }
+
+    /// Side a's (or with `swap` side b's) targets at point `p` for the interface `state` there,
+    /// with the projected traction when `projected`.
+    fn targets_at(
+        &self,
+        p: usize,
+        projected: bool,
+        state: [f64; STATE_COMPONENTS],
+        swap: bool,
+    ) -> Targets {
+        let (w_a, w_b) = if swap {
+            (self.w_b[p], self.w_a[p])
+        } else {
+            (self.w_a[p], self.w_b[p])
+        };
+        if projected {
+            self.law
+                .targets_with_traction(w_a, w_b, state, self.traction[p])
+        } else {
+            self.law.targets(w_a, w_b, state)
+        }
+    }
+
+    /// For a cohesive face, the law's traction at the state coefficients `d` projected onto
+    /// the face's polynomials, at every point (and with `slopes` its derivatives with respect
+    /// to `d`). With the pointwise traction `T` in the targets, the rate `r = (w_a + w_b -
+    /// 2 T) / Z` makes the face gain `(2 / Z) |T - Pi T|^2` of energy against the law's
+    /// potential (docs/verification.md); with `Pi T` that term vanishes. Returns whether the
+    /// face projects.
+    fn project_traction(&mut self, nf: usize, d: &[f64], slopes: bool) -> bool {
+        if !self.projects() {
+            return false;
+        }
+        let law = self.law.cohesive.expect("a cohesive face");
+        let points = self.weights.len();
+        if slopes {
+            self.slopes[..points * 4 * nf].fill(0.0);
+        }
+        for p in 0..points {
+            self.traction[p] = [0.0; 2];
+        }
+        for q in 0..points {
+            let state = self.separation_at(nf, q, d);
+            let (t, dt) = law.traction([state[0], state[1]]);
+            let psi_q = &self.psi[q * nf..(q + 1) * nf];
+            for p in 0..points {
+                let w = self.projection[p * points + q];
+                if w == 0.0 {
+                    continue;
+                }
+                for (x, tk) in self.traction[p].iter_mut().zip(t) {
+                    *x += w * tk;
+                }
+                if slopes {
+                    for (k, e) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                        let f = w * dt[k][e];
+                        let row = &mut self.slopes[((p * 2 + k) * 2 + e) * nf..][..nf];
+                        for (x, &ps) in row.iter_mut().zip(psi_q) {
+                            *x += f * ps;
+                        }
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// Subtracts from the face system's Jacobian `jac` (`n2` square) the dependence of the
+    /// rate at point `p` (weight `w`, scaled by `1 / c`; targets `t`) on the state through the
+    /// projected traction: `d r_k / d T_k = -2 (1 - eta) / Z_k`.
+    fn add_projected_slopes(&self, p: usize, w: f64, t: &Targets, jac: &mut [f64], n2: usize) {
+        let nf = n2 / 2;
+        let psi = &self.psi[p * nf..(p + 1) * nf];
+        for comp in 0..2 {
+            let r = w * -2.0 * (1.0 - t.eta) / self.law.z[comp];
+            for e in 0..2 {
+                let slope = &self.slopes[((p * 2 + comp) * 2 + e) * nf..][..nf];
+                for k in 0..nf {
+                    let row = &mut jac[(comp * nf + k) * n2 + e * nf..][..nf];
+                    for (x, &sl) in row.iter_mut().zip(slope) {
+                        *x -= r * psi[k] * sl;
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -365,6 +466,9 @@ impl ContactFaces {
             w_b: vec![[0.0; 2]; points],
             targets_a: vec![Targets::default(); points],
             targets_b: vec![Targets::default(); points],
+            projection: vec![0.0; points * points],
+            traction: vec![[0.0; 2]; points],
+            slopes: vec![0.0; points * 4 * nf],
         };
         Self {
             bottom_rule: quadrature::gauss_legendre(order + 2),
@@ -506,10 +610,42 @@ impl ContactFaces {
                 };
             }
         }
+        if face.projects() {
+            // P[p][q] = w_q psi(p) . M^-1 psi(q), with the face rule's mass matrix M.
+            let (x, mass) = (
+                &mut self.columns[..points * nf],
+                &mut self.jacobian[..nf * nf],
+            );
+            mass.fill(0.0);
+            for q in 0..points {
+                let psi_q = &face.psi[q * nf..(q + 1) * nf];
+                for k in 0..nf {
+                    for l in 0..nf {
+                        mass[k * nf + l] += face.weights[q] * psi_q[k] * psi_q[l];
+                    }
+                }
+            }
+            x.copy_from_slice(&face.psi[..points * nf]);
+            if solve_dense(mass, nf, x, points) {
+                for p in 0..points {
+                    let psi_p = &face.psi[p * nf..(p + 1) * nf];
+                    for q in 0..points {
+                        let xq = &x[q * nf..(q + 1) * nf];
+                        face.projection[p * points + q] =
+                            face.weights[q] * psi_p.iter().zip(xq).map(|(a, b)| a * b).sum::<f64>();
+                    }
+                }
+            } else {
+                face.projection[..points * points].fill(0.0);
+                for p in 0..points {
+                    face.projection[p * points + p] = 1.0;
+                }
+            }
+        }
         // First guess: the inherited state carried up the face (no rate), `M0 d = inflow`.
         let (guess, matrix) = (&mut self.columns[..ns * nf], &mut self.jacobian[..nf * nf]);
         guess.copy_from_slice(&face.inflow[..ns * nf]);
-        matrix.copy_from_slice(m0);
+        matrix.copy_from_slice(&face.m0[..nf * nf]);
         if !solve_dense(matrix, nf, guess, ns) {
             guess.fill(0.0);
         }
@@ -601,7 +737,8 @@ impl ContactFaces {
         let (g, rest) = self.columns.split_at_mut(n2);
         let trial_g = &mut rest[..n2];
         let jac = &mut self.jacobian[..n2 * n2];
-        let mut norm = face.separation_residual(c, &face.sep, g, Some(jac));
+        let sep = face.sep;
+        let mut norm = face.separation_residual(c, &sep, g, Some(jac));
         let mut converged = false;
         let mut previous = f64::INFINITY;
         for _ in 0..60 {
@@ -633,7 +770,8 @@ impl ContactFaces {
             if !step.is_finite() {
                 return false;
             }
-            norm = face.separation_residual(c, &face.sep, g, Some(jac));
+            let sep = face.sep;
+            norm = face.separation_residual(c, &sep, g, Some(jac));
             // Converged, or stalled at round-off (the step no longer halves).
             if step <= 1e-12 || (step <= 1e-9 && step >= 0.5 * previous) {
                 converged = true;
@@ -641,10 +779,12 @@ impl ContactFaces {
             }
             previous = step;
         }
+        let sep = face.sep;
+        let projected = face.project_traction(nf, &sep, true);
         for p in 0..points {
-            let sep = face.separation_at(nf, p, &face.sep);
-            face.targets_a[p] = face.law.targets(face.w_a[p], face.w_b[p], sep);
-            face.targets_b[p] = face.law.targets(face.w_b[p], face.w_a[p], sep);
+            let state = face.separation_at(nf, p, &sep);
+            face.targets_a[p] = face.targets_at(p, projected, state, false);
+            face.targets_b[p] = face.targets_at(p, projected, state, true);
         }
         converged
     }
@@ -698,6 +838,7 @@ impl ContactFaces {
             flux_columns(system, minus),
         );
         let (a, b) = (face.a, face.b);
+        let projects = face.projects();
         let [coupling_a, coupling_b] = &mut self.coupling;
         coupling_a.fill(0.0);
         coupling_b.fill(0.0);
@@ -759,6 +900,27 @@ impl ContactFaces {
                         }
                     }
                 }
+                if projects {
+                    // Through the projected traction: d star / d T_k is (1 - eta) / Z_k for
+                    // the velocity, 1 - eta for the traction.
+                    for e in 0..2 {
+                        for l in 0..nf {
+                            let slope = |k: usize| face.slopes[((p * 2 + k) * 2 + e) * nf + l];
+                            let dstar = [
+                                (1.0 - t.eta) / z[0] * slope(0),
+                                (1.0 - t.eta) / z[1] * slope(1),
+                                (1.0 - t.eta) * slope(0),
+                                (1.0 - t.eta) * slope(1),
+                            ];
+                            for (k, &ph) in phi.iter().enumerate() {
+                                for i in 0..fields {
+                                    let d: f64 = (0..4).map(|c| flux[c][i] * dstar[c]).sum();
+                                    coupling[(k * fields + i) * n2 + e * nf + l] += w * ph * d;
+                                }
+                            }
+                        }
+                    }
+                }
             }
             for comp in 0..ns {
                 let drate: [[f64; MAX_FIELDS]; 2] =
@@ -786,6 +948,9 @@ impl ContactFaces {
                         }
                     }
                 }
+            }
+            if projects {
+                face.add_projected_slopes(p, w / c, ta, jac, n2);
             }
         }
         // d sep / d q = J^-1 (int psi (d rate / d q) / c), one column per side unknown.
