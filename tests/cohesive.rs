@@ -157,10 +157,10 @@ fn a_cohesive_interface_below_its_strength_is_a_nonlinear_spring() {
     check_spring(&summary, dir.path());
 }
 
-/// Segments of the interface on a snapshot's slice (`interface_NNNN.vtu`): one per interface
+/// Segments of the interface on a snapshot's slice (`cracks_NNNN.vtu`): one per interface
 /// face the plane cuts, so one per interface edge where the slice crosses each face once.
 fn interface_segments(dir: &Path, k: usize) -> usize {
-    let text = std::fs::read_to_string(dir.join(format!("interface_{k:04}.vtu"))).unwrap();
+    let text = std::fs::read_to_string(dir.join(format!("cracks_{k:04}.vtu"))).unwrap();
     let at = text.find("NumberOfCells=\"").unwrap() + "NumberOfCells=\"".len();
     text[at..].split('"').next().unwrap().parse().unwrap()
 }

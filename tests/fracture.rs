@@ -8,6 +8,7 @@ mod common;
 use std::path::Path;
 
 use common::{csv_columns, outputs, shipped, solve};
+use sdg_engine::plot::VtuGrid;
 
 /// `events.csv` rows: time, from x, from y, to x, to y; and the event names.
 fn events(dir: &Path) -> (Vec<Vec<f64>>, Vec<String>) {
@@ -26,7 +27,10 @@ fn events(dir: &Path) -> (Vec<Vec<f64>>, Vec<String>) {
 
 #[test]
 fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
-    let problem = shipped("crack_growth.toml", &["time.end=1.1e-6"]);
+    let problem = shipped(
+        "crack_growth.toml",
+        &["time.end=1.1e-6", "output.snapshot_times=[1.1e-6]"],
+    );
     let (summary, dir) = solve(&problem, 2, true);
     let (rows, kinds) = events(dir.path());
     let fracture = summary.fracture.as_ref().expect("fracture summary");
@@ -60,6 +64,25 @@ fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
     );
     let debonded = new.iter().filter(|c| c[3] > 0.95).count();
     assert!(debonded >= 4, "{new:?}");
+    // The snapshot's crack surfaces (`cracks_0000.vtu`) carry the damage of the new edges too.
+    let slice = VtuGrid::read(&dir.path().join("cracks_0000.vtu")).unwrap();
+    let damage = slice
+        .point_data
+        .iter()
+        .find(|f| f.name == "damage")
+        .unwrap();
+    let grown = slice.lines().into_iter().filter(|l| {
+        let [a, b] = l.map(|i| slice.points[i as usize]);
+        a[1] == 1e-3 && b[1] == 1e-3 && a[0].min(b[0]) >= 1e-3
+    });
+    let debonded_ends = grown
+        .flat_map(|l| l.map(|i| damage.values[i as usize]))
+        .filter(|d| *d > 0.95)
+        .count();
+    assert!(
+        debonded_ends >= 2 * 4,
+        "{debonded_ends} debonded segment ends"
+    );
     assert!(summary.energy.fracture_energy > 0.0);
     assert!(dir.path().join("crack_path.png").is_file());
     assert!(dir.path().join("crack_zoom.png").is_file());

@@ -129,7 +129,7 @@ fn interface_cuts_open_in_meshio() {
         ],
     );
     let (_, dir) = common::solve(&problem, 2, true);
-    let file = dir.path().join("interface_0000.vtu");
+    let file = dir.path().join("cracks_0000.vtu");
     let script = "import sys, meshio\n\
                   m = meshio.read(sys.argv[1])\n\
                   print(m.cells_dict['line'].shape[0], m.point_data['traction'].shape[1], \
@@ -142,5 +142,5 @@ fn interface_cuts_open_in_meshio() {
     // faces are in contact (frictionless: slip, mode 1) by then.
     assert_eq!(fields, [4, 3, 1, 1]);
     let pvd = std::fs::read_to_string(dir.path().join("snapshots.pvd")).unwrap();
-    assert!(pvd.contains("part=\"1\" file=\"interface_0000.vtu\""));
+    assert!(pvd.contains("part=\"1\" file=\"cracks_0000.vtu\""));
 }

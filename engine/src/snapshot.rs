@@ -1,8 +1,8 @@
 //! Snapshots: the solution on planes `t = const`, cut from the spacetime elements as they are
 //! solved and written as VTK triangle grids (`snapshot_NNNN.vtu`) with a ParaView collection
-//! (`snapshots.pvd`). Contact interfaces are cut the same way: their vertical faces give segments
-//! on the plane, written as `interface_NNNN.vtu` (lines) beside the triangles and listed in the
-//! collection as its part 1.
+//! (`snapshots.pvd`). Crack surfaces (contact, cohesive and damage interfaces) are cut the same
+//! way: their vertical faces give segments on the plane, written as `cracks_NNNN.vtu` (lines)
+//! beside the triangles and listed in the collection as its part 1.
 //!
 //! # Slicing rule
 //! A snapshot at `t_s` is the plane `tau = tau_s = c_ref t_s`. Each element vertex is classified
@@ -118,7 +118,7 @@ pub struct Snapshots {
     next: usize,
     written: Vec<(f64, String)>,
     /// Interface files written: (time in s, file name).
-    interface_files: Vec<(f64, String)>,
+    crack_files: Vec<(f64, String)>,
     /// Also draw each snapshot as `snapshot_NNNN.png`.
     png: bool,
     /// Encoding of the `.vtu` files; not saved, a restart takes the current `output.vtu`.
@@ -213,7 +213,7 @@ impl Snapshots {
             snapshots,
             next: 0,
             written: Vec::new(),
-            interface_files: Vec::new(),
+            crack_files: Vec::new(),
             png: false,
             vtu: VtuFormat::default(),
             writer: None,
@@ -368,9 +368,9 @@ impl Snapshots {
             let (index, time) = (snap.index, snap.time);
             let name = format!("snapshot_{index:04}.vtu");
             self.written.push((time, name.clone()));
-            let interface = format!("interface_{index:04}.vtu");
+            let cracks = format!("cracks_{index:04}.vtu");
             if !segments.is_empty() {
-                self.interface_files.push((time, interface.clone()));
+                self.crack_files.push((time, cracks.clone()));
             }
             let (dir, vtu, png) = (self.dir.clone(), self.vtu, self.png);
             self.submit(Box::new(move || {
@@ -388,7 +388,7 @@ impl Snapshots {
                 }
                 if !segments.is_empty() {
                     let grid = segments_grid(&segments);
-                    write_atomic(&dir, &interface, grid.to_vtu(vtu).as_bytes())?;
+                    write_atomic(&dir, &cracks, grid.to_vtu(vtu).as_bytes())?;
                 }
                 Ok(())
             }));
@@ -415,10 +415,7 @@ impl Snapshots {
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" \
              byte_order=\"LittleEndian\">\n<Collection>\n",
         );
-        for (part, files) in [&self.written, &self.interface_files]
-            .into_iter()
-            .enumerate()
-        {
+        for (part, files) in [&self.written, &self.crack_files].into_iter().enumerate() {
             for (time, name) in files {
                 let _ = writeln!(
                     s,

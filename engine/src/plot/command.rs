@@ -155,7 +155,7 @@ fn time_from_pvd(vtu: &Path) -> Option<f64> {
     None
 }
 
-/// The interface segments of the slice `snapshot_NNNN.vtu`: the lines of `interface_NNNN.vtu`
+/// The interface segments of the slice `snapshot_NNNN.vtu`: the lines of `cracks_NNNN.vtu`
 /// beside it, when there is one.
 fn interface_segments(vtu: &Path) -> Result<Vec<[[f64; 2]; 2]>, EngineError> {
     let Some(index) = vtu
@@ -165,7 +165,7 @@ fn interface_segments(vtu: &Path) -> Result<Vec<[[f64; 2]; 2]>, EngineError> {
     else {
         return Ok(Vec::new());
     };
-    let path = vtu.with_file_name(format!("interface_{index}"));
+    let path = vtu.with_file_name(format!("cracks_{index}"));
     if !path.is_file() {
         return Ok(Vec::new());
     }
@@ -179,7 +179,7 @@ fn interface_segments(vtu: &Path) -> Result<Vec<[[f64; 2]; 2]>, EngineError> {
 
 /// `sdg plot`: draws the requested field of a VTU file (see [`PlotRequest`]) as PNG, with the
 /// time from a `.pvd` collection beside it and the interfaces of a snapshot's
-/// `interface_NNNN.vtu` on top. Returns the PNG's path. A file that cannot be read or has no
+/// `cracks_NNNN.vtu` on top. Returns the PNG's path. A file that cannot be read or has no
 /// such field is an [`EngineError::Input`] naming the file (and the fields present).
 pub fn plot_vtu(request: &PlotRequest) -> Result<PathBuf, EngineError> {
     let grid = VtuGrid::read(&request.vtu)?;
