@@ -873,13 +873,12 @@ impl ContactFaces {
                         self.outer[k * n + l] = w * pr * pc;
                     }
                 }
-                super::add_kron(
+                super::add_kron_sum(
                     blocks.block_mut(row, col),
                     m,
                     n,
                     fields,
-                    &self.outer[..n * n],
-                    &j,
+                    &[(&self.outer[..n * n], j)],
                 );
             }
             // Dependence through the separation: d flux / d sep per side, and the face

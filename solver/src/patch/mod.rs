@@ -725,10 +725,13 @@ impl PatchSolver {
                 }
                 self.blocks.add_term(i, j, nf * rank, 1.0);
             }
-            let block = self.blocks.block_mut(i, i);
-            for (scalar, matrix) in &diagonal[..terms] {
-                add_kron(block, m, n, fields, scalar, matrix);
-            }
+            add_kron_sum(
+                self.blocks.block_mut(i, i),
+                m,
+                n,
+                fields,
+                &diagonal[..terms],
+            );
         }
 
         ring_order(&self.slots[..d], &mut self.order);
@@ -1227,19 +1230,26 @@ impl PatchSolver {
     }
 }
 
-/// Adds the Kronecker product `scalar (x) block` to the column-major `m x m` matrix `target`:
-/// entry `(k, l)` of the `n x n` row-major `scalar` scales `block` at rows `k fields..`, columns
-/// `l fields..`.
-fn add_kron(target: &mut [f64], m: usize, n: usize, fields: usize, scalar: &[f64], block: &Matrix) {
-    for (k, row) in scalar.chunks_exact(n).enumerate() {
-        for (l, &s) in row.iter().enumerate() {
-            if s == 0.0 {
-                continue;
+/// Adds the sum of Kronecker products `sum_t scalar_t (x) block_t` to the column-major `m x m`
+/// matrix `target`: entry `(k, l)` of each `n x n` row-major `scalar_t` scales `block_t` at rows
+/// `k fields..`, columns `l fields..`. The blocks are combined per `(k, l)` first, so `target`
+/// is read and written once whatever the number of terms.
+fn add_kron_sum(target: &mut [f64], m: usize, n: usize, fields: usize, terms: &[(&[f64], Matrix)]) {
+    for l in 0..n {
+        for k in 0..n {
+            let mut sum = [[0.0; MAX_FIELDS]; MAX_FIELDS];
+            for (scalar, block) in terms {
+                let s = scalar[k * n + l];
+                for (row, b) in sum.iter_mut().zip(block) {
+                    for (x, y) in row.iter_mut().zip(b) {
+                        *x += s * y;
+                    }
+                }
             }
             for (b, col) in (l * fields..).take(fields).enumerate() {
                 let column = &mut target[col * m + k * fields..][..fields];
-                for (a, t) in column.iter_mut().enumerate() {
-                    *t += s * block[a][b];
+                for (t, row) in column.iter_mut().zip(&sum) {
+                    *t += row[b];
                 }
             }
         }
