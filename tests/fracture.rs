@@ -111,6 +111,39 @@ fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
     );
 }
 
+/// With adaptivity, calm regions are coarsened again; on the crack only where both halves of
+/// a bisected crack edge are fully debonded (seed Fig. 4.6): here the notch's edges, refined
+/// when the tip started to run and merged once calm. Each merge is an event in `events.csv`.
+#[test]
+fn the_crack_wake_is_merged_where_fully_debonded() {
+    let problem = shipped(
+        "crack_growth.toml",
+        &[
+            "adapt.enabled=true",
+            "adapt.tol=1.0",
+            "adapt.min_edge=30e-6",
+            "time.end=1.0e-6",
+        ],
+    );
+    let (summary, dir) = solve(&problem, 2, true);
+    let (rows, kinds) = events(dir.path());
+    let merges: Vec<&Vec<f64>> = rows
+        .iter()
+        .zip(&kinds)
+        .filter(|(_, k)| *k == "coarsening")
+        .map(|(r, _)| r)
+        .collect();
+    let fracture = summary.fracture.expect("fracture summary");
+    // Measured: one merge, of the notch's last two 31.25 um edges at 0.86 us.
+    assert!(fracture.wake_coarsenings >= 1, "{fracture:?}");
+    assert_eq!(merges.len() as u64, fracture.wake_coarsenings);
+    for m in merges {
+        // The restored edge lies on the crack line, behind the tip that ran at x = 1 mm.
+        assert_eq!([m[2], m[4]], [1e-3, 1e-3], "{m:?}");
+        assert!(m[1].max(m[3]) <= 1e-3 && (m[1] - m[3]).abs() > 0.0, "{m:?}");
+    }
+}
+
 #[test]
 fn the_crack_pattern_is_bitwise_the_same_for_one_two_and_four_threads() {
     // Up to just after the first branching and a branch's arrest on the other.

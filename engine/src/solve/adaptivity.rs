@@ -5,8 +5,10 @@ use std::sync::atomic::Ordering;
 
 use sdg_mesh::{SplitError, TriangleId};
 use sdg_scheduler::{Changed, VertexId};
+use sdg_solver::interface::Law;
 use sdg_solver::patch::{PatchReport, PatchSolver};
 
+use super::propagation::{least_damage, wake_coarsening};
 use super::{InterfaceRecords, Outcome, Solve};
 use crate::adapt::Adapt;
 use crate::frontier::{Coarsening, Frontier, Limits, Refined, refinement_edge_length};
@@ -47,8 +49,28 @@ impl Solve<'_> {
         (t_mid - t_m >= 0.25 * budget
             && long <= adapt.max_edge_at(midpoint(mesh.vertex(ends[0]), mesh.vertex(ends[1])))
             && state.calm_around(m)
+            && self.debonded_if_damage(state, m, ends)
             && state.pitcher.may_coarsen(mesh, front, m, ends))
         .then_some((ends, t_m, t_mid))
+    }
+
+    /// False when `m` joins two halves of a damage interface edge (a crack's path) that are not
+    /// both fully debonded, `D >= 1 - eps` at every corner of their last faces: a crack's wake
+    /// is merged only where its faces have reached the end of their damage history (seed
+    /// 4.4.2, Fig. 4.6), so that no history is averaged over the merged face. (The halves of a
+    /// bisection are collinear, and no other crack meets `m`: [`sdg_mesh::Mesh::coarsenable`]
+    /// leaves the other edges at `m` untagged.)
+    fn debonded_if_damage(&self, state: &Frontier, m: VertexId, ends: [VertexId; 2]) -> bool {
+        let (mesh, order) = (&state.mesh, self.problem.loaded.config.solver.order);
+        ends.iter().all(|&w| {
+            let Some(e) = mesh.edge_between(w, m) else {
+                return true;
+            };
+            match self.problem.interfaces.law(mesh.edges()[e as usize].tag) {
+                Law::Damage(d) => least_damage(&state.solution, e, order, d.initial) >= 1.0 - d.eps,
+                _ => true,
+            }
+        })
     }
 
     /// Solves the coarsening patch of vertex `m`, claimed for a tent, when `m` may be coarsened
@@ -135,6 +157,20 @@ impl Solve<'_> {
         self.add_patch(&mut book, report);
         interface.add_to(&mut book);
         book.coarsenings += 1;
+        let restored = state.mesh.edge_between(
+            merge.vertex_after(merge.ends[0]),
+            merge.vertex_after(merge.ends[1]),
+        );
+        if let (Some(fracture), Some(e)) = (&self.problem.fracture, restored)
+            && fracture.is_crack(state.mesh.edges()[e as usize].tag)
+        {
+            let [a, b] = merge.ends.map(|w| state.mesh.vertex(merge.vertex_after(w)));
+            let time = 0.5
+                * (state.front.time(merge.vertex_after(merge.ends[0]))
+                    + state.front.time(merge.vertex_after(merge.ends[1])));
+            let event = wake_coarsening(&book.fracture_events, time, coarsening.at, a, b);
+            book.fracture_events.push(event);
+        }
         book.milestones.remove_vertex(t_m);
         book.progress.grow(-(t_end - t_m));
         self.add_to_snapshots(&mut book, &state.solution, &parents);

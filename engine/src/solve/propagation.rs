@@ -16,11 +16,11 @@ use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use sdg_mesh::{Mesh, TriangleId, VertexId};
+use sdg_mesh::{EdgeId, Mesh, TriangleId, VertexId};
 use sdg_scheduler::Changed;
 use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, evaluate};
-use sdg_solver::face::{FaceBasis, STATE_COMPONENTS};
+use sdg_solver::face::{FaceBasis, FaceState, STATE_COMPONENTS};
 use sdg_solver::patch::PatchSolver;
 use serde::Serialize;
 
@@ -49,9 +49,10 @@ pub(super) struct Extension {
 pub(super) struct FractureEvent {
     /// Front time at the tip, s.
     time: f64,
-    /// `nucleation`, `extension`, `branching` or `arrest`.
+    /// `nucleation`, `extension`, `branching`, `arrest`, `refused` or `coarsening`.
     kind: Cow<'static, str>,
-    branch: u32,
+    /// The crack branch; none for a coarsening of an initial crack's edges.
+    branch: Option<u32>,
     /// Where it happened and, for an extension, the new edge's far end (m).
     from: [f64; 2],
     to: [f64; 2],
@@ -70,6 +71,8 @@ pub struct FractureSummary {
     pub arrests: u64,
     /// Extensions the mesh could not make yet (the split was refused); the tip tries again.
     pub refused: u64,
+    /// Merges of two fully debonded crack edges into one by coarsening (the crack's wake).
+    pub wake_coarsenings: u64,
     /// Crack branches: the initial tips, every branching's new one and both halves of every
     /// nucleated crack.
     pub branches: u32,
@@ -140,7 +143,7 @@ impl Solve<'_> {
             events.push(FractureEvent {
                 time,
                 kind: "nucleation".into(),
-                branch: state.next_branch,
+                branch: Some(state.next_branch),
                 from: at,
                 to: at,
             });
@@ -174,7 +177,7 @@ impl Solve<'_> {
             let event = |kind: &'static str, to| FractureEvent {
                 time,
                 kind: kind.into(),
-                branch,
+                branch: Some(branch),
                 from: at,
                 to,
             };
@@ -285,7 +288,13 @@ pub(super) fn events_csv(events: &[FractureEvent]) -> String {
         let _ = writeln!(
             csv,
             "{:e},{},{},{:e},{:e},{:e},{:e}",
-            e.time, e.kind, e.branch, e.from[0], e.from[1], e.to[0], e.to[1]
+            e.time,
+            e.kind,
+            e.branch.map_or(String::new(), |b| b.to_string()),
+            e.from[0],
+            e.from[1],
+            e.to[0],
+            e.to[1]
         );
     }
     csv
@@ -311,19 +320,16 @@ pub(super) fn crack_edges(
     initial_damage: impl Fn(Option<sdg_mesh::TagId>) -> f64,
 ) -> Vec<CrackEdge> {
     let basis = FaceBasis::new(order);
-    let mut psi = [0.0; SCRATCH];
     (0..mesh.edges().len())
         .filter(|&e| fracture.is_crack(mesh.edges()[e].tag))
         .map(|e| {
             let edge = &mesh.edges()[e];
             let damage = solution.face(e).map_or(initial_damage(edge.tag), |face| {
-                let top = face
-                    .geometry
-                    .corners()
-                    .into_iter()
-                    .max_by(|a, b| a[2].total_cmp(&b[2]))
+                let corners = face.geometry.corners();
+                let top = (0..3)
+                    .max_by(|&a, &b| corners[a][2].total_cmp(&corners[b][2]))
                     .expect("a face has corners");
-                face.evaluate(&basis, top, &mut psi[..basis.len()])[STATE_COMPONENTS - 1]
+                corner_damage(&face, &basis)[top]
             });
             // The face polynomial may overshoot where D saturates; D itself is in [0, 1].
             let damage = damage.clamp(0.0, 1.0);
@@ -334,6 +340,47 @@ pub(super) fn crack_edges(
             }
         })
         .collect()
+}
+
+/// The damage `D` of `face` (an interface state) at each corner of its spacetime triangle.
+fn corner_damage(face: &FaceState, basis: &FaceBasis) -> [f64; 3] {
+    let mut psi = [0.0; SCRATCH];
+    face.geometry
+        .corners()
+        .map(|x| face.evaluate(basis, x, &mut psi[..basis.len()])[STATE_COMPONENTS - 1])
+}
+
+/// The least damage `D` over edge `e` on the front: the smallest at the corners of the last
+/// face solved over it (faces of order `order`), or `initial` where none was. `D` never
+/// decreases in time, so this is the damage of the whole face up to the polynomial's wiggle.
+pub(super) fn least_damage(solution: &FrontSolution, e: EdgeId, order: usize, initial: f64) -> f64 {
+    solution.face(e as usize).map_or(initial, |face| {
+        corner_damage(&face, &FaceBasis::new(order))
+            .into_iter()
+            .fold(f64::INFINITY, f64::min)
+    })
+}
+
+/// A merge of two crack edges into one by coarsening (the crack's wake, seed Fig. 4.6), at
+/// front time `time` (s): the restored edge runs `from` `to` (m); its branch is the one whose
+/// extension made the removed vertex `at` (m) a crack vertex, if any (none on initial cracks).
+pub(super) fn wake_coarsening(
+    events: &[FractureEvent],
+    time: f64,
+    at: [f64; 2],
+    from: [f64; 2],
+    to: [f64; 2],
+) -> FractureEvent {
+    FractureEvent {
+        time,
+        kind: "coarsening".into(),
+        branch: events
+            .iter()
+            .find(|e| e.kind == "extension" && on_segment(at, e.from, e.to))
+            .and_then(|e| e.branch),
+        from,
+        to,
+    }
 }
 
 /// `cracks.csv`: the crack edges, their ends (m), tag and damage.
@@ -450,6 +497,7 @@ pub(super) fn summary(events: &[FractureEvent], state: &Frontier) -> FractureSum
         branchings: count("branching"),
         arrests: count("arrest"),
         refused: count("refused"),
+        wake_coarsenings: count("coarsening"),
         branches: state.next_branch,
         active_tips: state.tips.iter().flatten().count(),
         total_length: events
@@ -490,11 +538,18 @@ pub(super) fn branch_tips(
     events: &[FractureEvent],
     crossings: &[Crossing],
 ) -> BTreeMap<u32, Vec<TipState>> {
-    let segments: Vec<&FractureEvent> = events.iter().filter(|e| e.kind == "extension").collect();
+    let segments: Vec<(&FractureEvent, u32)> = events
+        .iter()
+        .filter(|e| e.kind == "extension")
+        .filter_map(|e| Some((e, e.branch?)))
+        .collect();
     let mut by_branch: BTreeMap<u32, Vec<Crossing>> = BTreeMap::new();
     for c in crossings {
-        if let Some(e) = segments.iter().find(|e| on_segment(c.point, e.from, e.to)) {
-            by_branch.entry(e.branch).or_default().push(*c);
+        if let Some((_, branch)) = segments
+            .iter()
+            .find(|(e, _)| on_segment(c.point, e.from, e.to))
+        {
+            by_branch.entry(*branch).or_default().push(*c);
         }
     }
     by_branch
@@ -544,6 +599,29 @@ mod tests {
     use super::*;
     use sdg_solver::crack::Level;
 
+    /// The least damage of an edge is the smallest of its face's corners (D = 0.9 + 0.1 xi on
+    /// the reference face: 0.9, 1, 0.9), or the initial damage where no face was solved.
+    #[test]
+    fn the_least_damage_of_an_edge_is_that_of_its_face_s_lowest_corner() {
+        let solution = FrontSolution::new(1, 3, 5).with_edges(2);
+        let geometry = sdg_solver::face::FaceGeometry::new([
+            [0.0, 0.0, 0.0],
+            [1e-5, 0.0, 0.0],
+            [0.0, 0.0, 2e-5],
+        ]);
+        let mut coefficients = [[0.0; sdg_solver::face::MAX_FACE_BASIS]; STATE_COMPONENTS];
+        coefficients[STATE_COMPONENTS - 1][..2].copy_from_slice(&[0.9, 0.1]);
+        solution.store_face(
+            1,
+            &FaceState {
+                geometry,
+                coefficients,
+            },
+        );
+        assert_eq!(least_damage(&solution, 0, 1, 0.25), 0.25);
+        assert!((least_damage(&solution, 1, 1, 0.25) - 0.9).abs() < 1e-15);
+    }
+
     #[test]
     fn the_zoom_frames_the_grown_cracks() {
         let domain = [[0.0, 0.0], [16e-3, 10e-3]];
@@ -564,7 +642,7 @@ mod tests {
         FractureEvent {
             time,
             kind: "extension".into(),
-            branch,
+            branch: Some(branch),
             from,
             to,
         }
