@@ -157,17 +157,13 @@ impl Solve<'_> {
         self.add_patch(&mut book, report);
         interface.add_to(&mut book);
         book.coarsenings += 1;
-        let restored = state.mesh.edge_between(
-            merge.vertex_after(merge.ends[0]),
-            merge.vertex_after(merge.ends[1]),
-        );
-        if let (Some(fracture), Some(e)) = (&self.problem.fracture, restored)
+        let [p, q] = merge.ends.map(|w| merge.vertex_after(w));
+        if let (Some(fracture), Some(e)) = (&self.problem.fracture, state.mesh.edge_between(p, q))
             && fracture.is_crack(state.mesh.edges()[e as usize].tag)
         {
-            let [a, b] = merge.ends.map(|w| state.mesh.vertex(merge.vertex_after(w)));
-            let time = 0.5
-                * (state.front.time(merge.vertex_after(merge.ends[0]))
-                    + state.front.time(merge.vertex_after(merge.ends[1])));
+            let (mesh, front) = (&state.mesh, &state.front);
+            let time = 0.5 * (front.time(p) + front.time(q));
+            let (a, b) = (mesh.vertex(p), mesh.vertex(q));
             let event = wake_coarsening(&book.fracture_events, time, coarsening.at, a, b);
             book.fracture_events.push(event);
         }
