@@ -90,10 +90,18 @@ pub(super) struct ContactFace {
     w_b: Vec<[f64; 2]>,
     pub(super) targets_a: Vec<Targets>,
     pub(super) targets_b: Vec<Targets>,
-    /// Cohesive faces: `P[p][q]` (points x points) maps the law's traction at the points to
-    /// its projection onto the face's polynomials at `p` (the face rule's L2 projection), the
-    /// projected traction per point, and its derivatives `d T_k(p) / d d_(e, l)` with respect
-    /// to the state's coefficients, at `((p 2 + k) 2 + e) nf + l`.
+    /// The bottom edge's quadrature points (weights: spatial length, m; face basis values),
+    /// the inflow's points.
+    bottom_weights: Vec<f64>,
+    bottom_psi: Vec<f64>,
+    /// Where each bottom point lies along the edge: 0 below the top's first end, 1 below its
+    /// second.
+    bottom_along: Vec<f64>,
+    /// Cohesive faces: `P[p][q]` (points x sources) maps the law's traction at the sources (the
+    /// face's points, then the bottom's) to its projection onto the face's polynomials at `p`
+    /// (see [`ContactFace::project_matrix`]), the projected traction per point, and its derivatives
+    /// `d T_k(p) / d d_(e, l)` with respect to the state's coefficients, at
+    /// `((p 2 + k) 2 + e) nf + l`.
     projection: Vec<f64>,
     traction: Vec<[f64; 2]>,
     slopes: Vec<f64>,
@@ -115,8 +123,7 @@ impl ContactFace {
     /// The interface state (normal separation, slip: m; damage) at quadrature point `p` for
     /// coefficients `d`.
     fn separation_at(&self, nf: usize, p: usize, d: &[f64]) -> [f64; STATE_COMPONENTS] {
-        let psi = &self.psi[p * nf..(p + 1) * nf];
-        std::array::from_fn(|c| psi.iter().zip(&d[c * nf..]).map(|(a, b)| a * b).sum())
+        state_from(&self.psi[p * nf..(p + 1) * nf], d)
     }
 
     /// `-G(d) = inflow - M0 d + int psi rate(state) / c` of the face's state system (the law's
@@ -209,11 +216,12 @@ impl ContactFace {
     }
 
     /// For a cohesive face, the law's traction at the state coefficients `d` projected onto
-    /// the face's polynomials, at every point (and with `slopes` its derivatives with respect
-    /// to `d`). With the pointwise traction `T` in the targets, the rate `r = (w_a + w_b -
-    /// 2 T) / Z` makes the face gain `(2 / Z) |T - Pi T|^2` of energy against the law's
-    /// potential (docs/verification.md); with `Pi T` that term vanishes. Returns whether the
-    /// face projects.
+    /// the face's polynomials ([`Self::project_matrix`]), at every point (and with `slopes`
+    /// its derivatives with respect to `d`). Testing the face's DG equation with the target
+    /// traction gives its work as the law's potential gained over the face plus terms that
+    /// vanish for `Pi T` (docs/method.md): with the pointwise `T`, `-(2 / Z) |T - Pi T|^2`
+    /// (an L2 projection removes it), and `-int_bottom (T - Pi T) (delta+ - delta-)` on the
+    /// bottom's jump (the bottom moments remove it). Returns whether the face projects.
     fn project_traction(&mut self, nf: usize, d: &[f64], slopes: bool) -> bool {
         if !self.projects() {
             return false;
@@ -226,12 +234,17 @@ impl ContactFace {
         for p in 0..points {
             self.traction[p] = [0.0; 2];
         }
-        for q in 0..points {
-            let state = self.separation_at(nf, q, d);
+        let sources = points + self.bottom_weights.len();
+        for q in 0..sources {
+            let psi_q = if q < points {
+                &self.psi[q * nf..(q + 1) * nf]
+            } else {
+                &self.bottom_psi[(q - points) * nf..(q - points + 1) * nf]
+            };
+            let state = state_from(psi_q, d);
             let (t, dt) = law.traction([state[0], state[1]]);
-            let psi_q = &self.psi[q * nf..(q + 1) * nf];
             for p in 0..points {
-                let w = self.projection[p * points + q];
+                let w = self.projection[p * sources + q];
                 if w == 0.0 {
                     continue;
                 }
@@ -271,6 +284,73 @@ impl ContactFace {
             }
         }
     }
+
+    /// The projection of a cohesive face's traction (see [`Self::project_traction`]): the
+    /// polynomial `Pi T` of the face's degree `p` whose moments against the polynomials of
+    /// degree `p - 1` on the face (face rule) and against those of degree `p` along the bottom
+    /// edge (bottom rule) are the traction's. The first makes `int Pi T d delta / d tau` the
+    /// law's potential gained over the face; the second makes the work on the bottom's jump
+    /// of the separation that of `T` itself. Fills `projection` (points x sources); `g`
+    /// (`nf^2`) and `x` (`nf` per source) are scratch. Falls back to the pointwise traction
+    /// if the moments do not determine `Pi T`.
+    fn project_matrix(&mut self, nf: usize, g: &mut [f64], x: &mut [f64]) {
+        let points = self.weights.len();
+        let bottom = self.bottom_weights.len();
+        let sources = points + bottom;
+        let mut degree = 0;
+        while (degree + 1) * (degree + 2) / 2 < nf {
+            degree += 1;
+        }
+        // The face basis is ordered by degree: its first `interior` functions span degree p - 1.
+        let interior = nf - (degree + 1);
+        let (g, x) = (&mut g[..nf * nf], &mut x[..nf * sources]);
+        g.fill(0.0);
+        x.fill(0.0);
+        for q in 0..points {
+            let psi = &self.psi[q * nf..(q + 1) * nf];
+            let w = self.weights[q];
+            for j in 0..interior {
+                for k in 0..nf {
+                    g[j * nf + k] += w * psi[j] * psi[k];
+                }
+                x[q * nf + j] = w * psi[j];
+            }
+        }
+        for b in 0..bottom {
+            let psi = &self.bottom_psi[b * nf..(b + 1) * nf];
+            let (w, s) = (self.bottom_weights[b], self.bottom_along[b]);
+            for i in 0..=degree {
+                let row = interior + i;
+                let moment = w * s.powi(i as i32);
+                for k in 0..nf {
+                    g[row * nf + k] += moment * psi[k];
+                }
+                x[(points + b) * nf + row] = moment;
+            }
+        }
+        let projection = &mut self.projection[..points * sources];
+        if solve_dense(g, nf, x, sources) {
+            for p in 0..points {
+                let psi = &self.psi[p * nf..(p + 1) * nf];
+                for q in 0..sources {
+                    let xq = &x[q * nf..(q + 1) * nf];
+                    projection[p * sources + q] = psi.iter().zip(xq).map(|(a, b)| a * b).sum();
+                }
+            }
+        } else {
+            projection.fill(0.0);
+            for p in 0..points {
+                projection[p * sources + p] = 1.0;
+            }
+        }
+    }
+}
+
+/// The interface state (normal separation, slip: m; damage) at a point with face basis values
+/// `psi`, for coefficients `d` (`psi.len()` per component).
+fn state_from(psi: &[f64], d: &[f64]) -> [f64; STATE_COMPONENTS] {
+    let nf = psi.len();
+    std::array::from_fn(|c| psi.iter().zip(&d[c * nf..]).map(|(a, b)| a * b).sum())
 }
 
 /// Where a nonlinear face lies: its corners and the segments of its boundary, in scaled
@@ -352,6 +432,8 @@ pub(super) struct ContactFaces {
     grad: Vec<[f64; 2]>,
     jacobian: Vec<f64>,
     columns: Vec<f64>,
+    /// The right-hand sides of a cohesive face's projection, one per source point.
+    moments: Vec<f64>,
     coupling: [Vec<f64>; 2],
     outer: Vec<f64>,
     block: Vec<f64>,
@@ -439,6 +521,9 @@ impl ContactFaces {
     pub(super) fn new(max_faces: usize, order: usize, points: usize, n: usize, m: usize) -> Self {
         let basis = FaceBasis::new(order);
         let nf = basis.len();
+        let bottom_rule = quadrature::gauss_legendre(order + 2);
+        // Two bottom segments at most (a coarsening patch's face).
+        let bottom = 2 * bottom_rule.points.len();
         let face = || ContactFace {
             a: 0,
             b: 0,
@@ -466,12 +551,16 @@ impl ContactFaces {
             w_b: vec![[0.0; 2]; points],
             targets_a: vec![Targets::default(); points],
             targets_b: vec![Targets::default(); points],
-            projection: vec![0.0; points * points],
+            bottom_weights: Vec::with_capacity(bottom),
+            bottom_psi: vec![0.0; bottom * nf],
+            bottom_along: Vec::with_capacity(bottom),
+            projection: vec![0.0; points * (points + bottom)],
             traction: vec![[0.0; 2]; points],
             slopes: vec![0.0; points * 4 * nf],
         };
         Self {
-            bottom_rule: quadrature::gauss_legendre(order + 2),
+            moments: vec![0.0; nf * (points + bottom)],
+            bottom_rule,
             faces: (0..max_faces).map(|_| face()).collect(),
             count: 0,
             psi: vec![0.0; nf],
@@ -566,6 +655,11 @@ impl ContactFaces {
             }
         }
         face.inflow.fill(0.0);
+        face.bottom_weights.clear();
+        face.bottom_along.clear();
+        let [top_a, top_b] = shape.top;
+        let span = [top_b[0] - top_a[0], top_b[1] - top_a[1]];
+        let span2 = span[0] * span[0] + span[1] * span[1];
         let ns = law.components();
         let initial = law.initial_state();
         for &(under, [p, q]) in shape.bottom() {
@@ -583,6 +677,11 @@ impl ContactFaces {
                     .map_or(initial, |f| f.evaluate(basis, x, psi));
                 basis.eval(face.geometry.to_reference(x), psi);
                 let w = wg * length;
+                let b = face.bottom_weights.len();
+                face.bottom_weights.push(w);
+                face.bottom_along
+                    .push(((x[0] - top_a[0]) * span[0] + (x[1] - top_a[1]) * span[1]) / span2);
+                face.bottom_psi[b * nf..(b + 1) * nf].copy_from_slice(psi);
                 for k in 0..nf {
                     for l in 0..nf {
                         m0[k * nf + l] += w * psi[k] * psi[l];
@@ -611,36 +710,7 @@ impl ContactFaces {
             }
         }
         if face.projects() {
-            // P[p][q] = w_q psi(p) . M^-1 psi(q), with the face rule's mass matrix M.
-            let (x, mass) = (
-                &mut self.columns[..points * nf],
-                &mut self.jacobian[..nf * nf],
-            );
-            mass.fill(0.0);
-            for q in 0..points {
-                let psi_q = &face.psi[q * nf..(q + 1) * nf];
-                for k in 0..nf {
-                    for l in 0..nf {
-                        mass[k * nf + l] += face.weights[q] * psi_q[k] * psi_q[l];
-                    }
-                }
-            }
-            x.copy_from_slice(&face.psi[..points * nf]);
-            if solve_dense(mass, nf, x, points) {
-                for p in 0..points {
-                    let psi_p = &face.psi[p * nf..(p + 1) * nf];
-                    for q in 0..points {
-                        let xq = &x[q * nf..(q + 1) * nf];
-                        face.projection[p * points + q] =
-                            face.weights[q] * psi_p.iter().zip(xq).map(|(a, b)| a * b).sum::<f64>();
-                    }
-                }
-            } else {
-                face.projection[..points * points].fill(0.0);
-                for p in 0..points {
-                    face.projection[p * points + p] = 1.0;
-                }
-            }
+            face.project_matrix(nf, &mut self.jacobian, &mut self.moments);
         }
         // First guess: the inherited state carried up the face (no rate), `M0 d = inflow`.
         let (guess, matrix) = (&mut self.columns[..ns * nf], &mut self.jacobian[..nf * nf]);
@@ -1048,5 +1118,112 @@ impl ContactFaces {
         self.faces[..self.count]
             .iter()
             .map(move |face| (face.edge, face.state(nf)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cohesive face's projection keeps the traction's moments against degree `p - 1` on the
+    /// face and against degree `p` along the bottom edge, and reproduces polynomials of degree
+    /// `p`: what makes the face's work the law's potential plus the work of `T` itself on the
+    /// bottom's jump.
+    #[test]
+    fn the_projected_traction_keeps_the_face_and_bottom_moments() {
+        for p in 1..=4 {
+            let rule = quadrature::triangle(2 * p + 2);
+            let bottom_rule = quadrature::gauss_legendre(p + 2);
+            let points = rule.points.len();
+            let mut faces = ContactFaces::new(1, p, points, 1, 1);
+            let nf = faces.basis.len();
+            let basis = FaceBasis::new(p);
+            let face = &mut faces.faces[0];
+            // The reference triangle, its bottom the edge eta = 0 (twice as long as in `rule`).
+            let mut psi = vec![0.0; nf];
+            for (q, (x, &w)) in rule.points.iter().zip(&rule.weights).enumerate() {
+                face.weights[q] = w;
+                basis.eval(*x, &mut psi);
+                face.psi[q * nf..(q + 1) * nf].copy_from_slice(&psi);
+            }
+            face.bottom_weights.clear();
+            face.bottom_along.clear();
+            for (b, (t, &w)) in bottom_rule
+                .points
+                .iter()
+                .zip(&bottom_rule.weights)
+                .enumerate()
+            {
+                basis.eval([t[0], 0.0], &mut psi);
+                face.bottom_psi[b * nf..(b + 1) * nf].copy_from_slice(&psi);
+                face.bottom_weights.push(2.0 * w);
+                face.bottom_along.push(t[0]);
+            }
+            face.project_matrix(nf, &mut faces.jacobian, &mut faces.moments);
+            let sources: Vec<[f64; 2]> = rule
+                .points
+                .iter()
+                .copied()
+                .chain(bottom_rule.points.iter().map(|t| [t[0], 0.0]))
+                .collect();
+            let projected = |f: &dyn Fn([f64; 2]) -> f64| -> Vec<f64> {
+                (0..points)
+                    .map(|q| {
+                        let row = &face.projection[q * sources.len()..][..sources.len()];
+                        row.iter().zip(&sources).map(|(w, &x)| w * f(x)).sum()
+                    })
+                    .collect()
+            };
+            // Degree p is reproduced.
+            let poly =
+                |x: [f64; 2]| 0.3 + x[0].powi(p as i32) - 2.0 * x[0] * x[1].powi(p as i32 - 1);
+            for (q, value) in projected(&poly).into_iter().enumerate() {
+                assert!((value - poly(rule.points[q])).abs() < 1e-11, "p = {p}");
+            }
+            // A smooth traction: the projection's polynomial, from its values at the face's
+            // points, against the traction's moments.
+            let traction =
+                |x: [f64; 2]| (0.7 * x[0] - 1.3 * x[1]).exp() + (3.0 * x[0] * x[1]).sin();
+            let values = projected(&traction);
+            let (mut mass, mut c) = (vec![0.0; nf * nf], vec![0.0; nf]);
+            for ((psi_q, &w), value) in face.psi.chunks_exact(nf).zip(&face.weights).zip(&values) {
+                for k in 0..nf {
+                    for l in 0..nf {
+                        mass[k * nf + l] += w * psi_q[k] * psi_q[l];
+                    }
+                    c[k] += w * psi_q[k] * value;
+                }
+            }
+            assert!(solve_dense(&mut mass, nf, &mut c, 1));
+            let pi = |x: [f64; 2]| {
+                let mut psi = vec![0.0; nf];
+                basis.eval(x, &mut psi);
+                psi.iter().zip(&c).map(|(a, b)| a * b).sum::<f64>()
+            };
+            let interior = p * (p + 1) / 2;
+            for j in 0..interior {
+                let moment: f64 = (0..points)
+                    .map(|q| {
+                        let x = rule.points[q];
+                        face.weights[q] * face.psi[q * nf + j] * (pi(x) - traction(x))
+                    })
+                    .sum();
+                assert!(moment.abs() < 1e-12, "p = {p}, face moment {j}: {moment:e}");
+            }
+            for i in 0..=p {
+                let moment: f64 = bottom_rule
+                    .points
+                    .iter()
+                    .zip(&bottom_rule.weights)
+                    .map(|(t, w)| {
+                        w * t[0].powi(i as i32) * (pi([t[0], 0.0]) - traction([t[0], 0.0]))
+                    })
+                    .sum();
+                assert!(
+                    moment.abs() < 1e-12,
+                    "p = {p}, bottom moment {i}: {moment:e}"
+                );
+            }
+        }
     }
 }
