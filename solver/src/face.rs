@@ -38,6 +38,11 @@ impl FaceBasis {
         self.powers.len()
     }
 
+    /// The total degree `p`; the first `p (p + 1) / 2` functions span degree `p - 1`.
+    pub fn degree(&self) -> usize {
+        self.powers.last().map_or(0, |&(i, j)| (i + j) as usize)
+    }
+
     /// True for no basis functions (never).
     pub fn is_empty(&self) -> bool {
         self.powers.is_empty()

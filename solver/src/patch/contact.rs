@@ -291,16 +291,13 @@ impl ContactFace {
     /// edge (bottom rule) are the traction's. The first makes `int Pi T d delta / d tau` the
     /// law's potential gained over the face; the second makes the work on the bottom's jump
     /// of the separation that of `T` itself. Fills `projection` (points x sources); `g`
-    /// (`nf^2`) and `x` (`nf` per source) are scratch. Falls back to the pointwise traction
+    /// (`nf^2` for the face basis' `nf` functions) and `x` (`nf` per source) are scratch. Falls back to the pointwise traction
     /// if the moments do not determine `Pi T`.
-    fn project_matrix(&mut self, nf: usize, g: &mut [f64], x: &mut [f64]) {
+    fn project_matrix(&mut self, basis: &FaceBasis, g: &mut [f64], x: &mut [f64]) {
+        let (nf, degree) = (basis.len(), basis.degree());
         let points = self.weights.len();
         let bottom = self.bottom_weights.len();
         let sources = points + bottom;
-        let mut degree = 0;
-        while (degree + 1) * (degree + 2) / 2 < nf {
-            degree += 1;
-        }
         // The face basis is ordered by degree: its first `interior` functions span degree p - 1.
         let interior = nf - (degree + 1);
         let (g, x) = (&mut g[..nf * nf], &mut x[..nf * sources]);
@@ -710,7 +707,7 @@ impl ContactFaces {
             }
         }
         if face.projects() {
-            face.project_matrix(nf, &mut self.jacobian, &mut self.moments);
+            face.project_matrix(&self.basis, &mut self.jacobian, &mut self.moments);
         }
         // First guess: the inherited state carried up the face (no rate), `M0 d = inflow`.
         let (guess, matrix) = (&mut self.columns[..ns * nf], &mut self.jacobian[..nf * nf]);
@@ -1159,7 +1156,7 @@ mod tests {
                 face.bottom_weights.push(2.0 * w);
                 face.bottom_along.push(t[0]);
             }
-            face.project_matrix(nf, &mut faces.jacobian, &mut faces.moments);
+            face.project_matrix(&faces.basis, &mut faces.jacobian, &mut faces.moments);
             let sources: Vec<[f64; 2]> = rule
                 .points
                 .iter()
