@@ -412,7 +412,7 @@ fn mode1_crack_at_high_load_starts_at_once() {
     let (tau, t0, c_r) = mode1_high_scales();
     let end = t0 + 6.0 * tau;
     let problem = common::shipped("mode1_lefm_high.toml", &[&format!("time.end={end:e}")]);
-    let (summary, dir) = common::solve(&problem, 2, false);
+    let (summary, dir) = common::solve(&problem, 2, true);
     let rows = tip_rows(dir.path());
     let start = (rows[0].0 - t0) / tau;
     let tips = common::csv_columns(
@@ -435,8 +435,12 @@ fn mode1_crack_at_high_load_starts_at_once() {
     }
     // The crack starts at the initial tip (x = 0.5 mm), within the 3 um of the refined path.
     assert!((tips[0][0] - 0.5e-3).abs() < 3e-6, "{}", tips[0][0]);
-    // Measured: t' = 1.20 (LEFM: 1.5) at x = 0.5004 mm; 0.73 c_R a quarter of the way; at most
-    // 0.82 c_R by t' = 6 (23 um of extension).
+    // Deterministic, so the check is the same on every machine: the start is sensitive to the
+    // order of refinements near the tip (the interface there sits at 0.81 delta_c under the load
+    // alone and approaches delta_c slowly). Asynchronous 2-thread runs started between t' = 1.05
+    // and 1.36 over eleven runs, and once just before t' = 1 (2026-11-25/26, this machine).
+    // Measured (deterministic): t' = 1.055 (LEFM: 1.5) at x = 0.5004 mm; 0.71 c_R a quarter of
+    // the way; at most 0.83 c_R by t' = 6 (23 um of extension).
     assert!((1.0..1.5).contains(&start), "{start}");
     assert!(early > 0.5, "{early}");
     assert!(fastest < 1.0, "{fastest}");
