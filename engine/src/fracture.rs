@@ -46,6 +46,8 @@ pub struct Nucleation {
     pub strengths: DefectStrengths,
     /// Seed of the draws.
     pub seed: u64,
+    /// Cracks nucleate on the boundary and on cracks too.
+    pub on_surfaces: bool,
 }
 
 /// A crack tip: the crack arrives at its vertex travelling in `direction` (radians); `branch`
@@ -91,6 +93,7 @@ impl Fracture {
                     density,
                     strengths,
                     seed: config.seed,
+                    on_surfaces: config.surface_nucleation,
                 }),
         }
     }
@@ -221,14 +224,21 @@ impl Fracture {
 }
 
 impl Fracture {
-    /// The two directions (radians) of a crack nucleating at the top of the tent pole of vertex
-    /// `v` that reached `t_new` (s), if one does: `v` is interior and on no crack, and the
-    /// largest effective traction over orientations and over the star's elements (`stress(t)`,
-    /// Pa, at the middle of the pole) reaches the weakest defect in the area the vertex stands
-    /// for (a third of its star's area): a Poisson number of defects of mean
-    /// `density * area` with truncated-normal strengths. The draws are keyed by the run seed,
-    /// the vertex position and `t_new` (bits), so they do not depend on vertex numbering or
-    /// thread scheduling. The crack runs both ways along the plane of that traction.
+    /// The directions (radians, unused entries NaN) of a crack nucleating at the top of the
+    /// tent pole of vertex `v` that reached `t_new` (s), if one does: the largest effective
+    /// traction over orientations and over the star's elements (`stress(t)`, Pa, at the middle
+    /// of the pole) reaches the weakest defect in the area the vertex stands for (a third of
+    /// its star's area): a Poisson number of defects of mean `density * area` with
+    /// truncated-normal strengths. The draws are keyed by the run seed, the vertex position and
+    /// `t_new` (bits), so they do not depend on vertex numbering or thread scheduling.
+    ///
+    /// Inside, the crack runs both ways along the plane of that traction. Only with
+    /// `on_surfaces` do cracks nucleate anywhere in the closure of the domain, the boundary and
+    /// the surfaces of existing cracks included (seed 4.3.2); there a crack runs one way, into
+    /// the material where
+    /// the traction peaked (the direction of the pair closer to the strongest element's
+    /// centroid), and only at least the shield angle from every crack and boundary edge at `v`
+    /// (a free surface shields as a crack does).
     pub fn nucleates(
         &self,
         mesh: &Mesh,
@@ -237,17 +247,24 @@ impl Fracture {
         stress: impl Fn(TriangleId) -> [f64; 3],
     ) -> Option<[f64; 2]> {
         let n = self.nucleation.as_ref()?;
-        // The cheap checks before the star's stresses.
-        if on_boundary(mesh, v)
-            || vertex_edges(mesh, v).any(|e| self.is_crack(mesh.edges()[e as usize].tag))
-        {
+        // The free surfaces at `v`: its crack and boundary edges.
+        let mut surfaces: Vec<EdgeId> = vertex_edges(mesh, v)
+            .filter(|&e| {
+                let edge = &mesh.edges()[e as usize];
+                edge.is_boundary() || self.is_crack(edge.tag)
+            })
+            .collect();
+        if !n.on_surfaces && !surfaces.is_empty() {
             return None;
         }
         let star = mesh.vertex_triangles(v);
-        let (th, strongest) = star
+        let (strongest_triangle, th, strongest) = star
             .iter()
-            .map(|&t| max_effective_traction(stress(t), self.beta))
-            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.total_cmp(&a.0)))?;
+            .map(|&t| {
+                let (th, s) = max_effective_traction(stress(t), self.beta);
+                (t, th, s)
+            })
+            .max_by(|a, b| a.2.total_cmp(&b.2).then(b.1.total_cmp(&a.1)))?;
         // No defect is weaker than the truncation point.
         if strongest <= n.strengths.lower {
             return None;
@@ -256,7 +273,27 @@ impl Fracture {
         let [x, y] = mesh.vertex(v);
         let mut draws = Draws::new(n.seed, [x.to_bits(), y.to_bits(), t_new.to_bits()]);
         let weakest = weakest_defect(n.density, area, &n.strengths, &mut draws)?;
-        (strongest >= weakest).then(|| crack_directions(th))
+        if strongest < weakest {
+            return None;
+        }
+        let both = crack_directions(th);
+        if surfaces.is_empty() {
+            return Some(both);
+        }
+        surfaces.sort_unstable();
+        surfaces.dedup();
+        let corners = mesh.triangles()[strongest_triangle as usize].map(|w| mesh.vertex(w));
+        let [cx, cy] = [0, 1].map(|i| corners.iter().map(|p| p[i]).sum::<f64>() / 3.0);
+        let towards = (cy - y).atan2(cx - x);
+        let d = if angle_between(both[0], towards) <= angle_between(both[1], towards) {
+            both[0]
+        } else {
+            both[1]
+        };
+        let clear = surfaces
+            .iter()
+            .all(|&e| angle_between(d, angle_of(mesh, v, other_end(mesh, e, v))) >= self.shield);
+        (clear && crossing(mesh, v, d).is_some()).then_some([d, f64::NAN])
     }
 }
 
@@ -464,6 +501,7 @@ mod tests {
             density: 1e6,
             strengths,
             seed: 3,
+            on_surfaces: false,
         });
         let inside = vertex_at(&mesh, [0.5, 0.25]);
         let tension = |_| [0.0, 1e4, 0.0];
@@ -471,8 +509,7 @@ mod tests {
         let mut d = d.map(|x| x.rem_euclid(2.0 * PI));
         d.sort_by(f64::total_cmp);
         assert!(d[0].abs() < 1e-12 && (d[1] - PI).abs() < 1e-12, "{d:?}");
-        // Equal compression (no shear either), a stress below the weakest possible defect, the
-        // notch tip, the boundary.
+        // Equal compression (no shear either), a stress below the weakest possible defect.
         assert_eq!(
             fracture.nucleates(&mesh, inside, 1e-6, |_| [-1e4, -1e4, 0.0]),
             None
@@ -481,10 +518,38 @@ mod tests {
             fracture.nucleates(&mesh, inside, 1e-6, |_| [0.0, 4.0, 0.0]),
             None
         );
-        for at in [[0.5, 0.5], [0.25, 0.0]] {
-            assert_eq!(
-                fracture.nucleates(&mesh, vertex_at(&mesh, at), 1e-6, tension),
-                None
+        // On the boundary and on the notch: nothing without `on_surfaces`; with it, a crack
+        // along the surface is shielded by it,
+        let across = |_| [1e4, 0.0, 0.0];
+        for at in [[0.25, 0.0], [0.25, 0.5]] {
+            let v = vertex_at(&mesh, at);
+            assert_eq!(fracture.nucleates(&mesh, v, 1e-6, across), None);
+            fracture.nucleation.as_mut().unwrap().on_surfaces = true;
+            assert_eq!(fracture.nucleates(&mesh, v, 1e-6, tension), None);
+            fracture.nucleation.as_mut().unwrap().on_surfaces = false;
+        }
+        fracture.nucleation.as_mut().unwrap().on_surfaces = true;
+        // and a crack across it runs one way: into the plate from its bottom side, and from the notch
+        // into the side whose elements carry the larger traction.
+        let d = fracture.nucleates(&mesh, vertex_at(&mesh, [0.25, 0.0]), 1e-6, across);
+        let d = d.unwrap();
+        assert!((d[0] - 0.5 * PI).abs() < 1e-12 && d[1].is_nan(), "{d:?}");
+        let on_notch = vertex_at(&mesh, [0.25, 0.5]);
+        for (side, sign) in [(0.75, 1.0), (0.25, -1.0)] {
+            let stronger = |t: TriangleId| {
+                let y = mesh.triangles()[t as usize].map(|w| mesh.vertex(w)[1]);
+                let above = y.iter().sum::<f64>() / 3.0;
+                let s = if (above - side).abs() < 0.25 {
+                    2e4
+                } else {
+                    1e4
+                };
+                [s, 0.0, 0.0]
+            };
+            let d = fracture.nucleates(&mesh, on_notch, 1e-6, stronger).unwrap();
+            assert!(
+                (d[0] - sign * 0.5 * PI).abs() < 1e-12 && d[1].is_nan(),
+                "{d:?}"
             );
         }
         // Few defects: whether one is weak enough depends on the draw, keyed by the time.

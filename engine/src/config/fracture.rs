@@ -47,6 +47,11 @@ pub struct FractureConfig {
     /// Seed of the defect draws (default 0).
     #[serde(default)]
     pub seed: u64,
+    /// Defects also nucleate cracks at vertices on the boundary and on cracks, running one way
+    /// into the material (seed 4.3.2: anywhere in the closure of the domain). Default false:
+    /// only at interior vertices on no crack.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub surface_nucleation: bool,
 }
 
 impl FractureConfig {
@@ -187,7 +192,16 @@ shield_angle = 35.0
     fn a_valid_section_loads() {
         let c = parse(&format!("{BASE}{FRACTURE}"), &[]).unwrap();
         let f = c.fracture.unwrap();
-        assert_eq!((f.snap, f.from.len()), (0.2, 1));
+        assert_eq!(
+            (f.snap, f.from.len(), f.surface_nucleation),
+            (0.2, 1, false)
+        );
+        let c = parse(
+            &format!("{BASE}{FRACTURE}"),
+            &["fracture.surface_nucleation=true"],
+        )
+        .unwrap();
+        assert!(c.fracture.unwrap().surface_nucleation);
     }
 
     #[test]

@@ -73,7 +73,7 @@ pub struct FractureSummary {
     pub refused: u64,
     /// Merges of two fully debonded crack edges into one by coarsening (the crack's wake).
     pub wake_coarsenings: u64,
-    /// Crack branches: the initial tips, every branching's new one and both halves of every
+    /// Crack branches: the initial tips, every branching's new one and each half of every
     /// nucleated crack.
     pub branches: u32,
     /// Tips still active at the end.
@@ -129,10 +129,14 @@ impl Solve<'_> {
         if (v as usize) >= mesh.vertices().len() || mesh.vertex(v) != extension.at {
             return Changed::default();
         }
-        // A nucleation site is on no crack; a tip must still be one.
+        // A nucleation site is no tip (it may be on a crack); a tip must still be one.
         let tip = state.tips[v as usize];
-        let on_crack = !fracture.crack_edges(mesh, v).is_empty();
-        if extension.nucleation == (tip.is_some() || on_crack) {
+        let still = if extension.nucleation {
+            tip.is_none()
+        } else {
+            tip.is_some() && !fracture.crack_edges(mesh, v).is_empty()
+        };
+        if !still {
             return Changed::default();
         }
         let time = state.front.time(v);
@@ -155,7 +159,7 @@ impl Solve<'_> {
             let Some(c) = fracture::crossing(mesh, v, d) else {
                 continue;
             };
-            // A nucleated crack's two halves are new branches, each travelling its way.
+            // Each half of a nucleated crack is a new branch, travelling its way.
             let (tip, new_branch) = match tip {
                 Some(tip) if extended == 0 => (tip, false),
                 Some(tip) => (
