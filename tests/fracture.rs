@@ -212,6 +212,55 @@ fn cracks_nucleate_across_the_tension_the_same_way_for_any_thread_count() {
     assert!(one.energy.balance_residual_rel.abs() < 1e-10);
 }
 
+/// With `fracture.surface_nucleation`, very weak defects (mean 30 MPa, sd 10 MPa, lower bound
+/// 10 MPa) nucleate cracks on the plate's sides as the waves pass: each runs one way, into the
+/// plate, the same for 1 and 2 threads.
+#[test]
+fn with_surface_nucleation_cracks_start_on_the_sides_and_run_into_the_plate() {
+    let problem = shipped(
+        "crack_growth.toml",
+        &[
+            "fracture.defect_density=1e10",
+            "fracture.defect_mean=3e7",
+            "fracture.defect_std=1e7",
+            "fracture.defect_lower=1e7",
+            "fracture.surface_nucleation=true",
+            "time.end=3e-7",
+            "output.png=false",
+        ],
+    );
+    let (one, a) = solve(&problem, 1, true);
+    let (two, b) = solve(&problem, 2, true);
+    assert_eq!(one.state_hash, two.state_hash);
+    assert_eq!(outputs(a.path()), outputs(b.path()));
+    let (rows, kinds) = events(a.path());
+    let width = 4e-3;
+    let (mut on_sides, mut into) = (0, 0);
+    for (k, kind) in kinds.iter().enumerate() {
+        let site = &rows[k];
+        if kind != "nucleation" || (site[1] > 0.0 && site[1] < width) {
+            continue;
+        }
+        on_sides += 1;
+        // The events of this site that follow it: one half (an extension, a refused split or an
+        // arrest), never two.
+        let halves: Vec<(&Vec<f64>, &String)> = rows[k + 1..]
+            .iter()
+            .zip(&kinds[k + 1..])
+            .take_while(|(_, kind)| *kind != "nucleation")
+            .filter(|(r, kind)| *kind != "arrest" && r[1] == site[1] && r[2] == site[2])
+            .collect();
+        assert_eq!(halves.len(), 1, "{site:?}: {halves:?}");
+        if halves[0].1 == "extension" {
+            into += 1;
+            let to = halves[0].0[3];
+            assert!(to > 0.0 && to < width, "{site:?} -> {to}");
+        }
+    }
+    assert!(on_sides >= 3 && into >= 1, "{on_sides} {into}");
+    assert!(one.energy.balance_residual_rel.abs() < 1e-10);
+}
+
 #[test]
 fn the_seed_changes_the_nucleation_sites() {
     let base = ["time.end=8e-7", "output.png=false"];
