@@ -235,10 +235,9 @@ impl Fracture {
     /// Inside, the crack runs both ways along the plane of that traction. Only with
     /// `on_surfaces` do cracks nucleate anywhere in the closure of the domain, the boundary and
     /// the surfaces of existing cracks included (seed 4.3.2); there a crack runs one way, into
-    /// the material where
-    /// the traction peaked (the direction of the pair closer to the strongest element's
-    /// centroid), and only at least the shield angle from every crack and boundary edge at `v`
-    /// (a free surface shields as a crack does).
+    /// the material where the traction peaked (the direction of the pair closer to the
+    /// strongest element's centroid), and only at least the shield angle from every crack and
+    /// boundary edge at `v` (a free surface shields as a crack does).
     pub fn nucleates(
         &self,
         mesh: &Mesh,
@@ -247,14 +246,13 @@ impl Fracture {
         stress: impl Fn(TriangleId) -> [f64; 3],
     ) -> Option<[f64; 2]> {
         let n = self.nucleation.as_ref()?;
-        // The free surfaces at `v`: its crack and boundary edges.
-        let mut surfaces: Vec<EdgeId> = vertex_edges(mesh, v)
-            .filter(|&e| {
-                let edge = &mesh.edges()[e as usize];
-                edge.is_boundary() || self.is_crack(edge.tag)
-            })
-            .collect();
-        if !n.on_surfaces && !surfaces.is_empty() {
+        // The free surfaces at `v`: its crack and boundary edges (checked before the stresses).
+        let surface = |e: &EdgeId| {
+            let edge = &mesh.edges()[*e as usize];
+            edge.is_boundary() || self.is_crack(edge.tag)
+        };
+        let on_surface = vertex_edges(mesh, v).any(|e| surface(&e));
+        if !n.on_surfaces && on_surface {
             return None;
         }
         let star = mesh.vertex_triangles(v);
@@ -277,11 +275,9 @@ impl Fracture {
             return None;
         }
         let both = crack_directions(th);
-        if surfaces.is_empty() {
+        if !on_surface {
             return Some(both);
         }
-        surfaces.sort_unstable();
-        surfaces.dedup();
         let corners = mesh.triangles()[strongest_triangle as usize].map(|w| mesh.vertex(w));
         let [cx, cy] = [0, 1].map(|i| corners.iter().map(|p| p[i]).sum::<f64>() / 3.0);
         let towards = (cy - y).atan2(cx - x);
@@ -290,9 +286,9 @@ impl Fracture {
         } else {
             both[1]
         };
-        let clear = surfaces
-            .iter()
-            .all(|&e| angle_between(d, angle_of(mesh, v, other_end(mesh, e, v))) >= self.shield);
+        let clear = vertex_edges(mesh, v)
+            .filter(surface)
+            .all(|e| angle_between(d, angle_of(mesh, v, other_end(mesh, e, v))) >= self.shield);
         (clear && crossing(mesh, v, d).is_some()).then_some([d, f64::NAN])
     }
 }
@@ -529,8 +525,8 @@ mod tests {
             fracture.nucleation.as_mut().unwrap().on_surfaces = false;
         }
         fracture.nucleation.as_mut().unwrap().on_surfaces = true;
-        // and a crack across it runs one way: into the plate from its bottom side, and from the notch
-        // into the side whose elements carry the larger traction.
+        // and a crack across it runs one way: into the plate from its bottom side, and from
+        // the notch into the side whose elements carry the larger traction.
         let d = fracture.nucleates(&mesh, vertex_at(&mesh, [0.25, 0.0]), 1e-6, across);
         let d = d.unwrap();
         assert!((d[0] - 0.5 * PI).abs() < 1e-12 && d[1].is_nan(), "{d:?}");
