@@ -243,6 +243,18 @@ impl BlockSystem {
         self.size * self.rank_capacity()
     }
 
+    /// Block `(i, j)`, which must not exist yet, as a dense column-major slice whose entries
+    /// are left over from earlier systems: the caller writes every one of them (this saves
+    /// zeroing a block that is assigned at once).
+    pub fn new_block_mut(&mut self, i: usize, j: usize) -> &mut [f64] {
+        let at = i * self.max_blocks + j;
+        assert!(self.index[at].is_none(), "block ({i}, {j}) exists already");
+        let k = self.new_slot();
+        self.index[at] = Some(Block::Dense(k));
+        let n = self.size * self.size;
+        &mut self.pool[k * n..(k + 1) * n]
+    }
+
     /// Block `(i, j)` as a dense column-major slice, created zero on first use (a factored
     /// block is multiplied out).
     pub fn block_mut(&mut self, i: usize, j: usize) -> &mut [f64] {
@@ -251,13 +263,12 @@ impl BlockSystem {
         &mut self.pool[k * n..(k + 1) * n]
     }
 
-    /// Zeroed factors `U` and `V` (`m x r` column-major each) of a term for [`Self::add_term`].
+    /// Room for the factors `U` and `V` (`m x r` column-major each) of a term for
+    /// [`Self::add_term`]; their entries are left over from earlier terms: the caller writes
+    /// every one of them.
     pub fn term_mut(&mut self, r: usize) -> (&mut [f64], &mut [f64]) {
         let m = self.size;
-        let (u, v) = (&mut self.left[..m * r], &mut self.right[..m * r]);
-        u.fill(0.0);
-        v.fill(0.0);
-        (u, v)
+        (&mut self.left[..m * r], &mut self.right[..m * r])
     }
 
     /// Adds `scale U V^T`, the rank-`r` term left by [`Self::term_mut`], to block `(i, j)`:

@@ -14,6 +14,7 @@
 //! iterations converge quadratically. The Jacobian keeps the ring structure: a nonlinear face
 //! couples only the two elements beside it.
 
+use faer::Accum;
 use sdg_mesh::EdgeId;
 
 use crate::basis::Basis;
@@ -940,8 +941,9 @@ impl ContactFaces {
                         self.outer[k * n + l] = w * pr * pc;
                     }
                 }
-                super::add_kron_sum(
+                super::kron_sum(
                     blocks.block_mut(row, col),
+                    Accum::Add,
                     m,
                     n,
                     fields,

@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
-use faer::{MatMut, MatRef, Par};
+use faer::{Accum, MatMut, MatRef, Par};
 
 use sdg_mesh::{EdgeId, Front, Mesh, TagId, Tent, TriangleId, VertexId};
 
@@ -725,8 +725,9 @@ impl PatchSolver {
                 }
                 self.blocks.add_term(i, j, nf * rank, 1.0);
             }
-            add_kron_sum(
-                self.blocks.block_mut(i, i),
+            kron_sum(
+                self.blocks.new_block_mut(i, i),
+                Accum::Replace,
                 m,
                 n,
                 fields,
@@ -1231,10 +1232,18 @@ impl PatchSolver {
 }
 
 /// Adds the sum of Kronecker products `sum_t scalar_t (x) block_t` to the column-major `m x m`
-/// matrix `target`: entry `(k, l)` of each `n x n` row-major `scalar_t` scales `block_t` at rows
-/// `k fields..`, columns `l fields..`. The blocks are combined per `(k, l)` first, so `target`
-/// is read and written once whatever the number of terms.
-fn add_kron_sum(target: &mut [f64], m: usize, n: usize, fields: usize, terms: &[(&[f64], Matrix)]) {
+/// matrix `target` (`Accum::Add`), or stores it there (`Accum::Replace`, every entry written):
+/// entry `(k, l)` of each `n x n` row-major `scalar_t` scales `block_t` at rows `k fields..`,
+/// columns `l fields..`, with `m = n fields`. The blocks are combined per `(k, l)` first, so
+/// `target` is written once whatever the number of terms.
+fn kron_sum(
+    target: &mut [f64],
+    accum: Accum,
+    m: usize,
+    n: usize,
+    fields: usize,
+    terms: &[(&[f64], Matrix)],
+) {
     for l in 0..n {
         for k in 0..n {
             let mut sum = [[0.0; MAX_FIELDS]; MAX_FIELDS];
@@ -1248,8 +1257,10 @@ fn add_kron_sum(target: &mut [f64], m: usize, n: usize, fields: usize, terms: &[
             }
             for (b, col) in (l * fields..).take(fields).enumerate() {
                 let column = &mut target[col * m + k * fields..][..fields];
-                for (t, row) in column.iter_mut().zip(&sum) {
-                    *t += row[b];
+                let values = column.iter_mut().zip(&sum);
+                match accum {
+                    Accum::Add => values.for_each(|(t, row)| *t += row[b]),
+                    Accum::Replace => values.for_each(|(t, row)| *t = row[b]),
                 }
             }
         }
