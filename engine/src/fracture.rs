@@ -133,7 +133,20 @@ impl Fracture {
             .collect()
     }
 
-    /// The directions (radians) `tip` at vertex `v` extends along, unused entries NaN.
+    /// The directions (radians) `tip` at vertex `v` extends along, unused entries NaN:
+    /// [`Fracture::select`] of the [`Fracture::candidates`] of `stress`.
+    pub fn directions(
+        &self,
+        mesh: &Mesh,
+        v: VertexId,
+        tip: Tip,
+        stress: impl Fn(TriangleId) -> [f64; 3],
+    ) -> [f64; 2] {
+        self.select(mesh, v, tip, &self.candidates(mesh, v, stress))
+    }
+
+    /// The local maxima of the effective traction around vertex `v` above the threshold, with
+    /// tensile normal traction, in every direction: `(direction, traction)` in radians and Pa.
     /// `stress(t)` is the in-plane stress `[sxx, syy, sxy]` (Pa) at `v` in star triangle `t`.
     ///
     /// The effective traction along a direction is taken with the stress of the star triangle
@@ -142,13 +155,12 @@ impl Fracture {
     /// triangle's sector, with jumps at the star's edges. Its local maxima are the tensile
     /// maxima inside a sector ([`tensile_maxima`] on the sector's stress) and the star edges
     /// towards which the traction grows on both sides; a jump alone makes no maximum.
-    pub fn directions(
+    pub fn candidates(
         &self,
         mesh: &Mesh,
         v: VertexId,
-        tip: Tip,
         stress: impl Fn(TriangleId) -> [f64; 3],
-    ) -> [f64; 2] {
+    ) -> Vec<(f64, f64)> {
         let sectors = sectors(mesh, v, stress);
         let traction = |sector: &Sector, d: f64| {
             let (eff, normal) = effective_traction(sector.stress, self.beta, d + 0.5 * PI);
@@ -179,17 +191,34 @@ impl Fracture {
                 found.push((edge, here.min(back)));
             }
         }
+        found
+    }
+
+    /// The directions (radians, unused entries NaN) `tip` at vertex `v` extends along, of the
+    /// local maxima `candidates` (`(direction, traction)`, radians and Pa): those in the forward
+    /// half of its direction of travel and at least the shield angle from every crack edge at
+    /// `v`, the strongest first; a weaker one within the shield angle of a kept one goes.
+    pub fn select(
+        &self,
+        mesh: &Mesh,
+        v: VertexId,
+        tip: Tip,
+        candidates: &[(f64, f64)],
+    ) -> [f64; 2] {
         let crack_edges: Vec<f64> = vertex_edges(mesh, v)
             .filter(|&e| self.is_crack(mesh.edges()[e as usize].tag))
             .map(|e| angle_of(mesh, v, other_end(mesh, e, v)))
             .collect();
-        found.retain(|&(d, _)| {
-            (d - tip.direction).cos() > 1e-9
-                && crack_edges
-                    .iter()
-                    .all(|&c| angle_between(d, c) >= self.shield)
-        });
-        // The strongest first; a weaker one within the shield angle of a kept one goes.
+        let mut found: Vec<(f64, f64)> = candidates
+            .iter()
+            .copied()
+            .filter(|&(d, _)| {
+                (d - tip.direction).cos() > 1e-9
+                    && crack_edges
+                        .iter()
+                        .all(|&c| angle_between(d, c) >= self.shield)
+            })
+            .collect();
         found.sort_by(|p, q| q.1.total_cmp(&p.1).then(p.0.total_cmp(&q.0)));
         let mut out = [f64::NAN; 2];
         let mut kept = 0;
@@ -466,6 +495,45 @@ mod tests {
         // Below the threshold: nothing.
         let d = fracture.directions(&mesh, v, tip, |_| [0.0, 0.5, 0.0]);
         assert!(d.iter().all(|x| x.is_nan()), "{d:?}");
+    }
+
+    /// Ahead of a crack running at 0.8 c_R (PMMA, plane strain) Yoffe's field has
+    /// `sxx = 2.1 syy` on the crack line: the effective traction peaks across the path, at
+    /// +-90 degrees, just outside the forward half, and is least straight ahead.
+    #[test]
+    fn a_tip_whose_stress_runs_along_the_path_finds_its_maxima_across_it_and_none_forward() {
+        let (mesh, fracture) = notched();
+        let v = vertex_at(&mesh, [0.5, 0.5]);
+        let tip = fracture.initial_tips(&mesh)[v as usize].unwrap();
+        let stress = |_| [21.0, 10.0, 0.0];
+        let found = fracture.candidates(&mesh, v, stress);
+        assert!(!found.is_empty());
+        for (d, s) in &found {
+            assert!(
+                (d.cos().abs() < 1e-9) && (s - 21.0).abs() < 1e-9,
+                "{found:?}"
+            );
+        }
+        let d = fracture.select(&mesh, v, tip, &found);
+        assert!(d.iter().all(|x| x.is_nan()), "{d:?}");
+        // With its principal axes turned 15 degrees (clockwise above the path, counterclockwise
+        // below), the maxima enter the forward half, 75 degrees up and down: a branching.
+        let tilted = |t: TriangleId| {
+            let y = mesh.triangles()[t as usize].map(|w| mesh.vertex(w)[1]);
+            let above = y.iter().sum::<f64>() / 3.0 > 0.5;
+            let turn = if above { -15f64 } else { 15.0 }.to_radians();
+            let (s, c) = (2.0 * turn).sin_cos();
+            let (p, q) = (15.5, 5.5);
+            [p + q * c, p - q * c, q * s]
+        };
+        let mut d = fracture
+            .directions(&mesh, v, tip, tilted)
+            .map(f64::to_degrees);
+        d.sort_by(f64::total_cmp);
+        assert!(
+            (d[0] + 75.0).abs() < 1e-9 && (d[1] - 75.0).abs() < 1e-9,
+            "{d:?}"
+        );
     }
 
     #[test]

@@ -102,7 +102,25 @@ impl Solve<'_> {
         let t_mid = 0.5 * (times[0] + times[1]);
         let stress = |t| element_stress(self, mesh, solver, v, t, t_mid);
         let (directions, nucleation) = match state.tips[v as usize] {
-            Some(tip) => (fracture.directions(mesh, v, tip, stress), false),
+            Some(tip) => {
+                let candidates = fracture.candidates(mesh, v, stress);
+                let directions = fracture.select(mesh, v, tip, &candidates);
+                if !candidates.is_empty() {
+                    let [x, y] = mesh.vertex(v);
+                    let degrees_mpa = |(d, s): (f64, f64)| (d.to_degrees(), s * 1e-6);
+                    tracing::debug!(
+                        vertex = v,
+                        x,
+                        y,
+                        t = t_mid,
+                        travel = tip.direction.to_degrees(),
+                        maxima = ?candidates.iter().copied().map(degrees_mpa).collect::<Vec<_>>(),
+                        chosen = ?directions.map(f64::to_degrees),
+                        "propagation test (degrees, MPa)"
+                    );
+                }
+                (directions, false)
+            }
             None => (fracture.nucleates(mesh, v, times[1], stress)?, true),
         };
         directions[0].is_finite().then_some(Extension {
