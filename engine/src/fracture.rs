@@ -134,8 +134,10 @@ impl Fracture {
     }
 
     /// The directions (radians) `tip` at vertex `v` extends along, unused entries NaN:
-    /// [`Fracture::select`] of the [`Fracture::candidates`] of `stress`.
-    pub fn directions(
+    /// [`Fracture::select`] of the [`Fracture::candidates`] of `stress` (runs call the two
+    /// apart, to log the candidates).
+    #[cfg(test)]
+    fn directions(
         &self,
         mesh: &Mesh,
         v: VertexId,
