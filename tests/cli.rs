@@ -629,6 +629,36 @@ fn a_run_stops_when_its_wall_time_is_up() {
     assert!(out_dir.join("checkpoints/checkpoint_000000.sdgc").exists());
 }
 
+/// A crack run stopped early leaves the crack outputs of its front as it is: events, crack
+/// edges and their pictures.
+#[test]
+fn a_stopped_crack_run_leaves_its_crack_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("out");
+    let out = sdg(&[
+        "run",
+        repo("configs/crack_growth.toml").to_str().unwrap(),
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--set",
+        "limits.max_wall_time_s=1e-9",
+        "--force",
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    for name in [
+        "events.csv",
+        "cracks.csv",
+        "crack_path.png",
+        "crack_tips.csv",
+    ] {
+        assert!(out_dir.join(name).is_file(), "{name}");
+    }
+    // The notch's edges, from x = 0 to 1 mm on y = 1 mm.
+    let cracks = std::fs::read_to_string(out_dir.join("cracks.csv")).unwrap();
+    assert_eq!(cracks.lines().count(), 1 + 16, "{cracks}");
+}
+
 #[test]
 fn a_traced_run_replays_on_more_workers() {
     let (dir, config) = config_file(CONFIG);

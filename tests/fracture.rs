@@ -1,5 +1,6 @@
 //! Crack propagation (`[fracture]`, seed 4.3.2) on `configs/crack_growth.toml`: a notch under
-//! symmetric mode-I waves grows straight ahead on new damage edges that debond behind it, the
+//! symmetric mode-I waves grows straight ahead on new damage edges that debond behind it and
+//! branches both ways, the
 //! energy balance holds, and the crack pattern is bitwise the same for any thread count; and
 //! the load of the seed's branching plate, `configs/crack_branching.toml`.
 
@@ -26,7 +27,7 @@ fn events(dir: &Path) -> (Vec<Vec<f64>>, Vec<String>) {
 }
 
 #[test]
-fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
+fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branches_both_ways() {
     let problem = shipped(
         "crack_growth.toml",
         &["time.end=1.1e-6", "output.snapshot_times=[1.1e-6]"],
@@ -34,23 +35,52 @@ fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
     let (summary, dir) = solve(&problem, 2, true);
     let (rows, kinds) = events(dir.path());
     let fracture = summary.fracture.as_ref().expect("fracture summary");
-    assert!(fracture.extensions >= 6, "{fracture:?}");
     assert_eq!(
         (fracture.branchings, fracture.arrests),
-        (0, 0),
+        (1, 0),
         "{fracture:?}"
     );
-    // Every extension runs along y = 1 mm, each from where the last one ended.
+    // Every extension runs along y = 1 mm, each from where the last one ended, until the tip
+    // branches: then one edge goes up and one down, mirror images to a degree.
     let mut x = 1e-3;
-    for (row, kind) in rows.iter().zip(&kinds) {
-        if kind != "extension" {
-            continue;
+    let mut straight = 0;
+    let extensions: Vec<&Vec<f64>> = rows
+        .iter()
+        .zip(&kinds)
+        .filter(|(_, kind)| *kind == "extension")
+        .map(|(row, _)| row)
+        .collect();
+    for row in &extensions {
+        if row[4] != 1e-3 {
+            break;
         }
-        assert_eq!([row[1], row[2], row[4]], [x, 1e-3, 1e-3], "{row:?}");
+        assert_eq!([row[1], row[2]], [x, 1e-3], "{row:?}");
         assert!(row[3] > x, "{row:?}");
         x = row[3];
+        straight += 1;
     }
-    assert!((fracture.total_length - (x - 1e-3)).abs() < 1e-15);
+    assert!(straight >= 5, "{extensions:?}");
+    let fork = [extensions[straight], extensions[straight + 1]];
+    let angles = fork.map(|e| {
+        assert_eq!([e[1], e[2]], [x, 1e-3], "{e:?}");
+        (e[4] - e[2]).atan2(e[3] - e[1]).to_degrees()
+    });
+    assert!(
+        angles[0] * angles[1] < 0.0 && (angles[0] + angles[1]).abs() < 1.0,
+        "{angles:?}"
+    );
+    assert!((10.0..45.0).contains(&angles[0].abs()), "{angles:?}");
+    let branching = kinds.iter().position(|k| k == "branching").unwrap();
+    assert_eq!(rows[branching][1..3], [x, 1e-3]);
+    // The mesh refused both splits when the tip's tent tested it (the front too steep over the
+    // crossed triangles for their thin children) and made them when a neighbour's tent retried
+    // them, at the tip's same front time: a branching made whole or not at all.
+    let refused = rows
+        .iter()
+        .zip(&kinds)
+        .filter(|(r, kind)| *kind == "refused" && r[..3] == rows[branching][..3])
+        .count();
+    assert_eq!(refused, 2, "{rows:?} {kinds:?}");
     // The first new edges are debonded (D = 1 up to the polynomial's overshoot).
     let cracks = csv_columns(
         &dir.path().join("cracks.csv"),
@@ -64,7 +94,8 @@ fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
     );
     let debonded = new.iter().filter(|c| c[3] > 0.95).count();
     assert!(debonded >= 4, "{new:?}");
-    // The snapshot's crack surfaces (`cracks_0000.vtu`) carry the damage of the new edges too.
+    // The snapshot's crack surfaces (`cracks_0000.vtu`) carry the damage of the new edges too:
+    // at least three of the straight ones are debonded at both ends.
     let slice = VtuGrid::read(&dir.path().join("cracks_0000.vtu")).unwrap();
     let damage = slice
         .point_data
@@ -80,14 +111,14 @@ fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
         .filter(|d| *d > 0.95)
         .count();
     assert!(
-        debonded_ends >= 2 * 4,
+        debonded_ends >= 2 * 3,
         "{debonded_ends} debonded segment ends"
     );
     assert!(summary.energy.fracture_energy > 0.0);
     assert!(dir.path().join("crack_path.png").is_file());
     assert!(dir.path().join("crack_zoom.png").is_file());
-    // One branch: its tip (where the damage reaches 1) runs along y = 1 mm behind the newest
-    // crack edge, slower than the dilatational wave. (On these 62.5 um p = 1 edges its fitted
+    // Up to the branching, branch 0's tip (where the damage reaches 1) runs along y = 1 mm
+    // behind the newest crack edge, slower than the dilatational wave. (On these 62.5 um p = 1 edges its fitted
     // speed reaches 1.08 c_R, over 13 states: the config shows the machinery, not converged
     // speeds; `configs/damage_mode1.toml` checks c_R on a resolved path.)
     let tips = csv_columns(
@@ -95,11 +126,15 @@ fn a_notch_under_mode_one_grows_straight_ahead_and_debonds_behind_its_tip() {
         &["t_s", "branch", "x_m", "y_m", "extension_m"],
     );
     assert!(tips.len() >= 8, "{tips:?}");
-    for t in &tips {
+    for t in tips.iter().filter(|t| t[2] < x) {
         assert_eq!([t[1], t[3]], [0.0, 1e-3], "{t:?}");
-        assert!((1e-3..x).contains(&t[2]), "{t:?}");
+        assert!(t[2] >= 1e-3, "{t:?}");
     }
-    assert!(tips.windows(2).all(|w| w[0][4] <= w[1][4]));
+    // Each branch's rows in time order, its extension growing.
+    assert!(
+        tips.windows(2)
+            .all(|w| w[0][1] != w[1][1] || w[0][4] <= w[1][4])
+    );
     let crack = summary.crack.expect("crack tips summary");
     let c_d = problem.material.c_d();
     assert!(crack.max_speed > 0.0 && crack.max_speed < c_d, "{crack:?}");
@@ -146,16 +181,16 @@ fn the_crack_wake_is_merged_where_fully_debonded() {
 
 #[test]
 fn the_crack_pattern_is_bitwise_the_same_for_one_two_and_four_threads() {
-    // Up to just after the first branching and a branch's arrest on the other.
+    // Up to just after the first branching (at 1.01 us).
     let problem = shipped(
         "crack_growth.toml",
-        &["time.end=1.2e-6", "output.png=false"],
+        &["time.end=1.05e-6", "output.png=false"],
     );
     let (one, a) = solve(&problem, 1, true);
     let (two, b) = solve(&problem, 2, true);
     let fracture = one.fracture.as_ref().unwrap();
     assert!(fracture.branchings >= 1, "{fracture:?}");
-    // The notch tip is at x = 1 mm; the config's comment has the branching at x = 1.44 mm.
+    // The notch tip is at x = 1 mm; the config's comment has the branching at x = 1.31 mm.
     let distance = fracture.first_branching_distance.unwrap();
     assert!((0.3e-3..0.6e-3).contains(&distance), "{fracture:?}");
     assert_eq!(one.state_hash, two.state_hash);

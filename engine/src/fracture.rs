@@ -56,6 +56,21 @@ pub struct Nucleation {
 pub struct Tip {
     pub direction: f64,
     pub branch: u32,
+    /// The directions of the tip's last propagation test that the mesh could not take then.
+    #[serde(default)]
+    pub pending: Option<Pending>,
+}
+
+/// Directions (radians, unused entries NaN) a tip's propagation test chose when no extension
+/// could be made: a split the crack needed was refused, as the front over the crossed triangle
+/// was too steep for its thin child ([`sdg_mesh::Pitcher::may_split_at`]). The front's time
+/// over that triangle changes as its corners are pitched in turn, so the extension is tried
+/// again after each tent of a neighbour of the tip, while the tip stays at `time` (s, its front
+/// time at the test); the tip's next tent makes a new test instead.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Pending {
+    pub directions: [f64; 2],
+    pub time: f64,
 }
 
 /// Where a direction from a vertex leaves its star: across the edge `edge` of triangle
@@ -126,6 +141,7 @@ impl Fracture {
                 let tip = Tip {
                     direction: angle_of(mesh, other_end(mesh, edges[0], v), v),
                     branch,
+                    pending: None,
                 };
                 branch += 1;
                 Some(tip)
@@ -255,6 +271,12 @@ impl Fracture {
 }
 
 impl Fracture {
+    /// True when the edges from `v` to its neighbours `a` and `b` are distinct and at least the
+    /// shield angle apart.
+    pub fn apart(&self, mesh: &Mesh, v: VertexId, a: VertexId, b: VertexId) -> bool {
+        a != b && angle_between(angle_of(mesh, v, a), angle_of(mesh, v, b)) >= self.shield
+    }
+
     /// The directions (radians, unused entries NaN) of a crack nucleating at the top of the
     /// tent pole of vertex `v` that reached `t_new` (s), if one does: the largest effective
     /// traction over orientations and over the star's elements (`stress(t)`, Pa, at the middle

@@ -283,7 +283,7 @@ fn deadline(limit_s: f64, max_wall_time_s: Option<f64>) -> Option<(Instant, Stri
 impl Solve<'_> {
     /// Writes what a run that stops before the end has produced so far: the history up to now
     /// (a row for the front as it is), the probes, the crack tips crossed so far and the
-    /// fracture events; complete snapshots are already written.
+    /// fracture outputs of the front as it is; complete snapshots are already written.
     fn write_partial_outputs(&self, state: &Frontier, dir: &Path) -> Result<(), EngineError> {
         let config = &self.problem.loaded.config;
         let mut book = self.book.lock();
@@ -299,11 +299,45 @@ impl Solve<'_> {
         if let Some((csv, _)) = self.crack_tips(&state.mesh, &book) {
             self.write_crack_tips(dir, &csv, config.time.end)?;
         }
-        if self.problem.fracture.is_some() {
-            let events = propagation::events_csv(&book.fracture_events);
-            write_atomic(dir, "events.csv", events.as_bytes())?;
-        }
+        self.write_fracture(state, &book.fracture_events, dir)?;
         self.write_probes(dir, &mut book)
+    }
+
+    /// With `[fracture]`: `events.csv` (`events`), `cracks.csv` and, with `output.png`,
+    /// `crack_path.png` and `crack_zoom.png` of the crack edges on the front of `state`.
+    fn write_fracture(
+        &self,
+        state: &Frontier,
+        events: &[propagation::FractureEvent],
+        dir: &Path,
+    ) -> Result<(), EngineError> {
+        let Some(fracture) = &self.problem.fracture else {
+            return Ok(());
+        };
+        let config = &self.problem.loaded.config;
+        write_atomic(
+            dir,
+            "events.csv",
+            propagation::events_csv(events).as_bytes(),
+        )?;
+        let order = config.solver.order;
+        let cracks = propagation::crack_edges(
+            &state.mesh,
+            &state.solution,
+            fracture,
+            order,
+            |tag| match self.problem.interfaces.law(tag) {
+                sdg_solver::interface::Law::Damage(d) => d.initial,
+                _ => 1.0,
+            },
+        );
+        if config.output.png {
+            let time = state.front.min_time();
+            propagation::write_crack_path_png(dir, &state.mesh, &cracks, fracture.tag, time);
+        }
+        let csv = propagation::cracks_csv(&state.mesh, &cracks);
+        write_atomic(dir, "cracks.csv", csv.as_bytes())?;
+        Ok(())
     }
 
     /// `crack_tips.csv` and its summary from the tip crossings recorded so far: per crack
@@ -525,6 +559,16 @@ impl<'a> Work<'a> for Solve<'a> {
                     events.push(Box::new(move |state: &mut Frontier| {
                         self.traced(|| self.extend(state, v, &extension))
                     }));
+                }
+                if self.problem.fracture.is_some() {
+                    // The tent changed the front over the triangles of its neighbours' stars.
+                    for &u in state.mesh.vertex_neighbors(v) {
+                        if let Some(retry) = Extension::retry(state, u) {
+                            events.push(Box::new(move |state: &mut Frontier| {
+                                self.traced(|| self.extend(state, u, &retry))
+                            }));
+                        }
+                    }
                 }
                 (t_old, t_new, pitching_s, report)
             }
@@ -1068,25 +1112,7 @@ fn run_job(
     if let Some(csv) = crack_csv {
         solve.write_crack_tips(&dir, &csv, t_end)?;
     }
-    if let Some(fracture) = &problem.fracture {
-        write_atomic(
-            &dir,
-            "events.csv",
-            propagation::events_csv(&book.fracture_events).as_bytes(),
-        )?;
-        let cracks =
-            propagation::crack_edges(mesh, solution, fracture, config.solver.order, |tag| {
-                match problem.interfaces.law(tag) {
-                    sdg_solver::interface::Law::Damage(d) => d.initial,
-                    _ => 1.0,
-                }
-            });
-        if config.output.png {
-            propagation::write_crack_path_png(&dir, mesh, &cracks, fracture.tag, front.min_time());
-        }
-        let csv = propagation::cracks_csv(mesh, &cracks);
-        write_atomic(&dir, "cracks.csv", csv.as_bytes())?;
-    }
+    solve.write_fracture(&state, &book.fracture_events, &dir)?;
     solve.write_trace(options)?;
     summary.timings.output_s += finishing.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";

@@ -6,11 +6,14 @@
 //! event extends it: per direction, the crack takes the existing edge of the tip's star when the
 //! direction crosses the opposite edge near one of its ends (`snap`) and that edge keeps to the
 //! rules ([`Fracture::may_take`]), and otherwise splits that edge where the direction crosses it
-//! ([`Frontier::split_at`] towards the tip). The new edge
-//! takes the crack tag (a damage interface, bonded at first: nothing on the front changes) and
-//! its far end becomes a tip, unless it lies on the boundary or on another crack (the crack
-//! arrests there). A crossing of a crack edge arrests the tip. Two directions make a branch:
-//! the first keeps the tip's branch id, the second takes a new one.
+//! ([`Frontier::split_at`] towards the tip), or, where no split may be that short, takes an end
+//! within the rules. The new edge takes the crack tag (a damage interface, bonded at first:
+//! nothing on the front changes) and its far end becomes a tip, unless it lies on the boundary
+//! or on another crack (the crack arrests there). A crossing of a crack edge arrests the tip.
+//! Two directions make a branch: the first keeps the tip's branch id, the second takes a new
+//! one. A tip makes all its edges or none: when the mesh refuses one, the tip keeps its
+//! directions ([`Pending`]) and tries again after each tent of a neighbour, until its own next
+//! tent tests anew.
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -26,7 +29,7 @@ use serde::Serialize;
 
 use super::Solve;
 use super::crack_output::{self, CrackSummary, TipState};
-use crate::fracture::{self, Fracture, Tip};
+use crate::fracture::{self, Fracture, Pending, Tip};
 use crate::frontier::Frontier;
 use crate::plot::{FieldPlot, Values};
 
@@ -42,6 +45,23 @@ pub(super) struct Extension {
     directions: [f64; 2],
     /// A crack nucleates at the vertex (it is no tip): both directions are new branches.
     nucleation: bool,
+    /// A tip's [`Pending`] directions, tried again after a neighbour's tent: made only while
+    /// the tip stays where its test left it, and a refusal is not recorded again.
+    retry: bool,
+}
+
+impl Extension {
+    /// The retry of the pending directions of the tip at `v`, when it has fresh ones (its
+    /// front time is still that of its test).
+    pub(super) fn retry(state: &Frontier, v: VertexId) -> Option<Extension> {
+        let pending = state.tips[v as usize]?.pending?;
+        (state.front.time(v) == pending.time).then(|| Extension {
+            at: state.mesh.vertex(v),
+            directions: pending.directions,
+            nucleation: false,
+            retry: true,
+        })
+    }
 }
 
 /// One line of `events.csv`.
@@ -69,7 +89,8 @@ pub struct FractureSummary {
     pub branchings: u64,
     /// Tips that stopped on a crack or the boundary.
     pub arrests: u64,
-    /// Extensions the mesh could not make yet (the split was refused); the tip tries again.
+    /// New crack edges the mesh could not make when their tip was tested; the tip tries again
+    /// after its neighbours' tents.
     pub refused: u64,
     /// Merges of two fully debonded crack edges into one by coarsening (the crack's wake).
     pub wake_coarsenings: u64,
@@ -127,6 +148,7 @@ impl Solve<'_> {
             at: mesh.vertex(v),
             directions,
             nucleation,
+            retry: false,
         })
     }
 
@@ -154,89 +176,83 @@ impl Solve<'_> {
         } else {
             tip.is_some() && !fracture.crack_edges(mesh, v).is_empty()
         };
-        if !still {
+        let fresh = || Extension::retry(state, v).is_some();
+        if !still || (extension.retry && !fresh()) {
             return Changed::default();
         }
         let time = state.front.time(v);
+        let at = mesh.vertex(v);
         let mut changed = Changed::default();
+        // First the far ends of the new edges, splitting edges where the directions need it.
+        let mut plans: Vec<Plan> = Vec::new();
+        for &d in extension.directions.iter().filter(|d| d.is_finite()) {
+            let plan = self.plan(fracture, state, (v, tip), d, &mut changed);
+            let plan = match plan {
+                // Two new edges keep the shield angle between them (snapping may turn them).
+                Plan::Edge(w)
+                    if plans.iter().any(|&other| match other {
+                        Plan::Edge(u) => !fracture.apart(&state.mesh, v, u, w),
+                        _ => false,
+                    }) =>
+                {
+                    Plan::Refused
+                }
+                plan => plan,
+            };
+            plans.push(plan);
+        }
+        // A later split's closure may have split an earlier new edge.
+        for plan in &mut plans {
+            if let Plan::Edge(w) = *plan
+                && state.mesh.edge_between(v, w).is_none()
+            {
+                *plan = Plan::Refused;
+            }
+        }
+        let refused = plans.iter().filter(|&&p| p == Plan::Refused).count();
+        let event = |kind: &'static str, branch, to| FractureEvent {
+            time,
+            kind: kind.into(),
+            branch,
+            from: at,
+            to,
+        };
         let mut events = Vec::new();
         if extension.nucleation {
-            let at = mesh.vertex(v);
-            events.push(FractureEvent {
+            events.push(event("nucleation", Some(state.next_branch), at));
+        }
+        if !extension.retry {
+            let branch = tip.map(|tip| tip.branch);
+            events.extend((0..refused).map(|_| event("refused", branch, at)));
+        }
+        // A tip makes all its edges or none (a branching is not lost half-made); its splits
+        // stay as refinements, and the same directions are tried again after neighbours' tents.
+        if let Some(tip) = &mut state.tips[v as usize]
+            && refused > 0
+        {
+            tip.pending = Some(Pending {
+                directions: extension.directions,
                 time,
-                kind: "nucleation".into(),
-                branch: Some(state.next_branch),
-                from: at,
-                to: at,
             });
+            self.book.lock().fracture_events.extend(events);
+            return sorted(changed);
         }
         let mut extended = 0;
-        for &d in extension.directions.iter().filter(|d| d.is_finite()) {
-            let mesh = &state.mesh;
-            let at = mesh.vertex(v);
-            let Some(c) = fracture::crossing(mesh, v, d) else {
-                continue;
+        for plan in plans {
+            // Each half of a nucleated crack is a new branch, travelling its way; so is a
+            // tip's second direction.
+            let (branch, new_branch) = match tip {
+                Some(tip) if extended == 0 => (tip.branch, false),
+                _ => (state.next_branch, true),
             };
-            // Each half of a nucleated crack is a new branch, travelling its way.
-            let (tip, new_branch) = match tip {
-                Some(tip) if extended == 0 => (tip, false),
-                Some(tip) => (
-                    Tip {
-                        branch: state.next_branch,
-                        ..tip
-                    },
-                    true,
-                ),
-                None => (
-                    Tip {
-                        direction: d,
-                        branch: state.next_branch,
-                    },
-                    true,
-                ),
-            };
-            let branch = tip.branch;
-            let event = |kind: &'static str, to| FractureEvent {
-                time,
-                kind: kind.into(),
-                branch: Some(branch),
-                from: at,
-                to,
-            };
-            if fracture.is_crack(mesh.edges()[c.edge as usize].tag) {
-                events.push(event("arrest", at));
-                state.tips[v as usize] = None;
-                continue;
-            }
-            let [p, q] = mesh.edges()[c.edge as usize].vertices;
-            let near = if c.fraction < fracture.snap {
-                Some(p)
-            } else if c.fraction > 1.0 - fracture.snap {
-                Some(q)
-            } else {
-                None
-            };
-            let target = near.filter(|&w| fracture.may_take(mesh, v, tip, d, w));
-            let target = match target {
-                Some(w) => w,
-                None => match self.split_at(state, c.triangle, Some(c.corner), c.fraction) {
-                    Ok((true, more, new)) => {
-                        changed.offer.extend(more.offer);
-                        changed.below_end += more.below_end;
-                        *new.last().expect("a split adds a vertex")
-                    }
-                    Ok((false, more, _)) => {
-                        changed.offer.extend(more.offer);
-                        changed.below_end += more.below_end;
-                        events.push(event("refused", at));
-                        continue;
-                    }
-                    Err(_) => {
-                        // A child would be degenerate (a very flat triangle): as refused.
-                        events.push(event("refused", at));
-                        continue;
-                    }
-                },
+            let target = match plan {
+                Plan::Refused => continue,
+                Plan::Arrest => {
+                    events.push(event("arrest", Some(branch), at));
+                    state.tips[v as usize] = None;
+                    continue;
+                }
+                Plan::Edge(w) => w,
             };
             let mesh = &mut state.mesh;
             let edge = mesh
@@ -245,32 +261,112 @@ impl Solve<'_> {
             let joins = !fracture.crack_edges(mesh, target).is_empty();
             mesh.set_tag(edge, Some(fracture.tag));
             let to = mesh.vertex(target);
-            events.push(event("extension", to));
+            events.push(event("extension", Some(branch), to));
             if new_branch {
                 state.next_branch += 1;
             }
             extended += 1;
             changed.offer.extend([v, target]);
             if joins || fracture::on_boundary(&state.mesh, target) {
-                events.push(event("arrest", to));
+                events.push(event("arrest", Some(branch), to));
             } else {
                 state.tips[target as usize] = Some(Tip {
                     direction: (to[1] - at[1]).atan2(to[0] - at[0]),
                     branch,
+                    pending: None,
                 });
             }
             state.tips[v as usize] = None;
         }
+        if extension.nucleation && extended == 0 {
+            // Both ways ran into cracks at once (or the mesh refused them): nothing nucleated.
+            return sorted(changed);
+        }
         if extended == 2 && !extension.nucleation {
-            let mut branching = events[0].clone();
+            let mut branching = events
+                .iter()
+                .find(|e| e.kind == "extension")
+                .expect("two extensions")
+                .clone();
             branching.kind = "branching".into();
             events.push(branching);
         }
         self.book.lock().fracture_events.extend(events);
-        changed.offer.sort_unstable();
-        changed.offer.dedup();
-        changed
+        sorted(changed)
     }
+
+    /// Where the crack of `fracture` from the tip at `v` (`tip`; `None` at a nucleation site)
+    /// in direction `d` (radians) ends its new edge: the end of the crossed edge near the
+    /// crossing when the rules allow, else a split of that edge where the direction crosses it,
+    /// else (when no split can be that short) an end within the rules. Splits made are added to
+    /// `changed`.
+    fn plan(
+        &self,
+        fracture: &Fracture,
+        state: &mut Frontier,
+        (v, tip): (VertexId, Option<Tip>),
+        d: f64,
+        changed: &mut Changed,
+    ) -> Plan {
+        let mesh = &state.mesh;
+        let Some(c) = fracture::crossing(mesh, v, d) else {
+            return Plan::Refused;
+        };
+        if fracture.is_crack(mesh.edges()[c.edge as usize].tag) {
+            return Plan::Arrest;
+        }
+        let tip = tip.unwrap_or(Tip {
+            direction: d,
+            branch: 0,
+            pending: None,
+        });
+        // The edge's ends, the one nearer the crossing first.
+        let [p, q] = mesh.edges()[c.edge as usize].vertices;
+        let ends = if c.fraction < 0.5 { [p, q] } else { [q, p] };
+        let may_take = |mesh: &Mesh, w: VertexId| fracture.may_take(mesh, v, tip, d, w);
+        let near_end = c.fraction.min(1.0 - c.fraction);
+        if near_end < fracture.snap && may_take(mesh, ends[0]) {
+            return Plan::Edge(ends[0]);
+        }
+        if near_end * fracture::distance(mesh, p, q) < self.min_edge {
+            // No split is allowed there, now or later.
+            return ends
+                .into_iter()
+                .find(|&w| may_take(mesh, w))
+                .map_or(Plan::Refused, Plan::Edge);
+        }
+        match self.split_at(state, c.triangle, Some(c.corner), c.fraction) {
+            Ok((split, more, new)) => {
+                changed.offer.extend(more.offer);
+                changed.below_end += more.below_end;
+                if split {
+                    Plan::Edge(*new.last().expect("a split adds a vertex"))
+                } else {
+                    Plan::Refused
+                }
+            }
+            // A child would be degenerate (a very flat triangle): as refused.
+            Err(_) => Plan::Refused,
+        }
+    }
+}
+
+/// `changed` with its offered vertices sorted and without repeats.
+fn sorted(mut changed: Changed) -> Changed {
+    changed.offer.sort_unstable();
+    changed.offer.dedup();
+    changed
+}
+
+/// How a direction of an extension ends its new edge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Plan {
+    /// At this vertex, a neighbour of the tip.
+    Edge(VertexId),
+    /// The direction crosses a crack: the tip arrests.
+    Arrest,
+    /// The mesh cannot make the edge now.
+    Refused,
 }
 
 /// The in-plane stress (Pa) at the tent's vertex `v` at time `t` (s), the middle of its pole, in
