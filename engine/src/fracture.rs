@@ -683,4 +683,39 @@ mod tests {
             assert_eq!(mesh.triangles()[c.triangle as usize][c.corner], v);
         }
     }
+
+    /// Checkpoints carry a tip's pending directions (CBOR, as `checkpoint_NNNNNN.sdgc`), NaN
+    /// entries included, and read a tip written before they existed as one with none.
+    #[test]
+    fn a_tip_s_pending_directions_survive_a_checkpoint() {
+        let tip = Tip {
+            direction: 0.25,
+            branch: 3,
+            pending: Some(Pending {
+                directions: [-0.5, f64::NAN],
+                time: 1.25e-6,
+            }),
+        };
+        let mut bytes = Vec::new();
+        ciborium::into_writer(&tip, &mut bytes).unwrap();
+        let read: Tip = ciborium::from_reader(bytes.as_slice()).unwrap();
+        let pending = read.pending.unwrap();
+        assert_eq!((read.direction, read.branch), (0.25, 3));
+        assert_eq!(pending.directions[0], -0.5);
+        assert!(pending.directions[1].is_nan());
+        assert_eq!(pending.time, 1.25e-6);
+        #[derive(serde::Serialize)]
+        struct Before {
+            direction: f64,
+            branch: u32,
+        }
+        let mut bytes = Vec::new();
+        let before = Before {
+            direction: 0.25,
+            branch: 3,
+        };
+        ciborium::into_writer(&before, &mut bytes).unwrap();
+        let read: Tip = ciborium::from_reader(bytes.as_slice()).unwrap();
+        assert_eq!(read.pending, None);
+    }
 }
