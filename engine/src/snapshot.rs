@@ -257,6 +257,20 @@ impl Snapshots {
         }
     }
 
+    /// False when no pending snapshot plane can cut an element whose vertices' times all lie in
+    /// `[lo, hi]` (s), so that [`Snapshots::add_element`] would do nothing with it: callers may
+    /// then skip loading the element. Conservative (a relative margin of 1e-9 on top of each
+    /// plane's band), never false for an element `add_element` would slice.
+    pub fn pending_within(&self, lo: f64, hi: f64) -> bool {
+        let (lo, hi) = (self.c_ref * lo, self.c_ref * hi);
+        let slack = 1e-9 * lo.abs().max(hi.abs());
+        let pending = &self.snapshots[self.next..];
+        let first = pending.partition_point(|s| s.tau + s.tol + slack < lo);
+        pending
+            .get(first)
+            .is_some_and(|s| s.tau - s.tol - slack <= hi)
+    }
+
     /// Cuts the element with vertices `vertices` ([x, y, tau]) by every pending snapshot plane it
     /// crosses and records the slice polygons (a triangle, or a quadrilateral split into two
     /// triangles), evaluating `eval` at each polygon corner (a point `[x, y, tau_s]` of the
@@ -740,6 +754,21 @@ mod tests {
     }
 
     const TIMES: [f64; 5] = [0.0, 0.3, 1.0, 1.7, 2.0];
+
+    #[test]
+    fn elements_between_pending_planes_are_told_apart_from_those_they_cut() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut snaps = Snapshots::new(&[0.3, 1.0], 2.0, dir.path().to_path_buf());
+        assert!(snaps.pending_within(0.1, 0.3), "touches the first plane");
+        assert!(snaps.pending_within(0.2, 0.5));
+        assert!(snaps.pending_within(0.9, 1.2));
+        assert!(!snaps.pending_within(0.0, 0.29));
+        assert!(!snaps.pending_within(0.31, 0.99), "between the planes");
+        assert!(!snaps.pending_within(1.01, 2.0));
+        assert_eq!(snaps.flush(0.5).unwrap(), 1);
+        assert!(!snaps.pending_within(0.1, 0.5), "the first is written");
+        assert!(snaps.pending_within(0.5, 1.0));
+    }
 
     /// Feeds `elements` in the given order and checks the five snapshots of `TIMES`.
     fn run(elements: &[[[f64; 3]; 4]]) {

@@ -1,6 +1,7 @@
 //! Deterministic mode: rounds of an independent set of ready vertices.
 //!
-//! Each round scans the front for ready vertices (local minima below the end time), sorts them by
+//! Each round finds the ready vertices (local minima below the end time; after the first round
+//! only those whose neighbourhood the last round or its events changed are examined), sorts them by
 //! `(time, id)` and greedily takes every vertex none of whose neighbours is taken. The taken
 //! tents do not read each other's data (they are not neighbours), so solving them in parallel in
 //! any order gives the same bits; their outcomes are recorded in the round's order, and queued
@@ -50,8 +51,14 @@ pub(crate) fn run<'a, W: Work<'a>>(
     };
     let per_thread: Vec<AtomicUsize> = (0..threads).map(|_| AtomicUsize::new(0)).collect();
     let (event_time, wait_time) = (Clock::default(), Clock::default());
+    // The ready vertices with their times. A round takes every ready vertex (it is chosen or
+    // beside a chosen one) and changes the front only at its chosen vertices, so the next
+    // round's ready vertices are among the taken ones (listed in `touched`). After events
+    // (which may renumber vertices) the whole front is scanned again.
     let mut ready: Vec<(f64, VertexId)> = Vec::with_capacity(n);
     let mut taken = vec![false; n];
+    let mut touched: Vec<VertexId> = Vec::with_capacity(n);
+    let mut scan_all = true;
     let outcome = std::thread::scope(|s| {
         for (id, mut scratch) in scratch.into_iter().enumerate() {
             let (round, barrier, done, events, per_thread, state, wait_time) = (
@@ -99,12 +106,19 @@ pub(crate) fn run<'a, W: Work<'a>>(
             loop {
                 let guard = state.read();
                 let s: &W::State = &guard;
+                if scan_all {
+                    touched.clear();
+                    touched.extend(0..n as VertexId);
+                    scan_all = false;
+                }
                 ready.clear();
                 ready.extend(
-                    (0..n as VertexId)
-                        .filter(|&v| is_ready(s, t_end, v))
-                        .map(|v| (s.front().time(v), v)),
+                    touched
+                        .iter()
+                        .filter(|&&v| is_ready(s, t_end, v))
+                        .map(|&v| (s.front().time(v), v)),
                 );
+                touched.clear();
                 if ready.is_empty() {
                     let remaining = below_end(s, t_end);
                     return if remaining == 0 {
@@ -125,8 +139,12 @@ pub(crate) fn run<'a, W: Work<'a>>(
                         if !taken[v as usize] {
                             r.chosen.push(v);
                             taken[v as usize] = true;
+                            touched.push(v);
                             for &w in s.mesh().vertex_neighbors(v) {
-                                taken[w as usize] = true;
+                                if !taken[w as usize] {
+                                    taken[w as usize] = true;
+                                    touched.push(w);
+                                }
                             }
                         }
                     }
@@ -159,6 +177,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                     action(&mut **guard);
                     events.pending.fetch_sub(1, Ordering::AcqRel);
                     stats.events += 1;
+                    scan_all = true;
                 }
                 event_time.add_since(running);
                 n = guard.mesh().vertices().len();

@@ -432,3 +432,108 @@ fn panics_end_the_run_with_their_message() {
         }
     }
 }
+
+/// Pitches tents and lists them in the order they are recorded; every `event_every`-th record
+/// queues an event that changes nothing.
+struct Listed<'m> {
+    mesh: PhantomData<&'m Mesh>,
+    pitcher: Pitcher,
+    order: Mutex<Vec<VertexId>>,
+    event_every: usize,
+}
+
+impl<'a, 'm: 'a> Work<'a> for Listed<'m> {
+    type State = Fixed<'m>;
+    type Scratch = ();
+    type Outcome = ();
+    type Error = String;
+
+    fn tent(
+        &self,
+        state: &Fixed<'m>,
+        _: &mut (),
+        v: VertexId,
+        _: &Events<'a, Fixed<'m>>,
+    ) -> Result<(f64, ()), String> {
+        let tent = self
+            .pitcher
+            .pitch(state.mesh, state.front, v)
+            .ok_or(format!("{v} not pitchable"))?;
+        Ok((tent.t_new, ()))
+    }
+
+    fn record(
+        &'a self,
+        _: &Fixed<'m>,
+        v: VertexId,
+        (): (),
+        events: &Events<'a, Fixed<'m>>,
+    ) -> Result<(), String> {
+        let mut order = self.order.lock();
+        order.push(v);
+        if order.len() % self.event_every == 0 {
+            events.push(Box::new(|_: &mut Fixed<'m>| Changed::default()));
+        }
+        Ok(())
+    }
+}
+
+/// The rounds by definition: scan the whole front for ready vertices, sort them by time and id,
+/// take greedily every vertex none of whose neighbours is taken, pitch them; repeat.
+fn rounds_by_full_scans(mesh: &Mesh, t_end: f64) -> Vec<VertexId> {
+    let n = mesh.vertices().len();
+    let front = Front::flat(n, 0.0);
+    let pitcher = Pitcher::new(mesh, C, SAFETY, t_end).unwrap();
+    let mut order = Vec::new();
+    loop {
+        let mut ready: Vec<(f64, VertexId)> = (0..n as VertexId)
+            .filter(|&v| front.time(v) < t_end && front.is_local_minimum(mesh, v))
+            .map(|v| (front.time(v), v))
+            .collect();
+        if ready.is_empty() {
+            return order;
+        }
+        ready.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut taken = vec![false; n];
+        for (_, v) in ready {
+            if !taken[v as usize] {
+                taken[v as usize] = true;
+                mesh.vertex_neighbors(v)
+                    .iter()
+                    .for_each(|&w| taken[w as usize] = true);
+                pitcher.pitch(mesh, &front, v).unwrap();
+                order.push(v);
+            }
+        }
+    }
+}
+
+#[test]
+fn deterministic_rounds_take_every_ready_vertex_as_a_full_scan_of_the_front_would() {
+    let mesh = perturbed(14);
+    let t_end = 3.0 / 16.0;
+    let expected = rounds_by_full_scans(&mesh, t_end);
+    assert!(expected.len() > 1000, "{}", expected.len());
+    for (threads, event_every) in [(1, usize::MAX), (2, 13), (3, 1)] {
+        let front = Front::flat(mesh.vertices().len(), 0.0);
+        let work = Listed {
+            mesh: PhantomData,
+            pitcher: Pitcher::new(&mesh, C, SAFETY, t_end).unwrap(),
+            order: Mutex::new(Vec::new()),
+            event_every,
+        };
+        let mut state = Fixed {
+            mesh: &mesh,
+            front: &front,
+        };
+        let options = Options {
+            threads,
+            deterministic: true,
+        };
+        sdg_scheduler::run(&mut state, t_end, &work, vec![(); threads], &options).unwrap();
+        assert!(
+            *work.order.lock() == expected,
+            "{threads} threads, an event every {event_every} tents"
+        );
+    }
+}

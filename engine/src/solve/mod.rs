@@ -252,6 +252,10 @@ impl Solve<'_> {
         }
         solver.commit(&state.solution);
         front.set_time(v, t_new);
+        let slope = star
+            .iter()
+            .map(|&t| state.pitcher.c_max() * front.slope(mesh, t))
+            .fold(0.0, f64::max);
         let extension =
             self.problem.fracture.as_ref().and_then(|fracture| {
                 self.extension(fracture, state, solver, v, [tent.t_old, t_new])
@@ -264,6 +268,7 @@ impl Solve<'_> {
             interface: self.interface_records(mesh, solver),
             extension,
             unresolved,
+            slope,
         };
         Ok((t_new, outcome))
     }
@@ -430,6 +435,8 @@ enum Outcome {
         /// The indicator over the tolerance when it was above and no star triangle could be
         /// bisected.
         unresolved: Option<f64>,
+        /// The steepest new front facet of the star relative to causality, `c_max |grad t|`.
+        slope: f64,
     },
     /// The indicator rejected the patch: nothing advanced; these star triangles (with their
     /// corners, to notice a change) are to be bisected.
@@ -534,7 +541,7 @@ impl<'a> Work<'a> for Solve<'a> {
         o: Outcome,
         events: &Events<'a, Frontier>,
     ) -> Result<(), EngineError> {
-        let (t_old, t_new, pitching_s, report) = match o {
+        let (t_old, t_new, pitching_s, report, slope) = match o {
             Outcome::Accepted {
                 t_old,
                 t_new,
@@ -543,6 +550,7 @@ impl<'a> Work<'a> for Solve<'a> {
                 interface,
                 extension,
                 unresolved,
+                slope,
             } => {
                 if let Some(ratio) = unresolved {
                     let mut book = self.book.lock();
@@ -570,7 +578,7 @@ impl<'a> Work<'a> for Solve<'a> {
                         }
                     }
                 }
-                (t_old, t_new, pitching_s, report)
+                (t_old, t_new, pitching_s, report, slope)
             }
             Outcome::Coarsen {
                 coarsening,
@@ -595,19 +603,21 @@ impl<'a> Work<'a> for Solve<'a> {
             }
         };
         let mesh = &state.mesh;
-        let c_max = state.pitcher.c_max();
-        let slope = mesh
-            .vertex_triangles(v)
-            .iter()
-            .map(|&t| c_max * state.front.slope(mesh, t))
-            .fold(0.0, f64::max);
         let mut guard = self.book.lock();
         let book = &mut *guard;
         self.add_patch(book, &report);
         book.timings.pitching_s += pitching_s;
         book.max_slope_ratio = book.max_slope_ratio.max(slope);
         let started = Instant::now();
-        self.add_to_snapshots(book, &state.solution, mesh.vertex_triangles(v));
+        // The star's elements span the old and new front times of `v` and its neighbours.
+        let (lo, hi) = mesh
+            .vertex_neighbors(v)
+            .iter()
+            .map(|&w| state.front.time(w))
+            .fold((t_old, t_new), |(lo, hi), t| (lo.min(t), hi.max(t)));
+        if book.snapshots.pending_within(lo, hi) {
+            self.add_to_snapshots(book, &state.solution, mesh.vertex_triangles(v));
+        }
         book.progress.advance(t_new - t_old, book.patches);
         let mut passed = std::mem::take(&mut book.passed);
         book.milestones.advance(t_old, t_new, &mut passed);
