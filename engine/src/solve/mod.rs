@@ -1105,6 +1105,7 @@ fn run_job(
         unresolved_max: book.unresolved_max,
         coarsenings: book.coarsenings,
         events: stats.events,
+        rounds: stats.rounds,
         checkpoint: checkpoints,
         timings: Timings {
             events_s: stats.events_s,

@@ -137,6 +137,9 @@ pub struct RunSummary {
     /// Scheduler events run (refinement, coarsening, history rows): each holds the whole
     /// front, so the other workers wait for it.
     pub events: u64,
+    /// Deterministic mode: rounds of independent tents (`patches / rounds` tents per round on
+    /// average, each round ending at a barrier); 0 in asynchronous mode.
+    pub rounds: u64,
     /// Shortest edge of the final space mesh, m.
     pub min_edge: f64,
     /// Longest edge of the final space mesh, m.
