@@ -265,6 +265,12 @@ pub fn evaluate(
     out: &mut [f64],
 ) {
     basis.eval(geometry.to_reference(x), phi);
+    combine(phi, coefficients, out);
+}
+
+/// The `width = out.len()` values `sum_k phi[k] coefficients[k * width..]` of an element whose
+/// basis functions take the values `phi` at a point, into `out`.
+pub fn combine(phi: &[f64], coefficients: &[f64], out: &mut [f64]) {
     let width = out.len();
     out.fill(0.0);
     for (k, &p) in phi.iter().enumerate() {

@@ -3,8 +3,9 @@
 use sdg_mesh::{Front, Mesh};
 
 use crate::basis::Basis;
-use crate::element::{FrontSolution, Geometry, evaluate};
+use crate::element::{FrontSolution, Geometry, combine, evaluate};
 use crate::exact::PlaneWave;
+use crate::patch::tables::FaceTables;
 use crate::quadrature;
 use crate::system::System;
 
@@ -95,8 +96,10 @@ pub struct FrontEnergy {
 /// Energy on `front` (vertex times): every triangle's facet carries the solution
 /// of the element under it, or the initial state `initial(x)` (scaled) if none. The rule is the
 /// patch solver's face rule (degree `2 p + 2`), so that energies of initial data match the
-/// solver's inflow energies exactly. The quadrature points are evaluated on `threads` threads
-/// and summed in triangle order on one: the result is the same for any `threads`.
+/// solver's inflow energies exactly; where the facet is a face of its element, the basis values
+/// there come from the solver's tables on the reference faces. The quadrature points are
+/// evaluated on `threads` threads and summed in triangle order on one: the result is the same
+/// for any `threads`.
 pub fn front_energy(
     mesh: &Mesh,
     times: &Front,
@@ -107,6 +110,7 @@ pub fn front_energy(
     initial: impl Fn([f64; 2]) -> crate::system::State + Sync,
 ) -> FrontEnergy {
     let rule = quadrature::triangle(2 * basis.degree() + 2);
+    let tables = FaceTables::new(basis, &rule);
     let points = rule.points.len();
     let triangles = mesh.triangles().len();
     // Per quadrature point: weighted kinetic, strain and flux densities.
@@ -129,19 +133,32 @@ pub fn front_energy(
             let grad = sdg_mesh::geometry::linear_gradient(p, tau);
             let area2 = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
                 - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
-            for ((xi, &w), slot) in rule.points.iter().zip(&rule.weights).zip(slots) {
+            // The facet is a face of its element (tabulated basis values), unless the triangle
+            // is a split child still lying on its parent's element.
+            let face = solved
+                .then(|| {
+                    let facet = [0, 1, 2].map(|i| [p[i][0], p[i][1], tau[i]]);
+                    FaceTables::corners_in(facet, &geometry.vertices())
+                })
+                .flatten();
+            for (point, ((xi, &w), slot)) in
+                rule.points.iter().zip(&rule.weights).zip(slots).enumerate()
+            {
                 let x = [0, 1]
                     .map(|i| p[0][i] + xi[0] * (p[1][i] - p[0][i]) + xi[1] * (p[2][i] - p[0][i]));
                 let t = tau[0] + xi[0] * (tau[1] - tau[0]) + xi[1] * (tau[2] - tau[0]);
                 let q = if solved {
-                    evaluate(
-                        basis,
-                        &geometry,
-                        &coefficients,
-                        [x[0], x[1], t],
-                        &mut phi,
-                        &mut values,
-                    );
+                    match face {
+                        Some(face) => combine(tables.at(face, point), &coefficients, &mut values),
+                        None => evaluate(
+                            basis,
+                            &geometry,
+                            &coefficients,
+                            [x[0], x[1], t],
+                            &mut phi,
+                            &mut values,
+                        ),
+                    }
                     let mut q = [0.0; crate::system::MAX_FIELDS];
                     q[..fields].copy_from_slice(&values[..fields]);
                     q

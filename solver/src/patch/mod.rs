@@ -36,7 +36,7 @@ use crate::ring::BlockSystem;
 use crate::system::{FrameTrace, MAX_FIELDS, Matrix, State, System};
 
 mod contact;
-mod tables;
+pub(crate) mod tables;
 
 use contact::{ContactFaces, FaceShape};
 pub use contact::{Newton, NewtonFailure};
