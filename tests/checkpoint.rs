@@ -242,7 +242,7 @@ fn poisoned_run(
         let mut coefficients = vec![0.0; live.basis().len() * solution.width()];
         assert!(solution.load(0, &mut geometry, &mut coefficients));
         coefficients[0] = value;
-        solution.store(0, &geometry, &coefficients);
+        solution.store(0, &geometry, &coefficients, None);
     };
     let err = sdg_engine::solve_job_with(&problem, &options, fraction * t_end, poison)
         .unwrap_err()

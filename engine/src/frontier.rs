@@ -154,7 +154,8 @@ impl Frontier {
         self.solution.remove(&merge);
         let parents: Vec<TriangleId> = children.iter().map(|&t| merge.triangle_after(t)).collect();
         for (&parent, (_, geometry, coefficients)) in parents.iter().zip(&c.elements) {
-            self.solution.store(parent as usize, geometry, coefficients);
+            self.solution
+                .store(parent as usize, geometry, coefficients, None);
         }
         if let Some(face) = &c.face {
             // A parent (z, a, b) has the restored edge ab opposite its first corner.

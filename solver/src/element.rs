@@ -107,6 +107,10 @@ struct Cell {
     solved: bool,
     geometry: Geometry,
     coefficients: Box<[f64]>,
+    /// The energy on the triangle's facet split as `[kinetic, strain, flux]` (see
+    /// `norms::FrontEnergy`), once computed; `None` after the facet or its element changed
+    /// without it.
+    energy: Option<[f64; 3]>,
 }
 
 impl Clone for FrontSolution {
@@ -135,6 +139,7 @@ impl FrontSolution {
             solved: false,
             geometry: Geometry::default(),
             coefficients: vec![0.0; basis_len * width].into_boxed_slice(),
+            energy: None,
         };
         Self {
             basis_len,
@@ -200,9 +205,12 @@ impl FrontSolution {
     }
 
     /// Appends a front triangle that lies on the top face of the element under triangle `from`
-    /// (a child of a bisection): it gets the same element, no projection. Returns its index.
+    /// (a child of a bisection; `from` is now the other child): it gets the same element, no
+    /// projection. Returns its index. The energies on both facets are no longer known.
     pub fn push_copy(&mut self, from: usize) -> usize {
-        let cell = self.cells[from].get_mut().clone();
+        let cell = self.cells[from].get_mut();
+        cell.energy = None;
+        let cell = cell.clone();
         self.cells.push(Mutex::new(cell));
         self.cells.len() - 1
     }
@@ -232,12 +240,30 @@ impl FrontSolution {
         cell.solved
     }
 
-    /// Replaces the element under triangle `t`.
-    pub fn store(&self, t: usize, geometry: &Geometry, coefficients: &[f64]) {
+    /// Replaces the element under triangle `t`, whose top face is the triangle's facet, with
+    /// the energy on that facet as `[kinetic, strain, flux]` if known.
+    pub fn store(
+        &self,
+        t: usize,
+        geometry: &Geometry,
+        coefficients: &[f64],
+        energy: Option<[f64; 3]>,
+    ) {
         let mut cell = self.cells[t].lock();
         cell.solved = true;
         cell.geometry = *geometry;
         cell.coefficients.copy_from_slice(coefficients);
+        cell.energy = energy;
+    }
+
+    /// The energy on triangle `t`'s facet as `[kinetic, strain, flux]`, if known.
+    pub fn energy(&self, t: usize) -> Option<[f64; 3]> {
+        self.cells[t].lock().energy
+    }
+
+    /// Records the energy on triangle `t`'s facet, computed for its current element and facet.
+    pub fn set_energy(&self, t: usize, energy: [f64; 3]) {
+        self.cells[t].lock().energy = Some(energy);
     }
 
     /// Calls `f` with the element under triangle `t`, or `None` while it carries initial data.

@@ -94,12 +94,15 @@ pub struct FrontEnergy {
 }
 
 /// Energy on `front` (vertex times): every triangle's facet carries the solution
-/// of the element under it, or the initial state `initial(x)` (scaled) if none. The rule is the
-/// patch solver's face rule (degree `2 p + 2`), so that energies of initial data match the
-/// solver's inflow energies exactly; where the facet is a face of its element, the basis values
-/// there come from the solver's tables on the reference faces. The quadrature points are
-/// evaluated on `threads` threads and summed in triangle order on one: the result is the same
-/// for any `threads`.
+/// of the element under it, or the initial state `initial(x)` (scaled) if none. A facet's
+/// energy is the one the patch solver recorded for it (the top face of its element, see
+/// [`FrontSolution::store`]) or, where none is recorded (initial data, bisection children,
+/// coarsened parents), computed here with the patch solver's face rule (degree `2 p + 2`, so
+/// that energies of initial data match the solver's inflow energies exactly; where the facet is
+/// a face of its element, the basis values come from the solver's tables on the reference
+/// faces) and recorded. The facets missing an energy are computed on `threads` threads; the
+/// facets' energies are summed in triangle order on one: the result is the same for any
+/// `threads`.
 pub fn front_energy(
     mesh: &Mesh,
     times: &Front,
@@ -109,90 +112,145 @@ pub fn front_energy(
     threads: usize,
     initial: impl Fn([f64; 2]) -> crate::system::State + Sync,
 ) -> FrontEnergy {
-    let rule = quadrature::triangle(2 * basis.degree() + 2);
-    let tables = FaceTables::new(basis, &rule);
-    let points = rule.points.len();
     let triangles = mesh.triangles().len();
-    // Per quadrature point: weighted kinetic, strain and flux densities.
-    let mut terms = vec![[0.0; 3]; triangles * points];
-    let chunk = triangles.div_ceil(threads.max(1)).max(1);
-    let fill = |first: usize, out: &mut [[f64; 3]]| {
-        let mut phi = vec![0.0; basis.len()];
-        let mut values = vec![0.0; front.width()];
-        let fields = system.fields();
-        let ax = system.a_n([1.0, 0.0, 0.0]);
-        let ay = system.a_n([0.0, 1.0, 0.0]);
-        let mut geometry = Geometry::default();
-        let mut coefficients = vec![0.0; basis.len() * front.width()];
-        for (k, slots) in out.chunks_mut(points).enumerate() {
-            let tri = first + k;
-            let corners = mesh.triangles()[tri];
-            let solved = front.load(tri, &mut geometry, &mut coefficients);
-            let p = corners.map(|v| mesh.vertex(v));
-            let tau = corners.map(|v| system.c_ref() * times.time(v));
-            let grad = sdg_mesh::geometry::linear_gradient(p, tau);
-            let area2 = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
-                - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
-            // The facet is a face of its element (tabulated basis values), unless the triangle
-            // is a split child still lying on its parent's element.
-            let face = solved
-                .then(|| {
-                    let facet = [0, 1, 2].map(|i| [p[i][0], p[i][1], tau[i]]);
-                    FaceTables::corners_in(facet, &geometry.vertices())
-                })
-                .flatten();
-            for (point, ((xi, &w), slot)) in
-                rule.points.iter().zip(&rule.weights).zip(slots).enumerate()
-            {
-                let x = [0, 1]
-                    .map(|i| p[0][i] + xi[0] * (p[1][i] - p[0][i]) + xi[1] * (p[2][i] - p[0][i]));
-                let t = tau[0] + xi[0] * (tau[1] - tau[0]) + xi[1] * (tau[2] - tau[0]);
-                let q = if solved {
-                    match face {
-                        Some(face) => combine(tables.at(face, point), &coefficients, &mut values),
-                        None => evaluate(
-                            basis,
-                            &geometry,
-                            &coefficients,
-                            [x[0], x[1], t],
-                            &mut phi,
-                            &mut values,
-                        ),
-                    }
-                    let mut q = [0.0; crate::system::MAX_FIELDS];
-                    q[..fields].copy_from_slice(&values[..fields]);
-                    q
-                } else {
-                    initial(x)
-                };
-                let wa = w * area2.abs();
-                let kinetic = system.kinetic_density(&q);
-                let total = system.energy_density(&q);
-                let flux = -0.5
-                    * (grad[0] * system.dot(&q, &system.apply(&ax, &q))
-                        + grad[1] * system.dot(&q, &system.apply(&ay, &q)));
-                *slot = [wa * kinetic, wa * (total - kinetic), wa * flux];
+    let missing: Vec<usize> = (0..triangles)
+        .filter(|&t| front.energy(t).is_none())
+        .collect();
+    if !missing.is_empty() {
+        let rule = quadrature::triangle(2 * basis.degree() + 2);
+        let tables = FaceTables::new(basis, &rule);
+        let chunk = missing.len().div_ceil(threads.max(1)).max(1);
+        let facets = Facets {
+            mesh,
+            times,
+            front,
+            basis,
+            system,
+            rule: &rule,
+            tables: &tables,
+        };
+        let fill = |part: &[usize]| {
+            let mut scratch = Scratch {
+                geometry: Geometry::default(),
+                coefficients: vec![0.0; basis.len() * front.width()],
+                phi: vec![0.0; basis.len()],
+                values: vec![0.0; front.width()],
+            };
+            for &tri in part {
+                front.set_energy(tri, facets.energy(tri, &mut scratch, &initial));
             }
+        };
+        if threads <= 1 || missing.len() <= chunk {
+            fill(&missing);
+        } else {
+            std::thread::scope(|s| {
+                for part in missing.chunks(chunk) {
+                    let fill = &fill;
+                    s.spawn(move || fill(part));
+                }
+            });
         }
-    };
-    if threads <= 1 || triangles <= chunk {
-        fill(0, &mut terms);
-    } else {
-        std::thread::scope(|s| {
-            for (c, out) in terms.chunks_mut(chunk * points).enumerate() {
-                let fill = &fill;
-                s.spawn(move || fill(c * chunk, out));
-            }
-        });
     }
     let mut e = FrontEnergy::default();
-    for [kinetic, strain, flux] in terms {
+    for t in 0..triangles {
+        let [kinetic, strain, flux] = front.energy(t).expect("every facet's energy is known");
         e.kinetic += kinetic;
         e.strain += strain;
         e.flux += flux;
     }
     e.total = e.kinetic + e.strain + e.flux;
     e
+}
+
+/// What [`front_energy`] integrates over the front's facets.
+struct Facets<'a> {
+    mesh: &'a Mesh,
+    times: &'a Front,
+    front: &'a FrontSolution,
+    basis: &'a Basis,
+    system: &'a System,
+    rule: &'a quadrature::Rule<2>,
+    tables: &'a FaceTables,
+}
+
+/// Element and basis scratch of [`Facets::energy`].
+struct Scratch {
+    geometry: Geometry,
+    coefficients: Vec<f64>,
+    phi: Vec<f64>,
+    values: Vec<f64>,
+}
+
+impl Facets<'_> {
+    /// Energy on the facet of triangle `tri` as `[kinetic, strain, flux]` by quadrature, with
+    /// `initial(x)` (scaled) on a facet without an element.
+    fn energy(
+        &self,
+        tri: usize,
+        scratch: &mut Scratch,
+        initial: &impl Fn([f64; 2]) -> crate::system::State,
+    ) -> [f64; 3] {
+        let Self {
+            mesh,
+            times,
+            front,
+            basis,
+            system,
+            rule,
+            tables,
+        } = *self;
+        let Scratch {
+            geometry,
+            coefficients,
+            phi,
+            values,
+        } = scratch;
+        let fields = system.fields();
+        let ax = system.a_n([1.0, 0.0, 0.0]);
+        let ay = system.a_n([0.0, 1.0, 0.0]);
+        let corners = mesh.triangles()[tri];
+        let solved = front.load(tri, geometry, coefficients);
+        let p = corners.map(|v| mesh.vertex(v));
+        let tau = corners.map(|v| system.c_ref() * times.time(v));
+        let grad = sdg_mesh::geometry::linear_gradient(p, tau);
+        let area2 =
+            (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+        // The facet is a face of its element (tabulated basis values), unless the triangle is a
+        // split child still lying on its parent's element.
+        let face = solved
+            .then(|| {
+                let facet = [0, 1, 2].map(|i| [p[i][0], p[i][1], tau[i]]);
+                FaceTables::corners_in(facet, &geometry.vertices())
+            })
+            .flatten();
+        let mut energy = [0.0; 3];
+        for (point, (xi, &w)) in rule.points.iter().zip(&rule.weights).enumerate() {
+            let x =
+                [0, 1].map(|i| p[0][i] + xi[0] * (p[1][i] - p[0][i]) + xi[1] * (p[2][i] - p[0][i]));
+            let t = tau[0] + xi[0] * (tau[1] - tau[0]) + xi[1] * (tau[2] - tau[0]);
+            let q = if solved {
+                match face {
+                    Some(face) => combine(tables.at(face, point), coefficients, values),
+                    None => evaluate(basis, geometry, coefficients, [x[0], x[1], t], phi, values),
+                }
+                let mut q = [0.0; crate::system::MAX_FIELDS];
+                q[..fields].copy_from_slice(&values[..fields]);
+                q
+            } else {
+                initial(x)
+            };
+            let wa = w * area2.abs();
+            let kinetic = system.kinetic_density(&q);
+            let total = system.energy_density(&q);
+            let flux = -0.5
+                * (grad[0] * system.dot(&q, &system.apply(&ax, &q))
+                    + grad[1] * system.dot(&q, &system.apply(&ay, &q)));
+            energy[0] += wa * kinetic;
+            energy[1] += wa * (total - kinetic);
+            energy[2] += wa * flux;
+        }
+        energy
+    }
 }
 
 /// Energy (scaled units) of the initial state `initial(x)` on the flat facet of the triangle

@@ -30,7 +30,7 @@ use crate::frontier::Frontier;
 /// The first bytes of every checkpoint file.
 const MAGIC: &[u8; 8] = b"SDGCKPT\n";
 /// The layout of the payload; a reader refuses any other.
-const FORMAT: u32 = 1;
+const FORMAT: u32 = 2;
 /// Bytes before the payload: magic, format, length, checksum.
 const PREAMBLE: usize = 8 + 4 + 8 + 4;
 /// zlib level: fast; the solution's floating-point bits compress little anyway.
@@ -388,8 +388,8 @@ mod tests {
         *flipped.last_mut().unwrap() ^= 1;
         assert!(reason(&flipped).contains("checksum"));
         let mut newer = bytes.clone();
-        newer[8] = 2;
-        assert!(reason(&newer).contains("format 2"));
+        newer[8] = FORMAT as u8 + 1;
+        assert!(reason(&newer).contains(&format!("format {}", FORMAT + 1)));
     }
 
     #[test]

@@ -50,6 +50,8 @@ pub struct ElementReport {
     pub energy_in: f64,
     /// Energy leaving through the outflow face (now part of the front).
     pub energy_out: f64,
+    /// `energy_out` split as `[kinetic, strain, flux]` (see `norms::FrontEnergy`).
+    pub energy_out_parts: [f64; 3],
     /// Net power entering through the vertical faces, integrated over them.
     pub vertical_work: f64,
     /// Part of `vertical_work` through the domain boundary.
@@ -904,8 +906,9 @@ impl PatchSolver {
     /// is the triangle each element's top face was built for: the tent's star triangles, or for
     /// a coarsening patch the child `(m, z, a)` whose id the parent takes, moved by renumbering.
     pub fn commit_to(&self, solution: &FrontSolution, id: impl Fn(TriangleId) -> TriangleId) {
-        for (t, geometry, coefficients) in self.elements() {
-            solution.store(id(t) as usize, geometry, coefficients);
+        for ((t, geometry, coefficients), report) in self.elements().zip(&self.reports) {
+            let energy = Some(report.energy_out_parts);
+            solution.store(id(t) as usize, geometry, coefficients, energy);
         }
         for (e, face) in &self.faces {
             solution.store_face(*e as usize, face);
@@ -1036,7 +1039,13 @@ impl PatchSolver {
         face_points(&exact.rule, &slot.vertices, TOP, |_, w, nrm| {
             let q = own(&exact.tables, TOP, point.next().expect("unbounded"));
             let aq = system.apply(&system.a_n(nrm), &q);
-            r.energy_out += 0.5 * w * system.dot(&q, &aq);
+            let out = 0.5 * w * system.dot(&q, &aq);
+            let kinetic = w * nrm[2] * system.kinetic_density(&q);
+            let strain = w * nrm[2] * system.energy_density(&q) - kinetic;
+            r.energy_out += out;
+            r.energy_out_parts[0] += kinetic;
+            r.energy_out_parts[1] += strain;
+            r.energy_out_parts[2] += out - kinetic - strain;
             for (f, a) in face_momentum.iter_mut().zip(&aq[..nv]) {
                 *f += w * a;
             }
