@@ -79,22 +79,35 @@ fn front_momentum(live: &Live, system: &System) -> ([f64; 2], f64) {
 #[derive(Clone, Copy, Debug)]
 struct Balance {
     energy: f64,
+    /// The energy's kinetic and strain parts: a split leaves each unchanged, the parent's as the
+    /// patch recorded them and the children's as integrated anew.
+    parts: [f64; 2],
     momentum: [f64; 2],
     momentum_scale: f64,
 }
 
 fn balance(live: &Live, system: &System) -> Balance {
     let (momentum, momentum_scale) = front_momentum(live, system);
+    let energy = live.front_energy();
     Balance {
-        energy: live.front_energy().total,
+        energy: energy.total,
+        parts: [energy.kinetic, energy.strain],
         momentum,
         momentum_scale,
     }
 }
 
-/// Largest relative change of the energy and of the momentum from `a` to `b`.
+/// Largest relative change of the energy (and its kinetic and strain parts) and of the momentum
+/// from `a` to `b`.
 fn change(a: Balance, b: Balance) -> (f64, f64) {
-    let energy = ((b.energy - a.energy) / a.energy).abs();
+    let energy = [
+        (b.energy, a.energy),
+        (b.parts[0], a.parts[0]),
+        (b.parts[1], a.parts[1]),
+    ]
+    .iter()
+    .map(|(b, a)| ((b - a) / a).abs())
+    .fold(0.0, f64::max);
     let momentum = (0..2)
         .map(|k| (b.momentum[k] - a.momentum[k]).abs() / a.momentum_scale)
         .fold(0.0, f64::max);
