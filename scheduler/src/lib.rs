@@ -83,8 +83,9 @@ pub trait Work<'a>: Sync {
     /// the old one when the tent is rejected) and the outcome. Called with `v` claimed
     /// exclusively and its neighbours shared, and `v` a local minimum of the front below the end
     /// time. A tent that leaves `v` in place must make sure an event changes something first
-    /// (otherwise it would be retried forever). May queue events, but only events queued by
-    /// [`Work::record`] run in a fixed order in deterministic mode.
+    /// (otherwise it would be retried forever); in asynchronous mode its claim is held until
+    /// that event has run, so the event sees `v`'s star as the tent left it. May queue events,
+    /// but only events queued by [`Work::record`] run in a fixed order in deterministic mode.
     fn tent(
         &self,
         state: &Self::State,

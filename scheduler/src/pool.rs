@@ -6,7 +6,9 @@
 //! neighbours back as candidates. A candidate that is not ready or cannot be claimed is dropped:
 //! whatever blocks it (an earlier neighbour, or a claim around it) pushes it again when it
 //! changes. Workers with nothing to do sleep on a condition variable. Tents hold the state
-//! shared (a read lock); events take it exclusively between tents. See `scheduler/README.md`.
+//! shared (a read lock); events run in batches that take it exclusively between tents, and a
+//! tent that leaves its vertex in place keeps its claim until its event has run. See
+//! `scheduler/README.md`.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
@@ -18,6 +20,12 @@ use crate::claim::ClaimTable;
 use crate::{
     Clock, Events, RunError, State, Stats, VertexId, Work, below_end, is_ready, panic_message,
 };
+
+/// Queued events that make a worker run them before its next tent; fewer wait until a worker
+/// finds nothing to claim. Each run of events stops every worker for the rest of its tent, so
+/// batching them saves that wait: on `adaptive_pulse` (about 1,000 events, 2 threads) the
+/// workers waited 0.36 s in all when every event ran at once, 0.06 to 0.07 s with 32.
+const EVENT_BATCH: usize = 32;
 
 /// The state and the claims on its vertices: shared by tents, exclusive for events.
 struct Locked<'s, S> {
@@ -49,6 +57,8 @@ struct Shared<'s, 'a, W: Work<'a>> {
     tents: Vec<AtomicU64>,
     event_time: Clock,
     wait_time: Clock,
+    /// Claims of tents that left their vertex in place, held until their events have run.
+    held: Mutex<Vec<(VertexId, Vec<VertexId>)>>,
 }
 
 pub(crate) fn run<'a, W: Work<'a>>(
@@ -85,6 +95,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
         tents: (0..threads).map(|_| AtomicU64::new(0)).collect(),
         event_time: Clock::default(),
         wait_time: Clock::default(),
+        held: Mutex::new(Vec::new()),
     };
     for v in ready {
         shared.queued.fetch_add(1, Ordering::SeqCst);
@@ -159,12 +170,16 @@ fn worker<'a, W: Work<'a>>(
             wake_all(shared);
             return;
         }
-        run_events(shared, local);
+        if shared.events.pending.load(Ordering::Acquire) >= EVENT_BATCH {
+            run_events(shared, local);
+        }
         match find(shared, id, local) {
             Some(v) => {
                 shared.queued.fetch_sub(1, Ordering::SeqCst);
                 tent(shared, id, local, &mut scratch, v);
             }
+            // Nothing to claim: whatever held claims block is waiting for the queued events.
+            None if shared.events.pending.load(Ordering::Acquire) > 0 => run_events(shared, local),
             None => sleep(shared),
         }
     }
@@ -246,6 +261,7 @@ fn tent<'a, W: Work<'a>>(
     if !locked.claims.try_claim(&[v], neighbours) {
         return;
     }
+    let t_old = state.front().time(v);
     // Claimed: the times of v and its neighbours cannot change until the release.
     let result = if is_ready(state, shared.t_end, v) {
         Some(
@@ -262,6 +278,14 @@ fn tent<'a, W: Work<'a>>(
     } else {
         None
     };
+    let in_place = matches!(result, Some(Ok(t)) if t <= t_old);
+    if in_place && shared.events.pending.load(Ordering::Acquire) > 0 {
+        // Left in place: its event is queued. Keep the star as the tent saw it until the event
+        // has run, and leave `v` out of the candidates meanwhile.
+        shared.held.lock().push((v, neighbours.to_vec()));
+        shared.tents[id].fetch_add(1, Ordering::Relaxed);
+        return;
+    }
     locked.claims.release(&[v], neighbours);
     match result {
         Some(Ok(t)) => {
@@ -283,9 +307,6 @@ fn tent<'a, W: Work<'a>>(
         offer(shared, local, w);
     }
     drop(locked);
-    if shared.events.pending.load(Ordering::Acquire) > 0 {
-        wake_all(shared);
-    }
 }
 
 /// Adds `delta` to the count of vertices below the end time.
@@ -297,8 +318,10 @@ fn count_remaining(remaining: &AtomicUsize, delta: isize) {
     }
 }
 
-/// Runs every queued event with the state held exclusively (waiting for the tents in flight),
-/// then offers the vertices the events touched or appended.
+/// Runs every queued event with the state held exclusively (waiting for the tents in flight):
+/// first releases the held claims (before any event renumbers vertices), then runs the events
+/// in queue order and offers the held vertices, their neighbours and whatever the events touched
+/// or appended.
 fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<VertexId>) {
     if shared.events.pending.load(Ordering::Acquire) == 0 {
         return;
@@ -312,6 +335,11 @@ fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<Vertex
     }
     let running = std::time::Instant::now();
     let mut touched = Vec::new();
+    for (v, neighbours) in shared.held.lock().drain(..) {
+        locked.claims.release(&[v], &neighbours);
+        touched.push(v);
+        touched.extend(neighbours);
+    }
     for action in actions {
         let changed = action(locked.state);
         let vertices = locked.state.mesh().vertices().len();

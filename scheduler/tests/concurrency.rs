@@ -537,3 +537,98 @@ fn deterministic_rounds_take_every_ready_vertex_as_a_full_scan_of_the_front_woul
         );
     }
 }
+
+/// Leaves every third tent at every fifth vertex in place and queues an event that checks
+/// that the vertex and its neighbours still have the times the tent saw.
+struct Deferring<'m> {
+    mesh: PhantomData<&'m Mesh>,
+    pitcher: Pitcher,
+    visits: Vec<AtomicUsize>,
+    /// Events that found their star as their tent left it, and those that did not.
+    kept: AtomicUsize,
+    moved: AtomicUsize,
+}
+
+impl<'a, 'm: 'a> Work<'a> for Deferring<'m> {
+    type State = Fixed<'m>;
+    type Scratch = ();
+    /// The star's times when the tent left its vertex in place.
+    type Outcome = Option<Vec<(VertexId, f64)>>;
+    type Error = String;
+
+    fn tent(
+        &self,
+        state: &Fixed<'m>,
+        _: &mut (),
+        v: VertexId,
+        _: &Events<'a, Fixed<'m>>,
+    ) -> Result<(f64, Self::Outcome), String> {
+        let Fixed { mesh, front } = *state;
+        if v % 5 == 0 && self.visits[v as usize].fetch_add(1, Ordering::Relaxed) % 3 == 0 {
+            let star = mesh
+                .vertex_neighbors(v)
+                .iter()
+                .chain([&v])
+                .map(|&u| (u, front.time(u)))
+                .collect();
+            return Ok((front.time(v), Some(star)));
+        }
+        let tent = self
+            .pitcher
+            .pitch(mesh, front, v)
+            .ok_or(format!("{v} not pitchable"))?;
+        Ok((tent.t_new, None))
+    }
+
+    fn record(
+        &'a self,
+        _: &Fixed<'m>,
+        v: VertexId,
+        star: Self::Outcome,
+        events: &Events<'a, Fixed<'m>>,
+    ) -> Result<(), String> {
+        if let Some(star) = star {
+            events.push(Box::new(move |state: &mut Fixed<'m>| {
+                let same = star.iter().all(|&(u, t)| state.front.time(u) == t);
+                let count = if same { &self.kept } else { &self.moved };
+                count.fetch_add(1, Ordering::Relaxed);
+                Changed {
+                    offer: vec![v],
+                    below_end: 0,
+                }
+            }));
+        }
+        Ok(())
+    }
+}
+
+#[test]
+fn a_tent_that_leaves_its_vertex_in_place_finds_its_star_unchanged_when_its_event_runs() {
+    let mesh = perturbed(16);
+    let t_end = 3.0 / 16.0;
+    for (threads, deterministic) in [(1, false), (2, false), (4, false), (4, true)] {
+        let front = Front::flat(mesh.vertices().len(), 0.0);
+        let work = Deferring {
+            mesh: PhantomData,
+            pitcher: Pitcher::new(&mesh, C, SAFETY, t_end).unwrap(),
+            visits: (0..mesh.vertices().len())
+                .map(|_| AtomicUsize::new(0))
+                .collect(),
+            kept: AtomicUsize::new(0),
+            moved: AtomicUsize::new(0),
+        };
+        let mut state = Fixed {
+            mesh: &mesh,
+            front: &front,
+        };
+        let options = Options {
+            threads,
+            deterministic,
+        };
+        sdg_scheduler::run(&mut state, t_end, &work, vec![(); threads], &options).unwrap();
+        let case = format!("{threads} threads, deterministic {deterministic}");
+        assert!(front.snapshot().iter().all(|&t| t == t_end), "{case}");
+        assert!(work.kept.load(Ordering::Relaxed) > 100, "{case}");
+        assert_eq!(work.moved.load(Ordering::Relaxed), 0, "{case}");
+    }
+}
