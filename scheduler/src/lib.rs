@@ -8,8 +8,11 @@
 //! or race are in `scheduler/README.md`.
 //!
 //! Two modes:
-//! - asynchronous (default): candidates flow through work-stealing deques; results are equally
-//!   accurate but the order of tents, hence the spacetime mesh, depends on timing;
+//! - asynchronous (default): candidates flow through work-stealing deques; a vertex is taken
+//!   only when it comes first in `(time, id)` among its neighbours, so without events the
+//!   result is the serial reference order's, bitwise, for any thread count and timing; events
+//!   (refinement, coarsening, cracks) run when a worker gets to them, so with events the
+//!   spacetime mesh depends on timing (equally accurate);
 //! - deterministic: rounds of a deterministically chosen independent set of ready vertices, solved
 //!   in parallel and recorded in a fixed order, so results depend only on the inputs, never on the
 //!   thread count or timing.
@@ -233,6 +236,23 @@ pub(crate) fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
 fn is_ready<S: State>(state: &S, t_end: f64, v: VertexId) -> bool {
     let front = state.front();
     (v as usize) < front.len() && front.time(v) < t_end && front.is_local_minimum(state.mesh(), v)
+}
+
+/// [`is_ready`], and no neighbour at exactly the same time has a smaller id: `v` comes first in
+/// the order of `(time, id)` among its neighbours. Two such vertices are never neighbours, and a
+/// tent elsewhere changes neither whether `v` is one nor what its tent reads, so tents taken by
+/// this rule in any order give the serial reference order's front and solution
+/// ([`run_serial`]: always the earliest vertex, ties to the smaller id).
+fn is_first_among_neighbours<S: State>(state: &S, t_end: f64, v: VertexId) -> bool {
+    is_ready(state, t_end, v) && {
+        let front = state.front();
+        let t = front.time(v);
+        state
+            .mesh()
+            .vertex_neighbors(v)
+            .iter()
+            .all(|&w| w > v || front.time(w) != t)
+    }
 }
 
 /// Vertices of `state` below `t_end`.

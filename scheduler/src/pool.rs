@@ -18,7 +18,8 @@ use parking_lot::{Condvar, Mutex, RwLock};
 
 use crate::claim::ClaimTable;
 use crate::{
-    Clock, Events, RunError, State, Stats, VertexId, Work, below_end, is_ready, panic_message,
+    Clock, Events, RunError, State, Stats, VertexId, Work, below_end, is_first_among_neighbours,
+    panic_message,
 };
 
 /// Queued events that make a worker run them before its next tent; fewer wait until a worker
@@ -71,7 +72,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
     let threads = scratch.len();
     let workers: Vec<Worker<VertexId>> = (0..threads).map(|_| Worker::new_fifo()).collect();
     let ready: Vec<VertexId> = (0..n as VertexId)
-        .filter(|&v| is_ready(&*state, t_end, v))
+        .filter(|&v| is_first_among_neighbours(&*state, t_end, v))
         .collect();
     let shared = Shared {
         remaining: AtomicUsize::new(below_end(&*state, t_end)),
@@ -254,7 +255,7 @@ fn tent<'a, W: Work<'a>>(
     let locked = shared.locked.read();
     shared.wait_time.add_since(asked);
     let state = &*locked.state;
-    if !is_ready(state, shared.t_end, v) {
+    if !is_first_among_neighbours(state, shared.t_end, v) {
         return;
     }
     let neighbours = state.mesh().vertex_neighbors(v);
@@ -263,7 +264,7 @@ fn tent<'a, W: Work<'a>>(
     }
     let t_old = state.front().time(v);
     // Claimed: the times of v and its neighbours cannot change until the release.
-    let result = if is_ready(state, shared.t_end, v) {
+    let result = if is_first_among_neighbours(state, shared.t_end, v) {
         Some(
             shared
                 .work
