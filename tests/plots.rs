@@ -88,7 +88,7 @@ fn layout(w: f64, h: f64) -> FieldLayout {
 /// Checks a snapshot picture: its size, and that its field and colour bar are not blank.
 fn check_field_png(path: &Path, lay: &FieldLayout) -> Decoded {
     let image = Decoded::read(path);
-    assert_eq!((image.width, image.height), FIELD_PNG_SIZE);
+    assert_eq!((image.width, image.height), lay.size);
     let field = image.variance(lay.field, 3);
     let bar = image.variance(lay.colorbar, 2);
     assert!(field > 50.0, "{}: field variance {field}", path.display());

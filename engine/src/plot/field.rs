@@ -25,6 +25,9 @@ pub struct FieldLayout {
     pub field: [u32; 4],
     /// The colour bar, lowest value at the bottom.
     pub colorbar: [u32; 4],
+    /// The picture's size (width, height) in pixels: the requested width, and the requested
+    /// height less what a wide field leaves empty below its axis labels.
+    pub size: (u32, u32),
 }
 
 /// A picture of a scalar field on triangles (points in metres, drawn in mm).
@@ -180,7 +183,8 @@ impl<'a> FieldPlot<'a> {
         widen(range.unwrap_or((0.0, 1.0)))
     }
 
-    /// Renders the picture into an image of `size` (width, height) pixels.
+    /// Renders the picture into an image of `size` (width, height) pixels, less the empty band
+    /// a wide field leaves at the bottom ([`FieldLayout::size`]).
     pub fn render(&self, size: (u32, u32)) -> Result<Image, EngineError> {
         let bounds = self.bounds()?;
         let lay = layout(bounds, size)?;
@@ -253,6 +257,11 @@ impl<'a> FieldPlot<'a> {
             }
         }
         self.draw_frame(&mut image, &lay, bounds, (lo, hi))?;
+        // Drawn at the requested size (which sets the font), then cut below the axis labels.
+        image.height = lay.size.1;
+        image
+            .rgb
+            .truncate(3 * lay.size.0 as usize * lay.size.1 as usize);
         Ok(image)
     }
 
@@ -367,7 +376,12 @@ fn layout(bounds: [f64; 4], size: (u32, u32)) -> Result<FieldLayout, EngineError
     let field = [left, top, left + fw, top + fh].map(|v| v as u32);
     let bar_x0 = field[2] + px(BAR_GAP) as u32;
     let colorbar = [bar_x0, field[1], bar_x0 + px(BAR_WIDTH) as u32, field[3]];
-    Ok(FieldLayout { field, colorbar })
+    let used = (f64::from(field[3]) + bottom) as u32;
+    Ok(FieldLayout {
+        field,
+        colorbar,
+        size: (size.0, used.min(size.1)),
+    })
 }
 
 /// Pixels drawn into an image, clipped to a rectangle `[x0, y0, x1, y1]`.
@@ -671,6 +685,45 @@ mod tests {
                 (60, 40)
             )
             .contains("no room")
+        );
+    }
+
+    /// A field wider than the picture's shape leaves no empty band below its axis labels; a
+    /// square one fills the requested height.
+    #[test]
+    fn a_wide_field_s_picture_is_cut_below_its_axis_labels() {
+        let picture = |w: f64, h: f64| {
+            let corners = [[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]];
+            let values = Values::Points(&[0.0, 1.0, 2.0, 3.0]);
+            let plot = FieldPlot::new(&corners, &[[0, 1, 2], [0, 2, 3]], values);
+            (
+                plot.render((1000, 800)).unwrap(),
+                plot.layout((1000, 800)).unwrap(),
+            )
+        };
+        let (square, lay) = picture(1e-3, 1e-3);
+        assert_eq!(
+            (square.width, square.height, lay.size),
+            (1000, 800, (1000, 800))
+        );
+        let (wide, lay) = picture(4e-3, 1e-3);
+        assert_eq!((wide.width, wide.height), lay.size);
+        assert_eq!(wide.rgb.len(), 3 * 1000 * wide.height as usize);
+        // The field keeps its place and shape; the picture ends a label band below it.
+        let [_, y0, _, y1] = lay.field;
+        assert!(
+            wide.height < 500 && wide.height > y1 + (y1 - y0) / 10,
+            "{lay:?}"
+        );
+        // The x-axis title sits in the band: the lowest third of it has dark pixels.
+        let band = (y1 + 2 * (wide.height - y1) / 3) as usize..wide.height as usize;
+        let dark = band
+            .flat_map(|y| (0..1000).map(move |x| 3 * (y * 1000 + x)))
+            .filter(|&i| wide.rgb[i] < 128)
+            .count();
+        assert!(
+            dark > 20,
+            "{dark} dark pixels in the lowest third of the label band"
         );
     }
 
