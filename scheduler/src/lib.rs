@@ -9,8 +9,8 @@
 //!
 //! Two modes:
 //! - asynchronous (default): candidates flow through work-stealing deques; a vertex is taken
-//!   only when it comes first in `(time, id)` among its neighbours, so without events the
-//!   result is the serial reference order's, bitwise, for any thread count and timing; events
+//!   only when it comes first in `(time, id)` among its neighbours, so without events the front
+//!   and solution are the serial reference order's, bitwise, for any thread count; events
 //!   (refinement, coarsening, cracks) run when a worker gets to them, so with events the
 //!   spacetime mesh depends on timing (equally accurate);
 //! - deterministic: rounds of a deterministically chosen independent set of ready vertices, solved
