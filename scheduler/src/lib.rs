@@ -244,14 +244,13 @@ fn is_ready<S: State>(state: &S, t_end: f64, v: VertexId) -> bool {
 /// this rule in any order give the serial reference order's front and solution
 /// ([`run_serial`]: always the earliest vertex, ties to the smaller id).
 fn is_first_among_neighbours<S: State>(state: &S, t_end: f64, v: VertexId) -> bool {
-    is_ready(state, t_end, v) && {
-        let front = state.front();
+    let front = state.front();
+    (v as usize) < front.len() && front.time(v) < t_end && {
         let t = front.time(v);
-        state
-            .mesh()
-            .vertex_neighbors(v)
-            .iter()
-            .all(|&w| w > v || front.time(w) != t)
+        state.mesh().vertex_neighbors(v).iter().all(|&w| {
+            let tw = front.time(w);
+            tw > t || (tw == t && w > v)
+        })
     }
 }
 
