@@ -151,15 +151,31 @@ pub fn write(crossings: &[(String, Crossing)], c_r: f64) -> (String, CrackSummar
     for (tag, c) in crossings {
         by_tag.entry(tag.as_str()).or_default().push(*c);
     }
-    let mut csv =
-        String::from("t_s,interface,x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n");
+    let states: Vec<(&str, Vec<TipState>)> = by_tag
+        .into_iter()
+        .map(|(tag, list)| (tag, tip_states(&list)))
+        .collect();
+    tips_csv(
+        "interface",
+        states.iter().map(|(tag, s)| (tag, s.as_slice())),
+        c_r,
+    )
+}
+
+/// `crack_tips.csv` (one row per tip state, keyed by its crack in the column `key`) and its
+/// totals; `c_r` is the Rayleigh speed, m/s.
+pub(super) fn tips_csv<'s, K: std::fmt::Display>(
+    key: &str,
+    cracks: impl IntoIterator<Item = (K, &'s [TipState])>,
+    c_r: f64,
+) -> (String, CrackSummary) {
+    let mut csv = format!("t_s,{key},x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n");
     let mut summary = CrackSummary::default();
-    for (tag, list) in by_tag {
-        let states = tip_states(&list);
-        for s in &states {
+    for (crack, states) in cracks {
+        for s in states {
             let _ = writeln!(
                 csv,
-                "{:e},{tag},{:e},{:e},{:e},{:e},{:e}",
+                "{:e},{crack},{:e},{:e},{:e},{:e},{:e}",
                 s.time, s.point[0], s.point[1], s.extension, s.speed, s.process_zone_length
             );
             summary.max_speed = summary.max_speed.max(s.speed);

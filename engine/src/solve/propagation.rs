@@ -28,7 +28,7 @@ use sdg_solver::patch::PatchSolver;
 use serde::Serialize;
 
 use super::Solve;
-use super::crack_output::{self, CrackSummary, TipState};
+use super::crack_output::{self, TipState};
 use crate::fracture::{self, Fracture, Pending, Tip};
 use crate::frontier::Frontier;
 use crate::plot::{FieldPlot, Values};
@@ -695,32 +695,6 @@ fn on_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
     (0.0..=1.0).contains(&along) && across <= 1e-9 * length2.sqrt()
 }
 
-/// `crack_tips.csv` of a run with `[fracture]` (one row per tip state of each branch) and its
-/// totals; `c_r` is the Rayleigh speed, m/s.
-pub(super) fn branch_tips_csv(
-    branches: &BTreeMap<u32, Vec<TipState>>,
-    c_r: f64,
-) -> (String, CrackSummary) {
-    let mut csv = String::from("t_s,branch,x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n");
-    let mut summary = CrackSummary::default();
-    for (branch, states) in branches {
-        for s in states {
-            let _ = writeln!(
-                csv,
-                "{:e},{branch},{:e},{:e},{:e},{:e},{:e}",
-                s.time, s.point[0], s.point[1], s.extension, s.speed, s.process_zone_length
-            );
-            summary.max_speed = summary.max_speed.max(s.speed);
-        }
-        summary.tip_states += states.len();
-        if let Some(last) = states.last() {
-            summary.final_length = summary.final_length.max(last.extension);
-        }
-    }
-    summary.max_speed_over_c_r = summary.max_speed / c_r;
-    (csv, summary)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -817,7 +791,11 @@ mod tests {
         let tips = branch_tips(&events, &crossings);
         assert_eq!(tips.keys().copied().collect::<Vec<_>>(), [2]);
         assert_eq!(tips[&2].len(), 40);
-        let (_, summary) = branch_tips_csv(&tips, 1000.0);
+        let (_, summary) = crack_output::tips_csv(
+            "branch",
+            tips.iter().map(|(b, s)| (b, s.as_slice())),
+            1000.0,
+        );
         assert!(
             (summary.max_speed_over_c_r - 0.4).abs() < 0.004,
             "{summary:?}"
@@ -877,7 +855,11 @@ mod tests {
                 );
             }
         }
-        let (csv, summary) = branch_tips_csv(&tips, 1000.0);
+        let (csv, summary) = crack_output::tips_csv(
+            "branch",
+            tips.iter().map(|(b, s)| (b, s.as_slice())),
+            1000.0,
+        );
         assert_eq!(csv.lines().count(), 185);
         assert!(csv.starts_with("t_s,branch,x_m,"));
         assert!(
