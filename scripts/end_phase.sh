@@ -12,11 +12,8 @@
 # Usage: [ORDER=..] [LEVELS=..] [COUNT=..] [PERTURB=..] [SDG=..] scripts/end_phase.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
-sdg=${SDG:-}
-if [ -z "$sdg" ]; then
-  cargo build --release --quiet
-  sdg=./target/release/sdg
-fi
+[ -n "${SDG:-}" ] || cargo build --release --quiet
+sdg=${SDG:-./target/release/sdg}
 order=${ORDER:-2}
 levels=${LEVELS:-8 16 32 64}
 count=${COUNT:-14}
