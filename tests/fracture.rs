@@ -84,10 +84,19 @@ fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branch
     // The first new edges are debonded (D = 1 up to the polynomial's overshoot).
     let cracks = csv_columns(
         &dir.path().join("cracks.csv"),
-        &["x0_m", "y0_m", "x1_m", "damage"],
+        &["x0_m", "y0_m", "x1_m", "damage", "branch"],
     );
     let new: Vec<&Vec<f64>> = cracks.iter().filter(|c| c[0] >= 1e-3).collect();
     assert_eq!(new.len() as u64, fracture.extensions);
+    // Every new edge names the branch that made it, the notch's edges none; the fork made a
+    // branch of its own.
+    assert!(new.iter().all(|c| c[4] >= 0.0), "{new:?}");
+    assert!(
+        cracks.iter().filter(|c| c[0] < 1e-3).all(|c| c[4].is_nan()),
+        "{cracks:?}"
+    );
+    let branches: std::collections::BTreeSet<u64> = new.iter().map(|c| c[4] as u64).collect();
+    assert!(branches.len() >= 2, "{branches:?}");
     assert!(
         cracks.iter().all(|c| (0.0..=1.0).contains(&c[3])),
         "{cracks:?}"

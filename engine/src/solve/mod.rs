@@ -340,7 +340,7 @@ impl Solve<'_> {
             let time = state.front.min_time();
             propagation::write_crack_path_png(dir, &state.mesh, &cracks, fracture.tag, time);
         }
-        let csv = propagation::cracks_csv(&state.mesh, &cracks);
+        let csv = propagation::cracks_csv(&state.mesh, &cracks, events);
         write_atomic(dir, "cracks.csv", csv.as_bytes())?;
         Ok(())
     }

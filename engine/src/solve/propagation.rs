@@ -501,17 +501,27 @@ pub(super) fn wake_coarsening(
     }
 }
 
-/// `cracks.csv`: the crack edges, their ends (m), tag and damage.
-pub(super) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge]) -> String {
-    let mut csv = String::from("x0_m,y0_m,x1_m,y1_m,tag,damage\n");
+/// `cracks.csv`: the crack edges, their ends (m), tag, branch and damage. An edge's branch is
+/// the one whose extension (in `events`) made the segment it lies on (bisections split an
+/// extension's edge and coarsening merges the halves again, so every crack edge lies on one);
+/// empty on initial cracks.
+pub(super) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge], events: &[FractureEvent]) -> String {
+    let extensions: Vec<&FractureEvent> = events.iter().filter(|e| e.kind == "extension").collect();
+    let mut csv = String::from("x0_m,y0_m,x1_m,y1_m,tag,branch,damage\n");
     for c in cracks {
         let tag = mesh.edges()[c.edge as usize]
             .tag
             .map_or("", |t| mesh.tag_names()[t as usize].as_str());
         let [a, b] = c.ends;
+        let middle = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+        let branch = extensions
+            .iter()
+            .find(|e| on_segment(middle, e.from, e.to))
+            .and_then(|e| e.branch)
+            .map_or(String::new(), |b| b.to_string());
         let _ = writeln!(
             csv,
-            "{:e},{:e},{:e},{:e},{tag},{:e}",
+            "{:e},{:e},{:e},{:e},{tag},{branch},{:e}",
             a[0], a[1], b[0], b[1], c.damage
         );
     }
