@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The error at the end time against the end time's phase in the tent pattern (docs/performance.md,
-# "Why sdg's rates wander"). Runs the peer problem of ../shared/peers/compare_ngstents.sh (anti-plane
+# "What decides the rates"). Runs the peer problem of ../shared/peers/compare_ngstents.sh (anti-plane
 # plane wave at 23 degrees on the unit square, n x n "left" diagonals, exact data on the sides) at
 # COUNT end times evenly spread over [0.45, 0.545] (more than a layer of tents on every level from
 # n = 6 up) and prints per level the error at T = 0.5, the geometric mean, least and largest error

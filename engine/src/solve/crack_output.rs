@@ -151,27 +151,26 @@ pub fn write(crossings: &[(String, Crossing)], c_r: f64) -> (String, CrackSummar
     for (tag, c) in crossings {
         by_tag.entry(tag.as_str()).or_default().push(*c);
     }
-    let states: Vec<(&str, Vec<TipState>)> = by_tag
-        .into_iter()
-        .map(|(tag, list)| (tag, tip_states(&list)))
-        .collect();
     tips_csv(
         "interface",
-        states.iter().map(|(tag, s)| (tag, s.as_slice())),
+        by_tag
+            .into_iter()
+            .map(|(tag, list)| (tag, tip_states(&list))),
         c_r,
     )
 }
 
 /// `crack_tips.csv` (one row per tip state, keyed by its crack in the column `key`) and its
 /// totals; `c_r` is the Rayleigh speed, m/s.
-pub(super) fn tips_csv<'s, K: std::fmt::Display>(
+pub(super) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
     key: &str,
-    cracks: impl IntoIterator<Item = (K, &'s [TipState])>,
+    cracks: impl IntoIterator<Item = (K, S)>,
     c_r: f64,
 ) -> (String, CrackSummary) {
     let mut csv = format!("t_s,{key},x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n");
     let mut summary = CrackSummary::default();
     for (crack, states) in cracks {
+        let states = states.as_ref();
         for s in states {
             let _ = writeln!(
                 csv,

@@ -353,11 +353,7 @@ impl Solve<'_> {
         if self.problem.fracture.is_some() {
             let crossings: Vec<Crossing> = book.crossings.iter().map(|&(_, c)| c).collect();
             let branches = propagation::branch_tips(&book.fracture_events, &crossings);
-            Some(crack_output::tips_csv(
-                "branch",
-                branches.iter().map(|(b, s)| (b, s.as_slice())),
-                c_r,
-            ))
+            Some(crack_output::tips_csv("branch", &branches, c_r))
         } else if self.problem.interfaces.any_cohesive() {
             let names = mesh.tag_names();
             let crossings: Vec<_> = book

@@ -801,11 +801,7 @@ mod tests {
         let tips = branch_tips(&events, &crossings);
         assert_eq!(tips.keys().copied().collect::<Vec<_>>(), [2]);
         assert_eq!(tips[&2].len(), 40);
-        let (_, summary) = crack_output::tips_csv(
-            "branch",
-            tips.iter().map(|(b, s)| (b, s.as_slice())),
-            1000.0,
-        );
+        let (_, summary) = crack_output::tips_csv("branch", &tips, 1000.0);
         assert!(
             (summary.max_speed_over_c_r - 0.4).abs() < 0.004,
             "{summary:?}"
@@ -865,11 +861,7 @@ mod tests {
                 );
             }
         }
-        let (csv, summary) = crack_output::tips_csv(
-            "branch",
-            tips.iter().map(|(b, s)| (b, s.as_slice())),
-            1000.0,
-        );
+        let (csv, summary) = crack_output::tips_csv("branch", &tips, 1000.0);
         assert_eq!(csv.lines().count(), 185);
         assert!(csv.starts_with("t_s,branch,x_m,"));
         assert!(
