@@ -1093,10 +1093,13 @@ fn run_job(
         interface,
         loading: problem.loading,
         crack,
-        fracture: problem
-            .fracture
-            .as_ref()
-            .map(|_| propagation::summary(&book.fracture_events, &state)),
+        fracture: problem.fracture.as_ref().map(|fracture| {
+            let initial_tips: Vec<[f64; 2]> = (fracture.initial_tips(&problem.mesh).iter())
+                .zip(problem.mesh.vertices())
+                .filter_map(|(tip, &p)| tip.as_ref().map(|_| p))
+                .collect();
+            propagation::summary(&book.fracture_events, &state, &initial_tips)
+        }),
         error,
         snapshots: book.snapshots.written().to_vec(),
         refinements: book.refinements,

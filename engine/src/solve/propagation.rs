@@ -103,8 +103,8 @@ pub struct FractureSummary {
     pub total_length: f64,
     /// Time of the first branching, s.
     pub first_branching_time: Option<f64>,
-    /// Distance from the start of the branching branch's first edge (for the first branch,
-    /// the initial tip) to the point of the first branching, m.
+    /// Distance from the nearest tip of the initial cracks to the point of the first
+    /// branching, m; none without an initial crack.
     pub first_branching_distance: Option<f64>,
 }
 
@@ -615,10 +615,15 @@ const ZOOM_MAX_EDGED_VERTICES: usize = 1500;
 /// Size of `crack_path.png`, pixels.
 const CRACK_PATH_PNG_SIZE: (u32, u32) = (1200, 900);
 
-/// The summary of the fracture events of a run on the final `state`.
-pub(super) fn summary(events: &[FractureEvent], state: &Frontier) -> FractureSummary {
+/// The summary of the fracture events of a run on the final `state`; `initial_tips` are the
+/// positions of the initial cracks' tips, m.
+pub(super) fn summary(
+    events: &[FractureEvent],
+    state: &Frontier,
+    initial_tips: &[[f64; 2]],
+) -> FractureSummary {
     let count = |kind: &str| events.iter().filter(|e| e.kind == kind).count() as u64;
-    let (first_branching_time, first_branching_distance) = first_branching(events);
+    let (first_branching_time, first_branching_distance) = first_branching(events, initial_tips);
     FractureSummary {
         nucleations: count("nucleation"),
         extensions: count("extension"),
@@ -638,9 +643,12 @@ pub(super) fn summary(events: &[FractureEvent], state: &Frontier) -> FractureSum
     }
 }
 
-/// The time (s) of the first branching and its distance (m) from the start of its branch's
-/// first edge (for a branch that starts at an initial tip, the initial tip).
-fn first_branching(events: &[FractureEvent]) -> (Option<f64>, Option<f64>) {
+/// The time (s) of the first branching and its distance (m) from the nearest of
+/// `initial_tips` (m), as the seed measures it (none without initial tips).
+fn first_branching(
+    events: &[FractureEvent],
+    initial_tips: &[[f64; 2]],
+) -> (Option<f64>, Option<f64>) {
     let Some(b) = events
         .iter()
         .filter(|e| e.kind == "branching")
@@ -648,12 +656,10 @@ fn first_branching(events: &[FractureEvent]) -> (Option<f64>, Option<f64>) {
     else {
         return (None, None);
     };
-    let origin = events
+    let distance = initial_tips
         .iter()
-        .filter(|e| e.kind == "extension" && e.branch == b.branch)
-        .min_by(|x, y| x.time.total_cmp(&y.time))
-        .map(|e| e.from);
-    let distance = origin.map(|o| (b.from[0] - o[0]).hypot(b.from[1] - o[1]));
+        .map(|o| (b.from[0] - o[0]).hypot(b.from[1] - o[1]))
+        .min_by(f64::total_cmp);
     (Some(b.time), distance)
 }
 
@@ -871,8 +877,10 @@ mod tests {
         let mut branching = extension(1.2e-7, 0, [6e-5, 0.0], [6e-5, 0.0]);
         branching.kind = "branching".into();
         events.push(branching);
-        let (time, distance) = first_branching(&events);
+        // Measured from the nearer initial tip, not from where branch 0's edges start.
+        let (time, distance) = first_branching(&events, &[[1e-5, 0.0], [-1e-3, 0.0]]);
         assert_eq!(time, Some(1.2e-7));
-        assert!((distance.unwrap() - 6e-5).abs() < 1e-15, "{distance:?}");
+        assert!((distance.unwrap() - 5e-5).abs() < 1e-15, "{distance:?}");
+        assert_eq!(first_branching(&events, &[]), (Some(1.2e-7), None));
     }
 }
