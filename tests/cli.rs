@@ -226,6 +226,10 @@ fn invalid_adaptivity_settings() {
         ),
         ("adapt.min_edge=0.0", ["adapt.min_edge", "positive length"]),
         (
+            "adapt.tip_edge=-1e-6",
+            ["adapt.tip_edge", "positive length"],
+        ),
+        (
             "adapt.max_edge=1e-4",
             ["adapt.max_edge", "twice adapt.min_edge"],
         ),

@@ -209,6 +209,42 @@ fn the_crack_pattern_is_bitwise_the_same_for_one_two_and_four_threads() {
     assert_eq!(outputs(a.path()), outputs(c.path()));
 }
 
+/// `adapt.tip_edge` refines the star of an active crack tip whatever the indicator says: with a
+/// tolerance no patch reaches, the notch tip's star of 88 um refinement edges is bisected down
+/// to refinement edges of at most 20 um (15.6 um: legs of 11 um) and nothing else is refined
+/// but what conformity asks; without it nothing is refined at all.
+#[test]
+fn the_star_of_a_crack_tip_is_refined_to_the_tip_edge() {
+    let set = [
+        "time.end=6e-8",
+        "output.png=false",
+        "adapt.enabled=true",
+        "adapt.tol=1e9",
+        "adapt.min_edge=5e-6",
+    ];
+    let (plain, _) = solve(&shipped("crack_growth.toml", &set), 2, true);
+    assert_eq!(plain.refinements, 0);
+    assert!(
+        (plain.min_edge - 62.5e-6).abs() < 1e-12,
+        "{}",
+        plain.min_edge
+    );
+    let mut tip = set.to_vec();
+    tip.push("adapt.tip_edge=2e-5");
+    let (refined, _) = solve(&shipped("crack_growth.toml", &tip), 2, true);
+    assert!(
+        (refined.min_edge - 62.5e-6 / 2f64.powf(2.5)).abs() < 1e-9,
+        "{}",
+        refined.min_edge
+    );
+    assert!(
+        refined.vertices > plain.vertices && refined.vertices < plain.vertices + 60,
+        "{} {}",
+        refined.vertices,
+        plain.vertices
+    );
+}
+
 /// Weak defects (mean 150 MPa, sd 30 MPa, lower bound 30 MPa, 1e4 per mm^2): cracks nucleate
 /// ahead of and around the notch once the waves meet.
 const WEAK_DEFECTS: [&str; 4] = [

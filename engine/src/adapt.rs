@@ -30,6 +30,8 @@ pub(crate) struct Adapt {
     pub(crate) min_edge: f64,
     /// Longest edge allowed before the first tent, m.
     pub(crate) max_edge: f64,
+    /// Longest refinement edge in the star of an active crack tip, m (infinite: no rule).
+    pub(crate) tip_edge: f64,
     /// Zones with a finer longest edge.
     zones: Vec<ZoneConfig>,
     /// Least reference energy, in the scaled units of the indicator's energies (J/m over the
@@ -64,6 +66,7 @@ impl Adapt {
             lower: config.tol / config.coarsen_ratio,
             min_edge: config.min_edge.unwrap_or(1e-3 * mesh.edge_length_range().0),
             max_edge: config.max_edge.unwrap_or(f64::INFINITY),
+            tip_edge: config.tip_edge.unwrap_or(f64::INFINITY),
             zones: config.zone.clone(),
             energy_floor: config.reference_energy.map_or(0.0, |e| e / rho),
             crossing: area * diameter / c_max,

@@ -280,8 +280,8 @@ impl Fracture {
     /// The directions (radians, unused entries NaN) of a crack nucleating at the top of the
     /// tent pole of vertex `v` that reached `t_new` (s), if one does: the largest effective
     /// traction over orientations and over the star's elements (`stress(t)`, Pa, at the middle
-    /// of the pole) reaches the weakest defect in the area the vertex stands for (a third of
-    /// its star's area): a Poisson number of defects of mean `density * area` with
+    /// of the pole) reaches the weakest defect in the patch's outflow area (the star's area, seed
+    /// 4.4.2, approximation 1): a Poisson number of defects of mean `density * area` with
     /// truncated-normal strengths. The draws are keyed by the run seed, the vertex position and
     /// `t_new` (bits), so they do not depend on vertex numbering or thread scheduling.
     ///
@@ -320,7 +320,7 @@ impl Fracture {
         if strongest <= n.strengths.lower {
             return None;
         }
-        let area = star.iter().map(|&t| mesh.area(t)).sum::<f64>() / 3.0;
+        let area = star.iter().map(|&t| mesh.area(t)).sum::<f64>();
         let [x, y] = mesh.vertex(v);
         let mut draws = Draws::new(n.seed, [x.to_bits(), y.to_bits(), t_new.to_bits()]);
         let weakest = weakest_defect(n.density, area, &n.strengths, &mut draws)?;
@@ -650,14 +650,13 @@ mod tests {
                     .is_some()
             })
             .count();
-        // P = 1 - exp(-density area F(45)) with the area a third of the star's and
+        // P = 1 - exp(-density area F(45)) with the area the star's and
         // F(45) = P(s < 45) for N(50, 10) truncated at 5.
         let area: f64 = mesh
             .vertex_triangles(inside)
             .iter()
             .map(|&t| mesh.area(t))
-            .sum::<f64>()
-            / 3.0;
+            .sum();
         let p = 1.0 - (-area * strengths.cdf(45.0)).exp();
         let expected = 200.0 * p;
         assert!(

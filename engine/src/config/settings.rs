@@ -224,6 +224,11 @@ pub struct AdaptConfig {
     /// Edges longer than this, m, are split before the first tent. Default: no limit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_edge: Option<f64>,
+    /// The patch of an active crack tip is rejected and its star refined while one of its
+    /// elements has a refinement edge longer than this, m (down to `min_edge`), whatever the
+    /// indicator says. Default: none (the indicator alone refines around tips).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tip_edge: Option<f64>,
     /// Zones with a finer `max_edge` (`[[adapt.zone]]`): refined before the first tent and
     /// never coarsened beyond it.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -264,6 +269,7 @@ impl Default for AdaptConfig {
             coarsen_ratio: default_coarsen_ratio(),
             min_edge: None,
             max_edge: None,
+            tip_edge: None,
             zone: Vec::new(),
             reference_energy: None,
         }

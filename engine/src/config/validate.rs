@@ -111,7 +111,11 @@ impl Config {
                 ),
             );
         }
-        for (key, value) in [("min_edge", a.min_edge), ("max_edge", a.max_edge)] {
+        for (key, value) in [
+            ("min_edge", a.min_edge),
+            ("max_edge", a.max_edge),
+            ("tip_edge", a.tip_edge),
+        ] {
             if let Some(v) = value {
                 if !(v.is_finite() && v > 0.0) {
                     return fail(key, format!("must be a positive length in m, got {v}"));

@@ -27,7 +27,9 @@ impl Solve<'_> {
     /// midpoint (s) when `m` may be coarsened now: its elements are calm, it is at least a
     /// quarter of its smallest tent budget below the edge's midpoint (thinner coarsening
     /// elements are slivers, singular at round-off height), the restored parents keep the
-    /// pitcher's invariant and the edge is not longer than `adapt.max_edge`.
+    /// pitcher's invariant, the edge is not longer than `adapt.max_edge` and, when it is longer
+    /// than `adapt.tip_edge`, no active crack tip is a corner of `m`'s star (the tip's refinement
+    /// would split it again).
     pub(super) fn coarsening(
         &self,
         adapt: &Adapt,
@@ -46,8 +48,15 @@ impl Solve<'_> {
             .iter()
             .map(|&t| state.pitcher.budget(t))
             .fold(f64::INFINITY, f64::min);
+        let near_tip = || {
+            mesh.vertex_triangles(m)
+                .iter()
+                .flat_map(|&t| mesh.triangles()[t as usize])
+                .any(|w| state.tips[w as usize].is_some())
+        };
         (t_mid - t_m >= 0.25 * budget
             && long <= adapt.max_edge_at(midpoint(mesh.vertex(ends[0]), mesh.vertex(ends[1])))
+            && (long <= adapt.tip_edge || !near_tip())
             && state.calm_around(m)
             && self.debonded_if_damage(state, m, ends)
             && state.pitcher.may_coarsen(mesh, front, m, ends))

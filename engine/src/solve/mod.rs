@@ -24,7 +24,7 @@ use sdg_solver::system::{MAX_FIELDS, State};
 use crate::adapt::Adapt;
 use crate::error::EngineError;
 use crate::estimate::{self, Estimate};
-use crate::frontier::{Coarsening, Frontier};
+use crate::frontier::{Coarsening, Frontier, refinement_edge_length};
 use crate::output::write_atomic;
 use crate::plot;
 use crate::problem::Problem;
@@ -226,10 +226,16 @@ impl Solve<'_> {
         if let Some(adapt) = &self.adapt {
             let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
             let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
-            if !state.insists(v) && eta > adapt.tol {
+            let at_tip = state.tips[v as usize].is_some();
+            // Above the tolerance the whole star is refined; at a crack tip the elements whose
+            // refinement edge exceeds `adapt.tip_edge`.
+            let coarse = |t: TriangleId| {
+                eta > adapt.tol || (at_tip && refinement_edge_length(mesh, t) > adapt.tip_edge)
+            };
+            if !state.insists(v) {
                 let star = star
                     .iter()
-                    .filter(|&&t| self.may_refine(adapt, state, t))
+                    .filter(|&&t| coarse(t) && self.may_refine(adapt, state, t))
                     .map(|&t| (t, mesh.triangles()[t as usize]))
                     .collect::<Vec<_>>();
                 if !star.is_empty() {
@@ -238,7 +244,8 @@ impl Solve<'_> {
                         eta,
                         bulk = report.dissipation,
                         cohesive = report.cohesive_mismatch,
-                        "patch above the tolerance"
+                        at_tip,
+                        "patch above the tolerance or at a coarse tip"
                     );
                     return Ok((tent.t_old, Outcome::Rejected { star }));
                 }
