@@ -232,7 +232,7 @@ impl Solve<'_> {
             let coarse = |t: TriangleId| {
                 eta > adapt.tol || (at_tip && refinement_edge_length(mesh, t) > adapt.tip_edge)
             };
-            if !state.insists(v) {
+            if !state.insists(v) && (eta > adapt.tol || at_tip) {
                 let star = star
                     .iter()
                     .filter(|&&t| coarse(t) && self.may_refine(adapt, state, t))
