@@ -71,6 +71,29 @@ fn patches_over_the_tolerance_at_the_refinement_floor_are_counted() {
     assert_eq!(loose.state_hash, floor.state_hash);
 }
 
+/// Without interfaces or cracks every element is far from them: `adapt.far_edge` is then the
+/// indicator's floor, the same run as `adapt.min_edge` at that length.
+#[test]
+fn without_cracks_the_far_edge_is_the_refinement_floor() {
+    let run = |set: &str| {
+        let mut overrides = SHORT.to_vec();
+        overrides.push(set);
+        solve(&shipped("adaptive_pulse.toml", &overrides), 2, true).0
+    };
+    let floor = run("adapt.min_edge=5e-4");
+    let far = run("adapt.far_edge=5e-4");
+    assert!(floor.refinements > 10, "{floor:?}");
+    assert!(far.min_edge >= 5e-4 * (1.0 - 1e-12), "{far:?}");
+    assert_eq!(
+        (far.state_hash, far.refinements, far.unresolved_patches),
+        (
+            floor.state_hash,
+            floor.refinements,
+            floor.unresolved_patches
+        )
+    );
+}
+
 #[test]
 fn adaptive_deterministic_runs_are_bitwise_identical_for_1_2_and_4_threads() {
     let problem = shipped(

@@ -229,6 +229,7 @@ fn invalid_adaptivity_settings() {
             "adapt.tip_edge=-1e-6",
             ["adapt.tip_edge", "positive length"],
         ),
+        ("adapt.far_edge=0.0", ["adapt.far_edge", "positive length"]),
         (
             "adapt.max_edge=1e-4",
             ["adapt.max_edge", "twice adapt.min_edge"],

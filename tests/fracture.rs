@@ -245,6 +245,33 @@ fn the_star_of_a_crack_tip_is_refined_to_the_tip_edge() {
     );
 }
 
+/// `adapt.far_edge` keeps the indicator's refinement below it to the elements at interfaces
+/// and crack tips: with a floor of 1 m elsewhere the run still refines at the notch and the
+/// crack (edges below the 62.5 um mesh) but bisects less than without it.
+#[test]
+fn the_far_edge_leaves_refinement_near_cracks_alone() {
+    let set = [
+        "adapt.enabled=true",
+        "adapt.tol=1.0",
+        "adapt.min_edge=30e-6",
+        "time.end=8e-7",
+        "output.png=false",
+    ];
+    let (everywhere, _) = solve(&shipped("crack_growth.toml", &set), 2, true);
+    let mut far = set.to_vec();
+    far.push("adapt.far_edge=1.0");
+    let (near, _) = solve(&shipped("crack_growth.toml", &far), 2, true);
+    eprintln!(
+        "refinements {} everywhere, {} near cracks; shortest edges {:e}, {:e}",
+        everywhere.refinements, near.refinements, everywhere.min_edge, near.min_edge
+    );
+    assert!(
+        near.refinements > 0 && near.min_edge < 62.5e-6 * 0.75,
+        "{near:?}"
+    );
+    assert!(near.refinements < everywhere.refinements, "{near:?}");
+}
+
 /// Weak defects (mean 150 MPa, sd 30 MPa, lower bound 30 MPa, 1e4 per mm^2): cracks nucleate
 /// ahead of and around the notch once the waves meet.
 const WEAK_DEFECTS: [&str; 4] = [

@@ -32,6 +32,8 @@ pub(crate) struct Adapt {
     pub(crate) max_edge: f64,
     /// Longest refinement edge in the star of an active crack tip, m (infinite: no rule).
     pub(crate) tip_edge: f64,
+    /// Shortest piece the indicator makes away from interfaces and crack tips, m (0: no rule).
+    pub(crate) far_edge: f64,
     /// Zones with a finer longest edge.
     zones: Vec<ZoneConfig>,
     /// Least reference energy, in the scaled units of the indicator's energies (J/m over the
@@ -67,6 +69,7 @@ impl Adapt {
             min_edge: config.min_edge.unwrap_or(1e-3 * mesh.edge_length_range().0),
             max_edge: config.max_edge.unwrap_or(f64::INFINITY),
             tip_edge: config.tip_edge.unwrap_or(f64::INFINITY),
+            far_edge: config.far_edge.unwrap_or(0.0),
             zones: config.zone.clone(),
             energy_floor: config.reference_energy.map_or(0.0, |e| e / rho),
             crossing: area * diameter / c_max,

@@ -114,6 +114,19 @@ impl Frontier {
         self.calm[t as usize].store(calm, Ordering::Relaxed);
     }
 
+    /// True when a corner of triangle `t` is a crack tip or an end of an interface edge (a
+    /// crack, a notch or a contact line).
+    pub(crate) fn near_crack(&self, t: TriangleId) -> bool {
+        let mesh = &self.mesh;
+        mesh.triangles()[t as usize].iter().any(|&w| {
+            self.tips[w as usize].is_some()
+                || mesh.vertex_neighbors(w).iter().any(|&u| {
+                    mesh.edge_between(w, u)
+                        .is_some_and(|e| mesh.edges()[e as usize].is_interface())
+                })
+        })
+    }
+
     /// True when every element around vertex `v` is calm.
     pub(crate) fn calm_around(&self, v: VertexId) -> bool {
         self.mesh

@@ -229,6 +229,11 @@ pub struct AdaptConfig {
     /// indicator says. Default: none (the indicator alone refines around tips).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tip_edge: Option<f64>,
+    /// Away from interfaces and crack tips the indicator halves no edge into pieces shorter
+    /// than this, m: an element is near a crack when one of its corners is on an interface
+    /// edge or is a crack tip. Default: none (`min_edge` everywhere).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub far_edge: Option<f64>,
     /// Zones with a finer `max_edge` (`[[adapt.zone]]`): refined before the first tent and
     /// never coarsened beyond it.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -270,6 +275,7 @@ impl Default for AdaptConfig {
             min_edge: None,
             max_edge: None,
             tip_edge: None,
+            far_edge: None,
             zone: Vec::new(),
             reference_energy: None,
         }

@@ -115,6 +115,7 @@ impl Config {
             ("min_edge", a.min_edge),
             ("max_edge", a.max_edge),
             ("tip_edge", a.tip_edge),
+            ("far_edge", a.far_edge),
         ] {
             if let Some(v) = value {
                 if !(v.is_finite() && v > 0.0) {

@@ -227,10 +227,13 @@ impl Solve<'_> {
             let area: f64 = star.iter().map(|&t| mesh.area(t)).sum();
             let eta = self.indicator(adapt, &report, area * (t_new - tent.t_old) / 3.0);
             let at_tip = state.tips[v as usize].is_some();
-            // Above the tolerance the whole star is refined; at a crack tip the elements whose
-            // refinement edge exceeds `adapt.tip_edge`.
+            // Above the tolerance the star is refined, away from cracks down to
+            // `adapt.far_edge`; at a crack tip the elements whose refinement edge exceeds
+            // `adapt.tip_edge`.
             let coarse = |t: TriangleId| {
-                eta > adapt.tol || (at_tip && refinement_edge_length(mesh, t) > adapt.tip_edge)
+                let edge = refinement_edge_length(mesh, t);
+                (eta > adapt.tol && (edge >= 2.0 * adapt.far_edge || state.near_crack(t)))
+                    || (at_tip && edge > adapt.tip_edge)
             };
             if !state.insists(v) && (eta > adapt.tol || at_tip) {
                 let star = star
