@@ -1024,7 +1024,8 @@ fn run_job(
             patches = book.patches,
             largest_over_tol = book.unresolved_max,
             "more than 1% of the patches were accepted above adapt.tol because refinement was at \
-             its floor (adapt.min_edge): the run is less resolved than its tolerance asks"
+             its floor (adapt.min_edge, or adapt.far_edge away from cracks): the run is less \
+             resolved than its tolerance asks"
         );
     }
 

@@ -126,9 +126,10 @@ pub struct RunSummary {
     /// `patches`).
     pub rejected_patches: u64,
     /// Patches accepted with the error indicator above `adapt.tol` because none of their star
-    /// triangles could be bisected (halves shorter than `adapt.min_edge`, a star at the
-    /// solvers' capacity, or the front's causality): where the run is less resolved than the
-    /// tolerance asks. Lower `adapt.min_edge` when this is a large share of `patches`.
+    /// triangles could be bisected (halves shorter than `adapt.min_edge`, or than
+    /// `adapt.far_edge` away from cracks, a star at the solvers' capacity, or the front's
+    /// causality): where the run is less resolved than the tolerance asks. Lower those floors
+    /// when this is a large share of `patches`.
     pub unresolved_patches: u64,
     /// The largest indicator of those patches over `adapt.tol` (0 when there are none).
     pub unresolved_max: f64,
