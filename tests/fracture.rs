@@ -30,7 +30,11 @@ fn events(dir: &Path) -> (Vec<Vec<f64>>, Vec<String>) {
 fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branches_both_ways() {
     let problem = shipped(
         "crack_growth.toml",
-        &["time.end=1.1e-6", "output.snapshot_times=[1.1e-6]"],
+        &[
+            "time.end=1.1e-6",
+            "output.snapshot_times=[1.1e-6]",
+            "fracture.macro_length=1e-6",
+        ],
     );
     let (summary, dir) = solve(&problem, 2, true);
     let (rows, kinds) = events(dir.path());
@@ -72,6 +76,13 @@ fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branch
     assert!((10.0..45.0).contains(&angles[0].abs()), "{angles:?}");
     let branching = kinds.iter().position(|k| k == "branching").unwrap();
     assert_eq!(rows[branching][1..3], [x, 1e-3]);
+    // With arms of a micrometre counting as macro, the fork is the crack network's first
+    // macro branching: where and when the tip branched, with the crack coming in from the
+    // notch's tip at (1, 1) mm and the two new arms going on.
+    let fork = fracture.macro_branching.as_ref().expect("a macro fork");
+    assert_eq!((fork.point, fork.time), ([x, 1e-3], rows[branching][0]));
+    assert_eq!(fork.distance, Some(x - 1e-3));
+    assert_eq!(fork.arms.len(), 2, "{fork:?}");
     // The mesh refused both splits when the tip's tent tested it (the front too steep over the
     // crossed triangles for their thin children) and made them when a neighbour's tent retried
     // them, at the tip's same front time: a branching made whole or not at all.

@@ -52,6 +52,11 @@ pub struct FractureConfig {
     /// only at interior vertices on no crack.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub surface_nucleation: bool,
+    /// Reach along crack edges that two arms of a fork (besides the one the crack came in by)
+    /// must have for `summary.json` to report it as the first macro branching, m (> 0). Only
+    /// the report uses it; without it none is reported.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub macro_length: Option<f64>,
 }
 
 impl FractureConfig {
@@ -149,6 +154,14 @@ impl Config {
                 format!("must be a fraction of an edge in (0, 0.5], got {}", f.snap),
             );
         }
+        if let Some(length) = f.macro_length
+            && !(length.is_finite() && length > 0.0)
+        {
+            return fail(
+                "macro_length",
+                format!("must be a positive length in m, got {length}"),
+            );
+        }
         f.defects().map(drop)
     }
 }
@@ -228,6 +241,11 @@ shield_angle = 35.0
                 "(0, 90)",
             ),
             ("fracture.snap=0.6", "fracture.snap", "(0, 0.5]"),
+            (
+                "fracture.macro_length=0.0",
+                "fracture.macro_length",
+                "positive length",
+            ),
             ("fracture.snap=0.0", "fracture.snap", "(0, 0.5]"),
             (
                 "fracture.defect_mean=3e8",

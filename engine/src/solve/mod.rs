@@ -39,6 +39,7 @@ mod checkpoint;
 mod crack_output;
 mod interface_output;
 mod live;
+mod network;
 mod propagation;
 mod summary;
 
@@ -1109,7 +1110,14 @@ fn run_job(
                 .zip(problem.mesh.vertices())
                 .filter_map(|(tip, &p)| tip.as_ref().map(|_| p))
                 .collect();
-            propagation::summary(&book.fracture_events, &state, &initial_tips)
+            let macro_length = config.fracture.as_ref().and_then(|f| f.macro_length);
+            propagation::summary(
+                &book.fracture_events,
+                &state,
+                fracture,
+                &initial_tips,
+                macro_length,
+            )
         }),
         error,
         snapshots: book.snapshots.written().to_vec(),

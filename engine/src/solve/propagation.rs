@@ -29,6 +29,7 @@ use serde::Serialize;
 
 use super::Solve;
 use super::crack_output::{self, TipState};
+use super::network::{self, CrackLink, MacroFork};
 use crate::fracture::{self, Fracture, Pending, Tip};
 use crate::frontier::Frontier;
 use crate::plot::{FieldPlot, Values};
@@ -106,6 +107,10 @@ pub struct FractureSummary {
     /// Distance from the nearest tip of the initial cracks to the point of the first
     /// branching, m; none without an initial crack.
     pub first_branching_distance: Option<f64>,
+    /// The first fork of the crack network with two arms reaching `fracture.macro_length`
+    /// beyond the one the crack came in by ([`network`]); none without that setting or such a
+    /// fork.
+    pub macro_branching: Option<MacroFork>,
 }
 
 impl Solve<'_> {
@@ -616,14 +621,23 @@ const ZOOM_MAX_EDGED_VERTICES: usize = 1500;
 const CRACK_PATH_PNG_SIZE: (u32, u32) = (1200, 900);
 
 /// The summary of the fracture events of a run on the final `state`; `initial_tips` are the
-/// positions of the initial cracks' tips, m.
+/// positions of the initial cracks' tips, m; `macro_length` the arms' reach of a macro fork, m.
 pub(super) fn summary(
     events: &[FractureEvent],
     state: &Frontier,
+    fracture: &Fracture,
     initial_tips: &[[f64; 2]],
+    macro_length: Option<f64>,
 ) -> FractureSummary {
     let count = |kind: &str| events.iter().filter(|e| e.kind == kind).count() as u64;
     let (first_branching_time, first_branching_distance) = first_branching(events, initial_tips);
+    let macro_branching = macro_length.and_then(|length| {
+        network::first_macro_fork(
+            &crack_links(&state.mesh, fracture, events),
+            length,
+            initial_tips,
+        )
+    });
     FractureSummary {
         nucleations: count("nucleation"),
         extensions: count("extension"),
@@ -640,7 +654,34 @@ pub(super) fn summary(
             .fold(0.0, |a, b| a + b),
         first_branching_time,
         first_branching_distance,
+        macro_branching,
     }
+}
+
+/// The crack edges of `mesh` as links of the crack network, each made when the extension
+/// whose segment it lies on was (see [`cracks_csv`]), initial cracks at 0.
+fn crack_links(mesh: &Mesh, fracture: &Fracture, events: &[FractureEvent]) -> Vec<CrackLink> {
+    let extensions: Vec<&FractureEvent> = events.iter().filter(|e| e.kind == "extension").collect();
+    mesh.edges()
+        .iter()
+        .filter(|edge| fracture.is_crack(edge.tag))
+        .map(|edge| {
+            let points = edge.vertices.map(|w| mesh.vertex(w));
+            let middle = [
+                0.5 * (points[0][0] + points[1][0]),
+                0.5 * (points[0][1] + points[1][1]),
+            ];
+            let time = extensions
+                .iter()
+                .find(|e| on_segment(middle, e.from, e.to))
+                .map_or(0.0, |e| e.time);
+            CrackLink {
+                ends: edge.vertices,
+                points,
+                time,
+            }
+        })
+        .collect()
 }
 
 /// The time (s) of the first branching and its distance (m) from the nearest of

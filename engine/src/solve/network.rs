@@ -1,0 +1,270 @@
+//! The crack network at the end of a run and its first macroscopic fork (`summary.json`
+//! `fracture.macro_branching`).
+//!
+//! The crack edges form a graph on the mesh's vertices (cracks that arrest on one another share
+//! a vertex, so a chain of nucleated cracks that link up is one path). At a vertex with three or
+//! more crack edges, the edges fall into *arms*: the parts of the network that stay connected
+//! once the vertex is taken out (two edges of a loop through the vertex are one arm). An arm's
+//! *reach* is the longest distance along crack edges from the vertex to a point of the arm; its
+//! *start* is the earliest time one of its edges at the vertex was made (an extension's time,
+//! 0 for initial cracks). The arm that started first is the one the crack came in by; the vertex
+//! is a *macro fork* when at least two of the other arms reach `length`, and it forked when the
+//! second of those started. Microbranches, side cracks and the steps of a wavy crack leave arms
+//! shorter than `length` and are no macro fork; the seed's "the crack branches at 0.37 mm ahead
+//! of the initial crack tip at 2.26 us" is the first macro fork.
+
+use std::cmp::Ordering;
+use std::collections::{BTreeMap, BinaryHeap};
+
+use serde::Serialize;
+
+use sdg_mesh::VertexId;
+
+/// One crack edge of the network.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct CrackLink {
+    /// Its end vertices.
+    pub(super) ends: [VertexId; 2],
+    /// Its end points, m.
+    pub(super) points: [[f64; 2]; 2],
+    /// When it was made, s (0 for initial cracks).
+    pub(super) time: f64,
+}
+
+/// The first macroscopic fork of the crack network.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MacroFork {
+    /// When its second long arm started, s.
+    pub time: f64,
+    /// Where, m.
+    pub point: [f64; 2],
+    /// Distance from the nearest tip of the initial cracks, m; none without initial cracks.
+    pub distance: Option<f64>,
+    /// Reach of each arm other than the incoming one that reaches the macro length, longest
+    /// first, m.
+    pub arms: Vec<f64>,
+}
+
+/// A vertex's neighbour along a crack edge, with the edge's length (m) and time (s).
+type Neighbour = (VertexId, f64, f64);
+
+/// Per vertex of the network, its neighbours and its position (m).
+type Graph = BTreeMap<VertexId, (Vec<Neighbour>, [f64; 2])>;
+
+/// The first macro fork of the network of `links` whose forward arms reach `length` (m): the
+/// earliest to fork, the nearest to `initial_tips` (m) among those of equal time.
+pub(super) fn first_macro_fork(
+    links: &[CrackLink],
+    length: f64,
+    initial_tips: &[[f64; 2]],
+) -> Option<MacroFork> {
+    let mut graph = Graph::new();
+    for link in links {
+        let length = distance(link.points[0], link.points[1]);
+        for (i, &v) in link.ends.iter().enumerate() {
+            let entry = graph
+                .entry(v)
+                .or_insert_with(|| (Vec::new(), link.points[i]));
+            entry.0.push((link.ends[1 - i], length, link.time));
+        }
+    }
+    let mut best: Option<MacroFork> = None;
+    for (&v, (neighbours, point)) in &graph {
+        if neighbours.len() < 3 {
+            continue;
+        }
+        let Some((time, arms)) = fork_at(&graph, v, length) else {
+            continue;
+        };
+        let candidate = MacroFork {
+            time,
+            point: *point,
+            distance: initial_tips
+                .iter()
+                .map(|&tip| distance(tip, *point))
+                .min_by(f64::total_cmp),
+            arms,
+        };
+        let earlier = |a: &MacroFork, b: &MacroFork| {
+            a.time.total_cmp(&b.time).then(
+                a.distance
+                    .unwrap_or(0.0)
+                    .total_cmp(&b.distance.unwrap_or(0.0)),
+            ) == Ordering::Less
+        };
+        if best.as_ref().is_none_or(|b| earlier(&candidate, b)) {
+            best = Some(candidate);
+        }
+    }
+    best
+}
+
+/// When `v` is a macro fork for `length` (m): the time it forked (s) and the reaches of its
+/// long forward arms (m), longest first.
+fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<(f64, Vec<f64>)> {
+    // Shortest paths from `v` never come back through it: each stays in its arm.
+    let distances = distances_from(graph, v);
+    let neighbours = &graph[&v].0;
+    let mut arm_of: BTreeMap<VertexId, usize> = BTreeMap::new();
+    // (start, reach) of each arm.
+    let mut arms: Vec<(f64, f64)> = Vec::new();
+    for &(first, _, _) in neighbours {
+        if arm_of.contains_key(&first) {
+            continue;
+        }
+        let arm = arms.len();
+        let mut reach = 0.0f64;
+        let mut stack = vec![first];
+        arm_of.insert(first, arm);
+        while let Some(u) = stack.pop() {
+            reach = reach.max(distances[&u]);
+            for &(w, _, _) in &graph[&u].0 {
+                if w != v && !arm_of.contains_key(&w) {
+                    arm_of.insert(w, arm);
+                    stack.push(w);
+                }
+            }
+        }
+        arms.push((f64::INFINITY, reach));
+    }
+    for &(w, _, time) in neighbours {
+        let start = &mut arms[arm_of[&w]].0;
+        *start = start.min(time);
+    }
+    arms.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)));
+    let mut long: Vec<(f64, f64)> = arms.into_iter().skip(1).filter(|a| a.1 >= length).collect();
+    if long.len() < 2 {
+        return None;
+    }
+    let time = long[1].0;
+    long.sort_by(|a, b| b.1.total_cmp(&a.1));
+    Some((time, long.into_iter().map(|a| a.1).collect()))
+}
+
+/// Distances (m) along crack edges from `v` to every vertex of its part of the network.
+fn distances_from(graph: &Graph, v: VertexId) -> BTreeMap<VertexId, f64> {
+    let mut best: BTreeMap<VertexId, f64> = BTreeMap::from([(v, 0.0)]);
+    let mut queue = BinaryHeap::from([Nearest(0.0, v)]);
+    while let Some(Nearest(d, u)) = queue.pop() {
+        if d > best[&u] {
+            continue;
+        }
+        for &(w, edge, _) in &graph[&u].0 {
+            let next = d + edge;
+            if best.get(&w).is_none_or(|&old| next < old) {
+                best.insert(w, next);
+                queue.push(Nearest(next, w));
+            }
+        }
+    }
+    best
+}
+
+/// A queue entry of Dijkstra's search, nearest first.
+#[derive(PartialEq)]
+struct Nearest(f64, VertexId);
+
+impl Eq for Nearest {}
+
+impl Ord for Nearest {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
+    }
+}
+
+impl PartialOrd for Nearest {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Links along the points `path` (vertex ids from `first`), each made at `time`.
+    fn path(first: VertexId, points: &[[f64; 2]], times: &[f64]) -> Vec<CrackLink> {
+        points
+            .windows(2)
+            .enumerate()
+            .map(|(i, w)| CrackLink {
+                ends: [first + i as VertexId, first + i as VertexId + 1],
+                points: [w[0], w[1]],
+                time: times[i],
+            })
+            .collect()
+    }
+
+    /// A notch from (0, 0) to the fork at (1, 0) made at t = 0, and two arms from the fork
+    /// (vertex 1): up to (2, 1) in two edges from t = 1, down to (1.5, -0.5) from t = 2.
+    fn y_network() -> Vec<CrackLink> {
+        let mut links = path(0, &[[0.0, 0.0], [1.0, 0.0]], &[0.0]);
+        links.push(CrackLink {
+            ends: [1, 2],
+            points: [[1.0, 0.0], [1.5, 0.5]],
+            time: 1.0,
+        });
+        links.push(CrackLink {
+            ends: [2, 3],
+            points: [[1.5, 0.5], [2.0, 1.0]],
+            time: 1.5,
+        });
+        links.push(CrackLink {
+            ends: [1, 4],
+            points: [[1.0, 0.0], [1.5, -0.5]],
+            time: 2.0,
+        });
+        links
+    }
+
+    #[test]
+    fn a_fork_with_two_long_arms_is_a_macro_fork_from_its_second_arm_s_start() {
+        let (up, down) = (2f64.sqrt(), 0.5 * 2f64.sqrt());
+        let fork = first_macro_fork(&y_network(), 0.7, &[[0.5, 0.0]]).unwrap();
+        assert_eq!(fork.time, 2.0);
+        assert_eq!(fork.point, [1.0, 0.0]);
+        assert_eq!(fork.distance, Some(0.5));
+        assert_eq!(fork.arms.len(), 2);
+        assert!((fork.arms[0] - up).abs() < 1e-15 && (fork.arms[1] - down).abs() < 1e-15);
+        // An arm shorter than the length is a side branch: no macro fork.
+        assert_eq!(first_macro_fork(&y_network(), 0.8, &[]), None);
+    }
+
+    #[test]
+    fn the_arm_that_started_first_is_the_incoming_one() {
+        // The same network without a notch: the crack came in from the upper arm (t = 1), and
+        // the fork's other arms are the lower one (0.71) and the former notch (1.0), made last.
+        let mut links = y_network();
+        links[0].time = 3.0;
+        let fork = first_macro_fork(&links, 0.7, &[]).unwrap();
+        assert_eq!((fork.time, fork.distance), (3.0, None));
+        assert_eq!(fork.arms, vec![1.0, 0.5 * 2f64.sqrt()]);
+    }
+
+    #[test]
+    fn two_edges_of_one_loop_are_one_arm() {
+        // A notch into vertex 1 at (1, 0); from there a loop through (2, 1) and (2, -1) that
+        // closes at (3, 0), and a long tail on from (3, 0): vertex 1 has three crack edges but
+        // only two arms, and (3, 0) has one arm forward.
+        let mut links = path(0, &[[0.0, 0.0], [1.0, 0.0]], &[0.0]);
+        let loop_points = [[1.0, 0.0], [2.0, 1.0], [3.0, 0.0], [2.0, -1.0], [1.0, 0.0]];
+        let ids = [1, 2, 3, 4, 1];
+        for (i, w) in loop_points.windows(2).enumerate() {
+            links.push(CrackLink {
+                ends: [ids[i], ids[i + 1]],
+                points: [w[0], w[1]],
+                time: 1.0 + i as f64,
+            });
+        }
+        links.push(CrackLink {
+            ends: [3, 5],
+            points: [[3.0, 0.0], [9.0, 0.0]],
+            time: 9.0,
+        });
+        assert_eq!(first_macro_fork(&links, 0.5, &[]), None);
+    }
+}
