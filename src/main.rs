@@ -345,6 +345,26 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
             summary.energy.balance_residual_rel,
             dir.display()
         );
+        if let Some(f) = &summary.fracture {
+            let fork = f.macro_branching.as_ref().map_or(String::new(), |m| {
+                let arms: Vec<String> = m.arms.iter().map(|a| format!("{a:.3e}")).collect();
+                let from_tip = m.distance.map_or(String::new(), |d| {
+                    format!(", {d:.3e} m from the initial tip")
+                });
+                format!(
+                    "; first macro branching at t = {:.6e} s at ({:.4e}, {:.4e}) m{from_tip}, \
+                     arms {} m",
+                    m.time,
+                    m.point[0],
+                    m.point[1],
+                    arms.join(", ")
+                )
+            });
+            println!(
+                "cracks: {} nucleations, {} extensions, {} branchings, {} branches{fork}",
+                f.nucleations, f.extensions, f.branchings, f.branches
+            );
+        }
     }
     Ok(())
 }
