@@ -7,9 +7,9 @@
 //! once the vertex is taken out (two edges of a loop through the vertex are one arm). An arm's
 //! *reach* is the longest distance along crack edges from the vertex to a point of the arm; its
 //! *start* is the earliest time one of its edges at the vertex was made (an extension's time,
-//! 0 for initial cracks). The arm that started first is the one the crack came in by; the vertex
-//! is a *macro fork* when at least two of the other arms reach `length`, and it forked when the
-//! second of those started. Microbranches, side cracks and the steps of a wavy crack leave arms
+//! 0 for initial cracks). The crack came in by the arm that holds an initial crack, or without
+//! one by the arm that started first; the vertex is a *macro fork* when at least two of the
+//! other arms reach `length`, and it forked when the second of those started. Microbranches, side cracks and the steps of a wavy crack leave arms
 //! shorter than `length` and are no macro fork; the seed's "the crack branches at 0.37 mm ahead
 //! of the initial crack tip at 2.26 us" is the first macro fork.
 
@@ -29,6 +29,8 @@ pub(super) struct CrackLink {
     pub(super) points: [[f64; 2]; 2],
     /// When it was made, s (0 for initial cracks).
     pub(super) time: f64,
+    /// It belongs to an initial crack.
+    pub(super) initial: bool,
 }
 
 /// The first macroscopic fork of the crack network.
@@ -48,8 +50,9 @@ pub struct MacroFork {
 /// A vertex's neighbour along a crack edge, with the edge's length (m) and time (s).
 type Neighbour = (VertexId, f64, f64);
 
-/// Per vertex of the network, its neighbours and its position (m).
-type Graph = BTreeMap<VertexId, (Vec<Neighbour>, [f64; 2])>;
+/// Per vertex of the network: its neighbours, its position (m) and whether an initial crack's
+/// edge ends there.
+type Graph = BTreeMap<VertexId, (Vec<Neighbour>, [f64; 2], bool)>;
 
 /// The first macro fork of the network of `links` whose forward arms reach `length` (m): the
 /// earliest to fork, the nearest to `initial_tips` (m) among those of equal time.
@@ -64,12 +67,13 @@ pub(super) fn first_macro_fork(
         for (i, &v) in link.ends.iter().enumerate() {
             let entry = graph
                 .entry(v)
-                .or_insert_with(|| (Vec::new(), link.points[i]));
+                .or_insert_with(|| (Vec::new(), link.points[i], false));
             entry.0.push((link.ends[1 - i], length, link.time));
+            entry.2 |= link.initial;
         }
     }
     let mut best: Option<MacroFork> = None;
-    for (&v, (neighbours, point)) in &graph {
+    for (&v, (neighbours, point, _)) in &graph {
         if neighbours.len() < 3 {
             continue;
         }
@@ -106,18 +110,20 @@ fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<(f64, Vec<f64>)> {
     let distances = distances_from(graph, v);
     let neighbours = &graph[&v].0;
     let mut arm_of: BTreeMap<VertexId, usize> = BTreeMap::new();
-    // (start, reach) of each arm.
-    let mut arms: Vec<(f64, f64)> = Vec::new();
+    // (holds an initial crack, start, reach) of each arm.
+    let mut arms: Vec<(bool, f64, f64)> = Vec::new();
     for &(first, _, _) in neighbours {
         if arm_of.contains_key(&first) {
             continue;
         }
         let arm = arms.len();
         let mut reach = 0.0f64;
+        let mut initial = false;
         let mut stack = vec![first];
         arm_of.insert(first, arm);
         while let Some(u) = stack.pop() {
             reach = reach.max(distances[&u]);
+            initial |= graph[&u].2;
             for &(w, _, _) in &graph[&u].0 {
                 if w != v && !arm_of.contains_key(&w) {
                     arm_of.insert(w, arm);
@@ -125,14 +131,25 @@ fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<(f64, Vec<f64>)> {
                 }
             }
         }
-        arms.push((f64::INFINITY, reach));
+        arms.push((initial, f64::INFINITY, reach));
     }
     for &(w, _, time) in neighbours {
-        let start = &mut arms[arm_of[&w]].0;
+        let start = &mut arms[arm_of[&w]].1;
         *start = start.min(time);
     }
-    arms.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)));
-    let mut long: Vec<(f64, f64)> = arms.into_iter().skip(1).filter(|a| a.1 >= length).collect();
+    // The incoming arm first: one that holds an initial crack, else the first to start.
+    arms.sort_by(|a, b| {
+        b.0.cmp(&a.0)
+            .then(a.1.total_cmp(&b.1))
+            .then(b.2.total_cmp(&a.2))
+    });
+    let mut long: Vec<(f64, f64)> = arms
+        .into_iter()
+        .skip(1)
+        .filter(|a| a.2 >= length)
+        .map(|a| (a.1, a.2))
+        .collect();
+    long.sort_by(|a, b| a.0.total_cmp(&b.0));
     if long.len() < 2 {
         return None;
     }
@@ -195,6 +212,7 @@ mod tests {
                 ends: [first + i as VertexId, first + i as VertexId + 1],
                 points: [w[0], w[1]],
                 time: times[i],
+                initial: times[i] == 0.0,
             })
             .collect()
     }
@@ -207,16 +225,19 @@ mod tests {
             ends: [1, 2],
             points: [[1.0, 0.0], [1.5, 0.5]],
             time: 1.0,
+            initial: false,
         });
         links.push(CrackLink {
             ends: [2, 3],
             points: [[1.5, 0.5], [2.0, 1.0]],
             time: 1.5,
+            initial: false,
         });
         links.push(CrackLink {
             ends: [1, 4],
             points: [[1.0, 0.0], [1.5, -0.5]],
             time: 2.0,
+            initial: false,
         });
         links
     }
@@ -235,14 +256,21 @@ mod tests {
     }
 
     #[test]
-    fn the_arm_that_started_first_is_the_incoming_one() {
+    fn without_an_initial_crack_the_arm_that_started_first_is_the_incoming_one() {
         // The same network without a notch: the crack came in from the upper arm (t = 1), and
         // the fork's other arms are the lower one (0.71) and the former notch (1.0), made last.
         let mut links = y_network();
         links[0].time = 3.0;
+        links[0].initial = false;
         let fork = first_macro_fork(&links, 0.7, &[]).unwrap();
         assert_eq!((fork.time, fork.distance), (3.0, None));
         assert_eq!(fork.arms, vec![1.0, 0.5 * 2f64.sqrt()]);
+        // With the notch an initial crack again, it is the incoming arm whenever its edge at
+        // the fork was made (here a crack that ran into it later): the fork is as before.
+        links[0].initial = true;
+        let fork = first_macro_fork(&links, 0.7, &[]).unwrap();
+        assert_eq!(fork.time, 2.0);
+        assert_eq!(fork.arms.len(), 2);
     }
 
     #[test]
@@ -258,12 +286,14 @@ mod tests {
                 ends: [ids[i], ids[i + 1]],
                 points: [w[0], w[1]],
                 time: 1.0 + i as f64,
+                initial: false,
             });
         }
         links.push(CrackLink {
             ends: [3, 5],
             points: [[3.0, 0.0], [9.0, 0.0]],
             time: 9.0,
+            initial: false,
         });
         assert_eq!(first_macro_fork(&links, 0.5, &[]), None);
     }

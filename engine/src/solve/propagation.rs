@@ -659,7 +659,8 @@ pub(super) fn summary(
 }
 
 /// The crack edges of `mesh` as links of the crack network, each made when the extension
-/// whose segment it lies on was (see [`cracks_csv`]), initial cracks at 0.
+/// whose segment it lies on was (see [`cracks_csv`]), initial cracks (every tag but the one of
+/// new crack edges) at 0.
 fn crack_links(mesh: &Mesh, fracture: &Fracture, events: &[FractureEvent]) -> Vec<CrackLink> {
     let extensions: Vec<&FractureEvent> = events.iter().filter(|e| e.kind == "extension").collect();
     mesh.edges()
@@ -679,6 +680,7 @@ fn crack_links(mesh: &Mesh, fracture: &Fracture, events: &[FractureEvent]) -> Ve
                 ends: edge.vertices,
                 points,
                 time,
+                initial: edge.tag != Some(fracture.tag),
             }
         })
         .collect()
