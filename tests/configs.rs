@@ -40,10 +40,11 @@ const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 3] = [
 ];
 
 /// Shipped configs checked against references by other tests: (file, test).
-const CHECKED_ELSEWHERE: [(&str, &str); 12] = [
+const CHECKED_ELSEWHERE: [(&str, &str); 13] = [
     ("crack_growth.toml", "tests/fracture.rs"),
     ("crack_branching.toml", "tests/fracture.rs"),
     ("crack_branching_full.toml", "tests/fracture.rs"),
+    ("crack_branching_set2.toml", "tests/fracture.rs"),
     ("contact_separation.toml", "tests/contact.rs"),
     ("stick_slip.toml", "tests/contact.rs"),
     ("cohesive_wave.toml", "tests/cohesive.rs"),

@@ -486,6 +486,49 @@ fn the_full_branching_run_is_the_main_job_over_the_seed_s_time_span() {
     assert_eq!(main, full);
 }
 
+/// `configs/crack_branching_set2.toml` is the main job with the seed's second parameter set
+/// (4.5: `tau = 1e-3 us`, `rho_N` 100 times larger) and crack tips refined from the start.
+#[test]
+fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved_tips() {
+    let read = |name: &str| -> toml::Table {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("configs")
+            .join(name);
+        std::fs::read_to_string(path).unwrap().parse().unwrap()
+    };
+    let (mut main, mut set2) = (
+        read("crack_branching.toml"),
+        read("crack_branching_set2.toml"),
+    );
+    let float = |v: &toml::Value| v.as_float().unwrap();
+    for (name, t) in [("main", &main), ("set2", &set2)] {
+        let delays: Vec<f64> = t["interface"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|i| float(&i["delay"]))
+            .collect();
+        let expected = if name == "main" { 1e-8 } else { 1e-9 };
+        assert_eq!(delays, [expected; 2], "{name}");
+    }
+    assert_eq!(float(&main["fracture"]["defect_density"]) * 100.0, 1e13);
+    assert_eq!(float(&set2["fracture"]["defect_density"]), 1e13);
+    assert_eq!(float(&set2["adapt"]["tip_edge"]), 6e-6);
+    assert!(!main["adapt"].as_table().unwrap().contains_key("tip_edge"));
+    for t in [&mut main, &mut set2] {
+        for i in t["interface"].as_array_mut().unwrap() {
+            i.as_table_mut().unwrap().remove("delay");
+        }
+        t["fracture"]
+            .as_table_mut()
+            .unwrap()
+            .remove("defect_density");
+        t["adapt"].as_table_mut().unwrap().remove("tip_edge");
+        t["output"].as_table_mut().unwrap().remove("dir");
+    }
+    assert_eq!(main, set2);
+}
+
 #[test]
 fn without_adaptivity_crack_splits_keep_a_quarter_of_the_shortest_edge() {
     // Without a floor, a crack running through ever smaller triangles split them down to 40 nm
