@@ -50,6 +50,7 @@ pub struct FieldPlot<'a> {
     time: Option<f64>,
     edges: bool,
     segments: &'a [[[f64; 2]; 2]],
+    markers: &'a [[f64; 2]],
     window: Option<[f64; 4]>,
 }
 
@@ -57,6 +58,8 @@ pub struct FieldPlot<'a> {
 const SEGMENT_RGB: [u8; 3] = [228, 26, 28];
 /// Mesh edges: black at this opacity, visible on both ends of viridis.
 const EDGE_ALPHA: f64 = 0.45;
+/// Radius of the circles around marked points, pixels (drawn 2 pixels wide, in black).
+const MARKER_RADIUS: f64 = 12.0;
 
 impl<'a> FieldPlot<'a> {
     /// The field `values` on `triangles` (indices into `points`, any orientation).
@@ -69,6 +72,7 @@ impl<'a> FieldPlot<'a> {
             time: None,
             edges: false,
             segments: &[],
+            markers: &[],
             window: None,
         }
     }
@@ -94,6 +98,12 @@ impl<'a> FieldPlot<'a> {
     /// Segments (ends in m) drawn on top in red, e.g. interfaces or crack faces.
     pub fn segments(mut self, segments: &'a [[[f64; 2]; 2]]) -> Self {
         self.segments = segments;
+        self
+    }
+
+    /// Points (m) circled in black on top, e.g. where a crack forks.
+    pub fn markers(mut self, markers: &'a [[f64; 2]]) -> Self {
+        self.markers = markers;
         self
     }
 
@@ -246,6 +256,18 @@ impl<'a> FieldPlot<'a> {
             canvas.line(a, b, SEGMENT_RGB, 1.0);
             let shift = |p: [f64; 2]| [p[0] + off[0], p[1] + off[1]];
             canvas.line(shift(a), shift(b), SEGMENT_RGB, 1.0);
+        }
+        for &m in self.markers {
+            let c = to_px(m);
+            for radius in [MARKER_RADIUS, MARKER_RADIUS + 1.0] {
+                let at = |k: usize| {
+                    let phi = std::f64::consts::TAU * k as f64 / 48.0;
+                    [c[0] + radius * phi.cos(), c[1] + radius * phi.sin()]
+                };
+                for k in 0..48 {
+                    canvas.line(at(k), at(k + 1), [0, 0, 0], 1.0);
+                }
+            }
         }
         let [bx0, by0, bx1, by1] = lay.colorbar;
         for y in by0..by1 {
@@ -581,6 +603,28 @@ mod tests {
         let [bx0, by0, bx1, by1] = lay.colorbar;
         let cx = (bx0 + bx1) / 2;
         assert!(luminance(image.pixel(cx, by0 + 2)) > luminance(image.pixel(cx, by1 - 3)) + 100.0);
+    }
+
+    #[test]
+    fn a_marker_is_a_black_circle_around_its_point() {
+        let (points, triangles) = grid(20, 0.01);
+        let values = vec![0.5; points.len()];
+        let plain = FieldPlot::new(&points, &triangles, Values::Points(&values));
+        let marked = plain.clone().markers(&[[0.005, 0.005]]);
+        let (a, b) = (
+            plain.render((800, 600)).unwrap(),
+            marked.render((800, 600)).unwrap(),
+        );
+        let [x0, y0, x1, y1] = marked.layout((800, 600)).unwrap().field;
+        let (cx, cy) = ((x0 + x1) / 2, (y0 + y1) / 2);
+        let r = MARKER_RADIUS as u32;
+        for (x, y) in [(cx + r, cy), (cx - r, cy), (cx, cy + r), (cx, cy - r)] {
+            assert_eq!(b.pixel(x, y), [0, 0, 0], "({x}, {y})");
+        }
+        // Inside and outside the ring the field shows as without the marker.
+        for (x, y) in [(cx, cy), (cx + r / 2, cy), (cx + 2 * r, cy)] {
+            assert_eq!(a.pixel(x, y), b.pixel(x, y), "({x}, {y})");
+        }
     }
 
     #[test]

@@ -349,7 +349,20 @@ impl Solve<'_> {
         );
         if config.output.png {
             let time = state.front.min_time();
-            propagation::write_crack_path_png(dir, &state.mesh, &cracks, fracture.tag, time);
+            let fork = (config.fracture.as_ref())
+                .and_then(|f| f.macro_length)
+                .and_then(|length| {
+                    let tips = initial_tip_points(fracture, &self.problem.mesh);
+                    propagation::macro_fork(&state.mesh, fracture, events, length, &tips)
+                });
+            propagation::write_crack_path_png(
+                dir,
+                &state.mesh,
+                &cracks,
+                fracture.tag,
+                time,
+                fork.map(|f| f.point),
+            );
         }
         let csv = propagation::cracks_csv(&state.mesh, &cracks, events);
         write_atomic(dir, "cracks.csv", csv.as_bytes())?;
@@ -787,6 +800,14 @@ pub fn estimate_job(problem: &Problem, options: &RunOptions) -> Result<Estimate,
         .estimate(problem, start.max_star, threads, start.adapt.is_some()))
 }
 
+/// The positions (m) of the tips of the initial cracks on the initial `mesh`.
+fn initial_tip_points(fracture: &crate::fracture::Fracture, mesh: &Mesh) -> Vec<[f64; 2]> {
+    (fracture.initial_tips(mesh).iter())
+        .zip(mesh.vertices())
+        .filter_map(|(tip, &p)| tip.as_ref().map(|_| p))
+        .collect()
+}
+
 /// `sdg run`: solves the problem to the end time; writes `summary.json`, `history.csv` and the
 /// configured snapshots. Returns the summary and the output folder.
 pub fn solve_job(
@@ -1106,10 +1127,7 @@ fn run_job(
         loading: problem.loading,
         crack,
         fracture: problem.fracture.as_ref().map(|fracture| {
-            let initial_tips: Vec<[f64; 2]> = (fracture.initial_tips(&problem.mesh).iter())
-                .zip(problem.mesh.vertices())
-                .filter_map(|(tip, &p)| tip.as_ref().map(|_| p))
-                .collect();
+            let initial_tips = initial_tip_points(fracture, &problem.mesh);
             let macro_length = config.fracture.as_ref().and_then(|f| f.macro_length);
             propagation::summary(
                 &book.fracture_events,

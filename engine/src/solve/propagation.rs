@@ -543,6 +543,7 @@ pub(super) fn write_crack_path_png(
     cracks: &[CrackEdge],
     grown: sdg_mesh::TagId,
     time: f64,
+    fork: Option<[f64; 2]>,
 ) {
     let mut damage = vec![f64::NAN; mesh.triangles().len()];
     for c in cracks {
@@ -560,10 +561,16 @@ pub(super) fn write_crack_path_png(
         }
     }
     let segments: Vec<[[f64; 2]; 2]> = cracks.iter().map(|c| c.ends).collect();
+    let markers: Vec<[f64; 2]> = fork.into_iter().collect();
+    let title = match fork {
+        Some(_) => "cracks (red), damage D beside them, first macro fork circled",
+        None => "cracks (red), damage D beside them",
+    };
     let plot = FieldPlot::new(mesh.vertices(), mesh.triangles(), Values::Cells(&damage))
-        .title("cracks (red), damage D beside them")
+        .title(title)
         .time(Some(time))
-        .segments(&segments);
+        .segments(&segments)
+        .markers(&markers);
     let new_ends = cracks
         .iter()
         .filter(|c| mesh.edges()[c.edge as usize].tag == Some(grown))
@@ -631,13 +638,8 @@ pub(super) fn summary(
 ) -> FractureSummary {
     let count = |kind: &str| events.iter().filter(|e| e.kind == kind).count() as u64;
     let (first_branching_time, first_branching_distance) = first_branching(events, initial_tips);
-    let macro_branching = macro_length.and_then(|length| {
-        network::first_macro_fork(
-            &crack_links(&state.mesh, fracture, events),
-            length,
-            initial_tips,
-        )
-    });
+    let macro_branching = macro_length
+        .and_then(|length| macro_fork(&state.mesh, fracture, events, length, initial_tips));
     FractureSummary {
         nucleations: count("nucleation"),
         extensions: count("extension"),
@@ -656,6 +658,18 @@ pub(super) fn summary(
         first_branching_distance,
         macro_branching,
     }
+}
+
+/// The first macro fork of the crack network on `mesh` whose arms reach `length` (m)
+/// ([`network`]); `initial_tips` are the positions of the initial cracks' tips, m.
+pub(super) fn macro_fork(
+    mesh: &Mesh,
+    fracture: &Fracture,
+    events: &[FractureEvent],
+    length: f64,
+    initial_tips: &[[f64; 2]],
+) -> Option<MacroFork> {
+    network::first_macro_fork(&crack_links(mesh, fracture, events), length, initial_tips)
 }
 
 /// The crack edges of `mesh` as links of the crack network, each made when the extension
