@@ -442,21 +442,23 @@ fn the_branching_plate_is_loaded_as_the_seed_says() {
     );
 }
 
+/// The shipped config `name` as a TOML table.
+fn config_table(name: &str) -> toml::Table {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(name);
+    std::fs::read_to_string(path).unwrap().parse().unwrap()
+}
+
 /// `configs/crack_branching_full.toml` is the main job run longer: the same plate, load,
 /// damage, propagation and defects, differing only in the end time (the seed's last figure,
 /// 4.96 us after the waves meet), the snapshot times (the seed's 1, 2, 3, 4 and 4.96 us), the
 /// output folder and the checkpoints.
 #[test]
 fn the_full_branching_run_is_the_main_job_over_the_seed_s_time_span() {
-    let read = |name: &str| -> toml::Table {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("configs")
-            .join(name);
-        std::fs::read_to_string(path).unwrap().parse().unwrap()
-    };
     let (mut main, mut full) = (
-        read("crack_branching.toml"),
-        read("crack_branching_full.toml"),
+        config_table("crack_branching.toml"),
+        config_table("crack_branching_full.toml"),
     );
     let t0 = 5e-3 / common::pmma_p_wave().0;
     let float = |t: &toml::Table, table: &str, key: &str| t[table][key].as_float().unwrap();
@@ -490,15 +492,9 @@ fn the_full_branching_run_is_the_main_job_over_the_seed_s_time_span() {
 /// (4.5: `tau = 1e-3 us`, `rho_N` 100 times larger) and crack tips refined from the start.
 #[test]
 fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved_tips() {
-    let read = |name: &str| -> toml::Table {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("configs")
-            .join(name);
-        std::fs::read_to_string(path).unwrap().parse().unwrap()
-    };
     let (mut main, mut set2) = (
-        read("crack_branching.toml"),
-        read("crack_branching_set2.toml"),
+        config_table("crack_branching.toml"),
+        config_table("crack_branching_set2.toml"),
     );
     let float = |v: &toml::Value| v.as_float().unwrap();
     for (name, t) in [("main", &main), ("set2", &set2)] {
