@@ -57,6 +57,8 @@ pub struct CrackSummary {
     pub max_speed: f64,
     /// `max_speed / c_R`.
     pub max_speed_over_c_r: f64,
+    /// Tip states whose speed is above `c_R`.
+    pub states_over_c_r: usize,
 }
 
 /// Per point, the first crossing of one level.
@@ -178,6 +180,7 @@ pub(super) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
                 s.time, s.point[0], s.point[1], s.extension, s.speed, s.process_zone_length
             );
             summary.max_speed = summary.max_speed.max(s.speed);
+            summary.states_over_c_r += usize::from(s.speed > c_r);
         }
         summary.tip_states += states.len();
         if let Some(last) = states.last() {
@@ -234,6 +237,10 @@ mod tests {
         assert_eq!(csv.lines().count(), 41);
         assert!((summary.final_length - 39e-5).abs() < 1e-12);
         assert!((summary.max_speed_over_c_r - 0.5).abs() < 1e-6);
+        assert_eq!(summary.states_over_c_r, 0);
+        // At a Rayleigh speed below the crack's, every state is above it.
+        let crossings: Vec<_> = list.iter().map(|c| ("crack".to_string(), *c)).collect();
+        assert_eq!(write(&crossings, 299.0).1.states_over_c_r, 40);
     }
 
     #[test]

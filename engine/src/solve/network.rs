@@ -103,39 +103,46 @@ pub(super) fn first_macro_fork(
     best
 }
 
+/// The radius of a fork's core as a fraction of the macro length: crack vertices closer to the
+/// fork than this along crack edges belong to it, so that a small loop there (a microcrack
+/// that links two cracks just past the fork) does not merge the arms it joins.
+const CORE: f64 = 0.1;
+
 /// When `v` is a macro fork for `length` (m): the time it forked (s) and the reaches of its
-/// long forward arms (m), longest first.
+/// long forward arms (m), longest first. The arms are the parts of the network outside the
+/// fork's core that hang on it; an arm starts with the earliest of its edges to the core.
 fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<(f64, Vec<f64>)> {
-    // Shortest paths from `v` never come back through it: each stays in its arm.
     let distances = distances_from(graph, v);
-    let neighbours = &graph[&v].0;
+    let in_core = |u: VertexId| distances[&u] < CORE * length;
+    let core: Vec<VertexId> = distances.keys().copied().filter(|&u| in_core(u)).collect();
     let mut arm_of: BTreeMap<VertexId, usize> = BTreeMap::new();
     // (holds an initial crack, start, reach) of each arm.
     let mut arms: Vec<(bool, f64, f64)> = Vec::new();
-    for &(first, _, _) in neighbours {
-        if arm_of.contains_key(&first) {
-            continue;
-        }
-        let arm = arms.len();
-        let mut reach = 0.0f64;
-        let mut initial = false;
-        let mut stack = vec![first];
-        arm_of.insert(first, arm);
-        while let Some(u) = stack.pop() {
-            reach = reach.max(distances[&u]);
-            initial |= graph[&u].2;
-            for &(w, _, _) in &graph[&u].0 {
-                if w != v && !arm_of.contains_key(&w) {
-                    arm_of.insert(w, arm);
-                    stack.push(w);
-                }
+    for &c in &core {
+        for &(first, _, time) in &graph[&c].0 {
+            if in_core(first) {
+                continue;
             }
+            if !arm_of.contains_key(&first) {
+                let arm = arms.len();
+                let (mut reach, mut initial) = (0.0f64, false);
+                let mut stack = vec![first];
+                arm_of.insert(first, arm);
+                while let Some(u) = stack.pop() {
+                    reach = reach.max(distances[&u]);
+                    initial |= graph[&u].2;
+                    for &(w, _, _) in &graph[&u].0 {
+                        if !in_core(w) && !arm_of.contains_key(&w) {
+                            arm_of.insert(w, arm);
+                            stack.push(w);
+                        }
+                    }
+                }
+                arms.push((initial, f64::INFINITY, reach));
+            }
+            let start = &mut arms[arm_of[&first]].1;
+            *start = start.min(time);
         }
-        arms.push((initial, f64::INFINITY, reach));
-    }
-    for &(w, _, time) in neighbours {
-        let start = &mut arms[arm_of[&w]].1;
-        *start = start.min(time);
     }
     // The incoming arm first: one that holds an initial crack, else the first to start.
     arms.sort_by(|a, b| {
@@ -271,6 +278,33 @@ mod tests {
         let fork = first_macro_fork(&links, 0.7, &[]).unwrap();
         assert_eq!(fork.time, 2.0);
         assert_eq!(fork.arms.len(), 2);
+    }
+
+    #[test]
+    fn a_small_loop_at_the_fork_does_not_merge_its_arms() {
+        // The notch into (1, 0); two short edges to A = (1.01, 0.01) and B = (1.01, -0.01),
+        // linked by a microcrack; long arms from A up to (2, 1) (t = 1) and from B down to
+        // (2, -1) (t = 2). A and B lie within the core (a tenth of 0.5) of the fork at (1, 0).
+        let mut links = path(0, &[[0.0, 0.0], [1.0, 0.0]], &[0.0]);
+        let (a, b) = ([1.01, 0.01], [1.01, -0.01]);
+        for (ends, points, time) in [
+            ([1, 2], [[1.0, 0.0], a], 1.0),
+            ([1, 3], [[1.0, 0.0], b], 2.0),
+            ([2, 3], [a, b], 3.0),
+            ([2, 4], [a, [2.0, 1.0]], 1.0),
+            ([3, 5], [b, [2.0, -1.0]], 2.0),
+        ] {
+            links.push(CrackLink {
+                ends,
+                points,
+                time,
+                initial: false,
+            });
+        }
+        let fork = first_macro_fork(&links, 0.5, &[[1.0, 0.0]]).unwrap();
+        assert_eq!((fork.point, fork.time), ([1.0, 0.0], 2.0));
+        assert_eq!(fork.arms.len(), 2);
+        assert!(fork.arms.iter().all(|&r| r > 1.4 && r < 1.43), "{fork:?}");
     }
 
     #[test]
