@@ -3,15 +3,18 @@
 //!
 //! The crack edges form a graph on the mesh's vertices (cracks that arrest on one another share
 //! a vertex, so a chain of nucleated cracks that link up is one path). At a vertex with three or
-//! more crack edges, the edges fall into *arms*: the parts of the network that stay connected
-//! once the vertex is taken out (two edges of a loop through the vertex are one arm). An arm's
-//! *reach* is the longest distance along crack edges from the vertex to a point of the arm; its
-//! *start* is the earliest time one of its edges at the vertex was made (an extension's time,
-//! 0 for initial cracks). The crack came in by the arm that holds an initial crack, or without
-//! one by the arm that started first; the vertex is a *macro fork* when at least two of the
-//! other arms reach `length`, and it forked when the second of those started. Microbranches, side cracks and the steps of a wavy crack leave arms
+//! more crack edges, the fork's *core* is every crack vertex closer to it along crack edges than
+//! a tenth of `length` ([`CORE`]), and its *arms* are the parts of the rest of the network that
+//! hang on the core (two paths that meet again beyond the core are one arm; a microcrack that
+//! links them within the core is not). An arm's *reach* is the longest distance along crack
+//! edges from the vertex to a point of the arm; its *start* is when the earliest of its edges to
+//! the core was made (an extension's time, 0 for initial cracks). The crack came in by the arm
+//! that holds an initial crack, or without one by the arm that started first; the vertex is a
+//! *macro fork* when at least two of the other arms reach `length`, and it forked when the
+//! second of those started. Microbranches, side cracks and the steps of a wavy crack leave arms
 //! shorter than `length` and are no macro fork; the seed's "the crack branches at 0.37 mm ahead
-//! of the initial crack tip at 2.26 us" is the first macro fork.
+//! of the initial crack tip at 2.26 us" is the first macro fork. Times are those of the crack
+//! edges, made ahead of the damage that debonds them.
 
 use std::cmp::Ordering;
 use std::collections::{BTreeMap, BinaryHeap};
