@@ -525,11 +525,13 @@ fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved
     assert_eq!(main, set2);
 }
 
-#[test]
-fn without_adaptivity_crack_splits_keep_a_quarter_of_the_shortest_edge() {
-    // Without a floor, a crack running through ever smaller triangles split them down to 40 nm
-    // in asynchronous runs of crack_growth, and its tents shrank with them.
-    let problem = shipped("crack_growth.toml", &["time.end=2e-7"]);
+/// Splits of a piece of 0.9 of the crack's split floor (a quarter of `crack_growth`'s shortest
+/// edge without `[adapt]`) and of the edge's half, on an interior triangle whose refinement edge
+/// the pitcher lets split anywhere, with the settings `set`: whether each was made.
+fn split_below_the_floor(set: &[&str]) -> (bool, bool) {
+    let mut set = set.to_vec();
+    set.push("time.end=2e-7");
+    let problem = shipped("crack_growth.toml", &set);
     let found = std::sync::Arc::new(std::sync::Mutex::new(None));
     let report = found.clone();
     let options = sdg_engine::RunOptions {
@@ -542,7 +544,6 @@ fn without_adaptivity_crack_splits_keep_a_quarter_of_the_shortest_edge() {
         let mesh = live.mesh();
         let floor = mesh.edge_length_range().0 / 4.0;
         let front = live.front();
-        // An interior triangle whose refinement edge the pitcher lets split anywhere.
         let t = (0..mesh.triangles().len() as u32)
             .find(|&t| {
                 let e = mesh.triangle_edges(t)[mesh.refinement_edge(t)];
@@ -554,13 +555,29 @@ fn without_adaptivity_crack_splits_keep_a_quarter_of_the_shortest_edge() {
             .expect("a triangle to split");
         let e = mesh.triangle_edges(t)[mesh.refinement_edge(t)];
         let length = mesh.edge_length(e);
-        // A piece of a tenth of the edge is below the floor here; half the edge is not.
+        // A piece of 0.9 of the floor; half the edge is above it.
         let tiny = 0.9 * floor / length;
-        assert!(tiny < 0.5 && 0.5 * length >= floor);
-        let refused = live.split_at(t, tiny).unwrap();
-        let split = live.split_at(t, 0.5).unwrap();
-        *report.lock().unwrap() = Some((refused, split));
+        assert!((0.1..0.5).contains(&tiny) && 0.5 * length >= floor);
+        let small = live.split_at(t, tiny).unwrap();
+        let half = live.split_at(t, 0.5).unwrap();
+        *report.lock().unwrap() = Some((small, half));
     })
     .unwrap();
-    assert_eq!(*found.lock().unwrap(), Some((false, true)));
+    let found = *found.lock().unwrap();
+    found.expect("the intervention ran")
+}
+
+#[test]
+fn without_adaptivity_crack_splits_keep_a_quarter_of_the_shortest_edge() {
+    // Without a floor, a crack running through ever smaller triangles split them down to 40 nm
+    // in asynchronous runs of crack_growth, and its tents shrank with them.
+    assert_eq!(split_below_the_floor(&[]), (false, true));
+}
+
+/// `fracture.min_piece` sets the floor of the crack's splits: a tenth of that edge's here
+/// (crack_growth's shortest edge is 62.5 um), so the piece of 0.9 of the default floor is made.
+#[test]
+fn the_crack_s_split_floor_is_min_piece() {
+    let (small, _) = split_below_the_floor(&["fracture.min_piece=6.25e-6"]);
+    assert!(small);
 }

@@ -256,12 +256,20 @@ impl Fracture {
 
 impl Fracture {
     /// True when the crack wanting direction `d` (radians) at `tip` (vertex `v`) may take the
-    /// existing edge from `v` to its neighbour `w` instead: the edge points forward, within half
-    /// the shield angle of `d`, and at least the shield angle from every crack edge at `v`.
+    /// existing edge from `v` to its neighbour `w` instead: it may join `w` ([`Fracture::may_join`])
+    /// and the edge lies within half the shield angle of `d`.
     pub fn may_take(&self, mesh: &Mesh, v: VertexId, tip: Tip, d: f64, w: VertexId) -> bool {
+        self.may_join(mesh, v, tip, w)
+            && angle_between(angle_of(mesh, v, w), d) <= 0.5 * self.shield
+    }
+
+    /// True when the crack at `tip` (vertex `v`) may run along the existing edge from `v` to
+    /// its neighbour `w`: the edge points forward and lies at least the shield angle from every
+    /// crack edge at `v`. This is how a tip whose direction runs into another crack joins it
+    /// (at an end of the crack edge it meets).
+    pub fn may_join(&self, mesh: &Mesh, v: VertexId, tip: Tip, w: VertexId) -> bool {
         let along = angle_of(mesh, v, w);
         (along - tip.direction).cos() > 0.0
-            && angle_between(along, d) <= 0.5 * self.shield
             && vertex_edges(mesh, v)
                 .filter(|&e| self.is_crack(mesh.edges()[e as usize].tag))
                 .all(|e| {
@@ -681,6 +689,36 @@ mod tests {
             assert!(angle_between(along, d) < 1e-12, "{d} {along}");
             assert_eq!(mesh.triangles()[c.triangle as usize][c.corner], v);
         }
+    }
+
+    /// A tip may take an edge only within half the shield angle of its wanted direction, but
+    /// may join a crack it runs into along any forward edge that keeps the shield angle from
+    /// the crack edges at the tip: here the edge 45 degrees up from the notch's tip.
+    #[test]
+    fn a_tip_joins_a_crack_along_any_shielded_forward_edge() {
+        let (mut mesh, fracture) = notched();
+        let v = vertex_at(&mesh, [0.5, 0.5]);
+        let tip = fracture.initial_tips(&mesh)[v as usize].unwrap();
+        let [ahead, up, back] =
+            [[0.75, 0.5], [0.75, 0.75], [0.25, 0.5]].map(|x| vertex_at(&mesh, x));
+        for w in [ahead, up, back] {
+            assert!(mesh.edge_between(v, w).is_some());
+        }
+        assert!(fracture.may_take(&mesh, v, tip, 0.0, ahead));
+        assert!(!fracture.may_take(&mesh, v, tip, 0.0, up));
+        assert!(fracture.may_join(&mesh, v, tip, up));
+        assert!(!fracture.may_join(&mesh, v, tip, back));
+        // Once the edge ahead is a crack, the edge 45 degrees from it still keeps the shield
+        // angle (35 degrees) and the crack edge itself is taken.
+        let e = mesh.edge_between(v, ahead).unwrap();
+        mesh.set_tag(e, Some(fracture.tag));
+        assert!(fracture.may_join(&mesh, v, tip, up));
+        assert!(!fracture.may_join(&mesh, v, tip, ahead));
+        let shielded = Fracture {
+            shield: 50f64.to_radians(),
+            ..fracture.clone()
+        };
+        assert!(!shielded.may_join(&mesh, v, tip, up));
     }
 
     /// Checkpoints carry a tip's pending directions (CBOR, as `checkpoint_NNNNNN.sdgc`), NaN

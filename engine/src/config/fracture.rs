@@ -30,6 +30,12 @@ pub struct FractureConfig {
     /// instead of splitting (default 0.2, in (0, 0.5]).
     #[serde(default = "default_snap")]
     pub snap: f64,
+    /// No split for a crack leaves a piece of an edge shorter than this, m (> 0). Default
+    /// `adapt.min_edge`, or without `[adapt]` a quarter of the initial mesh's shortest edge.
+    /// Below `adapt.min_edge` the crack may split triangles the indicator no longer refines,
+    /// so that its direction, not the grid's, decides where it runs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_piece: Option<f64>,
     /// Nucleation from random defects (seed 4.3.1): defects per unit area, 1/m^2 (> 0). Without
     /// it no crack nucleates; with it `defect_mean`, `defect_std` and `defect_lower` are
     /// required.
@@ -154,13 +160,12 @@ impl Config {
                 format!("must be a fraction of an edge in (0, 0.5], got {}", f.snap),
             );
         }
-        if let Some(length) = f.macro_length
-            && !(length.is_finite() && length > 0.0)
-        {
-            return fail(
-                "macro_length",
-                format!("must be a positive length in m, got {length}"),
-            );
+        for (key, length) in [("macro_length", f.macro_length), ("min_piece", f.min_piece)] {
+            if let Some(length) = length
+                && !(length.is_finite() && length > 0.0)
+            {
+                return fail(key, format!("must be a positive length in m, got {length}"));
+            }
         }
         f.defects().map(drop)
     }
@@ -247,6 +252,11 @@ shield_angle = 35.0
                 "positive length",
             ),
             ("fracture.snap=0.0", "fracture.snap", "(0, 0.5]"),
+            (
+                "fracture.min_piece=-1e-6",
+                "fracture.min_piece",
+                "positive length",
+            ),
             (
                 "fracture.defect_mean=3e8",
                 "fracture.defect_mean",

@@ -141,7 +141,10 @@ fn tip_series(
         let entry = tips.last_mut().expect("pushed");
         let x = (get(t) - shift) * per_time;
         entry.extension.push((x, get(a) * per_length));
-        entry.speed.push((x, get(v) * per_speed));
+        // A crack shorter than one edge has no speed (NaN): nothing to draw.
+        if get(v).is_finite() {
+            entry.speed.push((x, get(v) * per_speed));
+        }
     }
     Ok(())
 }

@@ -66,9 +66,9 @@ struct Solve<'a> {
     /// Worker threads: events that integrate over the whole front use them all.
     threads: usize,
     /// No split for crack alignment makes a piece of an edge shorter than this, m:
-    /// `adapt.min_edge`, or without adaptivity a quarter of the initial mesh's shortest edge
-    /// (cracks running through ever smaller triangles would otherwise shrink the tents without
-    /// bound).
+    /// `fracture.min_piece`, by default `adapt.min_edge`, or without adaptivity a quarter of the
+    /// initial mesh's shortest edge (cracks running through ever smaller triangles would
+    /// otherwise shrink the tents without bound).
     min_edge: f64,
     /// `Book::energy_max` as bits, read by tents without the book's lock.
     energy_reference: AtomicU64,
@@ -869,9 +869,17 @@ fn run_job(
         scheduler.threads,
         |x| initial_state(problem, initial, x),
     );
-    let min_edge = adapt
+    let min_edge = problem
+        .loaded
+        .config
+        .fracture
         .as_ref()
-        .map_or(problem.mesh.edge_length_range().0 / 4.0, |a| a.min_edge);
+        .and_then(|f| f.min_piece)
+        .unwrap_or_else(|| {
+            adapt
+                .as_ref()
+                .map_or(problem.mesh.edge_length_range().0 / 4.0, |a| a.min_edge)
+        });
     let solve = Solve {
         problem,
         adapt,
