@@ -450,12 +450,13 @@ fn config_table(name: &str) -> toml::Table {
     std::fs::read_to_string(path).unwrap().parse().unwrap()
 }
 
-/// `configs/crack_branching_full.toml` is the main job run longer: the same plate, load,
-/// damage, propagation and defects, differing only in the end time (the seed's last figure,
-/// 4.96 us after the waves meet), the snapshot times (the seed's 1, 2, 3, 4 and 4.96 us), the
-/// output folder and the checkpoints.
+/// `configs/crack_branching_full.toml` is the main job one refinement level finer and run
+/// longer: the same plate, load, damage, propagation and defects, differing only in the finest
+/// edge (`adapt.min_edge`, smaller), the end time (the seed's last figure, 4.96 us after the
+/// waves meet), the snapshot times (the seed's 1, 2, 3, 4 and 4.96 us), the output folder and
+/// the checkpoints.
 #[test]
-fn the_full_branching_run_is_the_main_job_over_the_seed_s_time_span() {
+fn the_full_branching_run_is_the_main_job_finer_over_the_seed_s_time_span() {
     let (mut main, mut full) = (
         config_table("crack_branching.toml"),
         config_table("crack_branching_full.toml"),
@@ -478,7 +479,10 @@ fn the_full_branching_run_is_the_main_job_over_the_seed_s_time_span() {
             && snapshots.len() == 5,
         "{snapshots:?}"
     );
+    let min_edge = |t: &toml::Table| float(t, "adapt", "min_edge");
+    assert!(min_edge(&full) < min_edge(&main));
     for t in [&mut main, &mut full] {
+        t["adapt"].as_table_mut().unwrap().remove("min_edge");
         t.remove("checkpoint");
         t["time"].as_table_mut().unwrap().remove("end");
         let output = t["output"].as_table_mut().unwrap();
@@ -489,12 +493,14 @@ fn the_full_branching_run_is_the_main_job_over_the_seed_s_time_span() {
 }
 
 /// `configs/crack_branching_set2.toml` is the main job with the seed's second parameter set
-/// (4.5: `tau = 1e-3 us`, `rho_N` 100 times larger) and crack tips refined from the start.
+/// (4.5: `tau = 1e-3 us`, `rho_N` 100 times larger) at the full run's finer resolution
+/// (`adapt.min_edge`), with crack tips refined from the start, to the seed's 3.0 us.
 #[test]
 fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved_tips() {
-    let (mut main, mut set2) = (
+    let (mut main, mut set2, full) = (
         config_table("crack_branching.toml"),
         config_table("crack_branching_set2.toml"),
+        config_table("crack_branching_full.toml"),
     );
     let float = |v: &toml::Value| v.as_float().unwrap();
     for (name, t) in [("main", &main), ("set2", &set2)] {
@@ -510,17 +516,24 @@ fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved
     assert_eq!(float(&main["fracture"]["defect_density"]) * 100.0, 1e13);
     assert_eq!(float(&set2["fracture"]["defect_density"]), 1e13);
     assert_eq!(float(&set2["adapt"]["tip_edge"]), 6e-6);
+    assert_eq!(set2["adapt"]["min_edge"], full["adapt"]["min_edge"]);
+    let t0 = 5e-3 / common::pmma_p_wave().0;
+    assert!((float(&set2["time"]["end"]) - (t0 + 3e-6)).abs() < 1e-8);
     assert!(!main["adapt"].as_table().unwrap().contains_key("tip_edge"));
     for t in [&mut main, &mut set2] {
         for i in t["interface"].as_array_mut().unwrap() {
             i.as_table_mut().unwrap().remove("delay");
         }
-        t["fracture"]
-            .as_table_mut()
-            .unwrap()
-            .remove("defect_density");
-        t["adapt"].as_table_mut().unwrap().remove("tip_edge");
-        t["output"].as_table_mut().unwrap().remove("dir");
+        let fracture = t["fracture"].as_table_mut().unwrap();
+        fracture.remove("defect_density");
+        fracture.remove("macro_length");
+        let adapt = t["adapt"].as_table_mut().unwrap();
+        adapt.remove("tip_edge");
+        adapt.remove("min_edge");
+        t["time"].as_table_mut().unwrap().remove("end");
+        let output = t["output"].as_table_mut().unwrap();
+        output.remove("dir");
+        output.remove("snapshot_times");
     }
     assert_eq!(main, set2);
 }
