@@ -237,18 +237,25 @@ fn tip_rows(dir: &Path) -> Vec<Vec<f64>> {
 }
 
 /// Checks that a crack ran along `damage_mode1.toml`'s path (y = 1.2 mm, beyond the free crack
-/// that ends at x = 2.5 mm) by at least `extension` (m), at every state slower than `speed_limit`
-/// (m/s); returns the largest speed.
+/// that ends at x = 2.5 mm) by at least `extension` (m), at every state with a speed slower than
+/// `speed_limit` (m/s); returns the largest speed. A state whose fitting window spans less
+/// than one edge has no speed (`NaN`, `crack_output::tip_states`): an asynchronous run may
+/// leave the crack's first state alone in its window.
 fn check_damage_crack(dir: &Path, extension: f64, speed_limit: f64) -> f64 {
     let tips = tip_rows(dir);
     assert!(!tips.is_empty(), "no crack tip");
     for t in &tips {
         assert!(t[2] == 1.2e-3 && t[1] > 2.5e-3, "tip off the path: {t:?}");
-        assert!(t[4] < speed_limit, "{t:?}");
+        assert!(t[4].is_nan() || t[4] < speed_limit, "{t:?}");
     }
     let last = tips.last().unwrap();
     assert!(last[3] >= extension, "{last:?}");
-    tips.iter().fold(0.0, |m, t| m.max(t[4]))
+    let speeds: Vec<f64> = tips.iter().map(|t| t[4]).filter(|v| !v.is_nan()).collect();
+    assert!(
+        speeds.len() * 2 > tips.len(),
+        "most states have a speed: {tips:?}"
+    );
+    speeds.into_iter().fold(0.0, f64::max)
 }
 
 /// `configs/damage_mode1.toml` on a coarser path (100 um edges instead of 25 um) to 0.63 us after
