@@ -26,11 +26,19 @@ pub struct Normalization {
     pub end: f64,
 }
 
+/// Branches that `tip_speed.png` draws in colour and names: the longest; the others are drawn
+/// faint behind them.
+const NAMED_BRANCHES: usize = 8;
+
+/// `tip_speed.png`'s speed axis ends at this many `c_R` when some state is faster.
+const SPEED_AXIS_C_R: f64 = 2.0;
+
 /// The points of one interface's tip, in the chart's units.
 struct TipSeries {
     name: String,
     extension: Vec<(f64, f64)>,
     speed: Vec<(f64, f64)>,
+    style: LineStyle,
 }
 
 /// The tip extension chart above the tip speed chart, for the texts of one or more runs'
@@ -63,11 +71,15 @@ fn render(
         ),
         None => ("time (us)", "extension (mm)", "tip speed (m/s)"),
     };
+    let (title, range) = speed_axis(tips, c_r);
     let mut position = LineChart::new("Crack tip extension", time, extension);
-    let mut velocity = LineChart::new("Crack tip speed", time, speed);
+    let mut velocity = LineChart::new(&title, time, speed);
+    if let Some((lo, hi)) = range {
+        velocity = velocity.y_range(lo, hi);
+    }
     for tip in tips {
-        position = position.series(&tip.name, &tip.extension, LineStyle::Solid);
-        velocity = velocity.series(&tip.name, &tip.speed, LineStyle::Solid);
+        position = position.series(&tip.name, &tip.extension, tip.style);
+        velocity = velocity.series(&tip.name, &tip.speed, tip.style);
     }
     if let Some(c_r) = c_r {
         let times = tips.iter().flat_map(|t| t.speed.iter().map(|p| p.0));
@@ -136,6 +148,7 @@ fn tip_series(
                 name,
                 extension: Vec::new(),
                 speed: Vec::new(),
+                style: LineStyle::Solid,
             });
         }
         let entry = tips.last_mut().expect("pushed");
@@ -164,12 +177,61 @@ pub fn write_crack_png(dir: &Path, csv: &str, normalization: Option<Normalizatio
 /// be drawn is logged as a warning.
 pub fn write_tip_speed_png(dir: &Path, csv: &str, c_r: f64) {
     let path = dir.join("tip_speed.png");
-    let mut tips = Vec::new();
-    let charts = tip_series(("sdg", "crack_tips.csv"), csv, None, &mut tips)
-        .and_then(|()| render(&tips, None, Some(c_r)));
-    if let Err(e) = charts.and_then(|image| image.write_png(&path)) {
+    if let Err(e) = tip_speed_charts(csv, c_r).and_then(|image| image.write_png(&path)) {
         tracing::warn!("{}: {e}", path.display());
     }
+}
+
+/// The charts of `tip_speed.png` for `crack_tips.csv`'s text `csv` of a run with `[fracture]`.
+fn tip_speed_charts(csv: &str, c_r: f64) -> Result<Image, EngineError> {
+    let mut tips = Vec::new();
+    tip_series(("sdg", "crack_tips.csv"), csv, None, &mut tips)?;
+    render(&longest_named(tips), None, Some(c_r))
+}
+
+/// The speed chart's title and fixed y range: with the Rayleigh speed `c_r` (m/s) given and
+/// states above [`SPEED_AXIS_C_R`] times it, the axis ends there and the title counts them;
+/// otherwise the axis spans the points.
+fn speed_axis(tips: &[TipSeries], c_r: Option<f64>) -> (String, Option<(f64, f64)>) {
+    let speeds = || tips.iter().flat_map(|t| t.speed.iter().map(|p| p.1));
+    let Some(c_r) = c_r else {
+        return ("Crack tip speed".into(), None);
+    };
+    let top = SPEED_AXIS_C_R * c_r;
+    let above = speeds().filter(|&v| v > top).count();
+    if above == 0 {
+        return ("Crack tip speed".into(), None);
+    }
+    let title = format!(
+        "Crack tip speed ({above} states above {SPEED_AXIS_C_R} c_R, up to {:.2} c_R, run off the \
+         top)",
+        speeds().fold(top, f64::max) / c_r
+    );
+    (title, Some((speeds().fold(0.0, f64::min), top)))
+}
+
+/// `tips` with the [`NAMED_BRANCHES`] longest (by final extension; the earlier of equal ones)
+/// kept, longest first, and the others faint, drawn first and named once in the legend.
+fn longest_named(mut tips: Vec<TipSeries>) -> Vec<TipSeries> {
+    let reach = |t: &TipSeries| t.extension.iter().map(|p| p.1).fold(0.0, f64::max);
+    tips.sort_by(|a, b| reach(b).total_cmp(&reach(a)));
+    let others = tips.split_off(NAMED_BRANCHES.min(tips.len()));
+    let count = others.len();
+    let mut all: Vec<TipSeries> = others
+        .into_iter()
+        .enumerate()
+        .map(|(i, t)| TipSeries {
+            name: if i == 0 {
+                format!("{count} other branches")
+            } else {
+                String::new()
+            },
+            style: LineStyle::Faint,
+            ..t
+        })
+        .collect();
+    all.extend(tips);
+    all
 }
 
 /// `sdg plot` of one or more runs' `crack_tips.csv` files: their tips drawn together, each run
@@ -216,5 +278,48 @@ mod tests {
             assert_eq!(orange > 300, normalization.is_some(), "{orange}");
         }
         assert!(crack_charts(&[("sdg", "t_s,x\n")], None).is_err());
+    }
+
+    #[test]
+    fn tip_speed_names_the_longest_branches_and_cuts_the_speed_axis() {
+        const C_R: f64 = 938.0;
+        let mut csv =
+            String::from("t_s,branch,x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n");
+        // Branch b runs b + 1 states at 0.5 c_R; branch 3's last state bursts at 5 c_R.
+        for b in 0..12 {
+            for i in 0..=b {
+                let speed = if (b, i) == (3, 3) { 5.0 } else { 0.5 } * C_R;
+                let t = 1e-6 * (1.0 + 0.1 * f64::from(b) + 0.01 * f64::from(i));
+                let a = 1e-5 * f64::from(i);
+                csv += &format!("{t:e},{b},0,0,{a:e},{speed:e},0\n");
+            }
+        }
+        let mut tips = Vec::new();
+        tip_series(("sdg", "crack_tips.csv"), &csv, None, &mut tips).unwrap();
+        let tips = longest_named(tips);
+        let names: Vec<&str> = tips.iter().map(|t| t.name.as_str()).collect();
+        assert_eq!(
+            names[..5],
+            ["4 other branches", "", "", "", "sdg, branch 11"]
+        );
+        assert_eq!(names[11], "sdg, branch 4");
+        assert!(tips[..4].iter().all(|t| t.style == LineStyle::Faint));
+        assert!(tips[4..].iter().all(|t| t.style == LineStyle::Solid));
+        let image = tip_speed_charts(&csv, C_R).unwrap();
+        let pixels = |c: [u8; 3]| image.rgb.chunks(3).filter(|p| *p == c).count();
+        // Faint grey for branches 0 to 3; eight palette colours for branches 4 to 11 and the
+        // ninth for the Rayleigh line; the tenth colour is unused.
+        assert!(pixels([170, 170, 170]) > 100);
+        assert!(pixels([188, 189, 34]) > 100, "the Rayleigh line");
+        assert_eq!(pixels([23, 190, 207]), 0);
+        let (title, range) = speed_axis(&tips, Some(C_R));
+        assert_eq!(range, Some((0.0, 2.0 * C_R)));
+        assert!(
+            title.contains("1 states above 2 c_R, up to 5.00 c_R"),
+            "{title}"
+        );
+        let (title, range) = speed_axis(&tips[4..], Some(C_R));
+        assert_eq!((title.as_str(), range), ("Crack tip speed", None));
+        assert_eq!(speed_axis(&tips, None).1, None);
     }
 }

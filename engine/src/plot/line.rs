@@ -15,7 +15,13 @@ pub enum LineStyle {
     Solid,
     /// A dashed line (references).
     Dashed,
+    /// A thin grey line that takes no colour of the palette: context behind the coloured series
+    /// (e.g. the many short branches of a crack network).
+    Faint,
 }
+
+/// The colour of [`LineStyle::Faint`] series.
+const FAINT: RGBColor = RGBColor(170, 170, 170);
 
 /// Series colours, in order (Tableau 10).
 const PALETTE: [RGBColor; 10] = [
@@ -57,6 +63,7 @@ pub struct LineChart {
     x_label: String,
     y_label: String,
     series: Vec<Series>,
+    y_range: Option<(f64, f64)>,
 }
 
 impl LineChart {
@@ -67,10 +74,19 @@ impl LineChart {
             x_label: x_label.into(),
             y_label: y_label.into(),
             series: Vec::new(),
+            y_range: None,
         }
     }
 
-    /// Adds a series named `name` (shown in the legend), coloured in turn from a palette.
+    /// Fixes the y axis to `[lo, hi]` (`lo < hi`, both finite) instead of the range of the
+    /// points; lines are cut where they leave it.
+    pub fn y_range(mut self, lo: f64, hi: f64) -> Self {
+        self.y_range = (lo.is_finite() && hi.is_finite() && lo < hi).then_some((lo, hi));
+        self
+    }
+
+    /// Adds a series named `name` (shown in the legend unless empty), coloured in turn from a
+    /// palette ([`LineStyle::Faint`] series in grey).
     pub fn series(mut self, name: &str, points: &[(f64, f64)], style: LineStyle) -> Self {
         self.series.push(Series {
             name: name.into(),
@@ -92,7 +108,9 @@ impl LineChart {
                 .filter(|p| p.0.is_finite() && p.1.is_finite())
         };
         let (x0, x1) = widen(finite_range(finite().map(|p| p.0)).unwrap_or((0.0, 1.0)));
-        let (y0, y1) = widen(finite_range(finite().map(|p| p.1)).unwrap_or((0.0, 1.0)));
+        let (y0, y1) = self
+            .y_range
+            .unwrap_or_else(|| widen(finite_range(finite().map(|p| p.1)).unwrap_or((0.0, 1.0))));
         let pad = 0.05 * (y1 - y0);
         if f64::from(size.0) < 12.0 * f || f64::from(size.1) < 8.0 * f {
             return Err(EngineError::Plot(format!(
@@ -123,13 +141,20 @@ impl LineChart {
                 .draw()
                 .map_err(plot_error)?;
             let width = (f / 8.0).round().max(2.0) as u32;
-            for (k, s) in self.series.iter().enumerate() {
-                let colour = PALETTE[k % PALETTE.len()];
-                let style = colour.stroke_width(width);
-                let mut labelled = false;
-                for run in runs(&s.points) {
+            let mut coloured = 0;
+            for s in &self.series {
+                let style = if s.style == LineStyle::Faint {
+                    FAINT.stroke_width(1)
+                } else {
+                    coloured += 1;
+                    PALETTE[(coloured - 1) % PALETTE.len()].stroke_width(width)
+                };
+                let mut labelled = s.name.is_empty();
+                for run in self.runs(&s.points) {
                     let drawn = match s.style {
-                        LineStyle::Solid => chart.draw_series(LineSeries::new(run, style)),
+                        LineStyle::Solid | LineStyle::Faint => {
+                            chart.draw_series(LineSeries::new(run, style))
+                        }
                         LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(
                             run,
                             (0.8 * f) as u32,
@@ -148,7 +173,8 @@ impl LineChart {
                     }
                 }
             }
-            if self.series.iter().any(|s| !runs(&s.points).is_empty()) {
+            let legend = |s: &Series| !(s.name.is_empty() || self.runs(&s.points).is_empty());
+            if self.series.iter().any(legend) {
                 chart
                     .configure_series_labels()
                     .label_font((family, 0.9 * f))
@@ -188,6 +214,14 @@ impl LineChart {
             .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
     }
 
+    /// The pieces of `points` to draw: runs of finite points, cut to the fixed y range.
+    fn runs(&self, points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
+        match self.y_range {
+            Some(band) => runs(points).iter().flat_map(|r| clip(r, band)).collect(),
+            None => runs(points),
+        }
+    }
+
     /// Renders the chart and writes it as PNG to `path` (atomically).
     pub fn write_png(&self, path: &Path, size: (u32, u32)) -> Result<(), EngineError> {
         self.render(size)?.write_png(path)
@@ -201,6 +235,42 @@ fn runs(points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
         .filter(|r| !r.is_empty())
         .map(<[(f64, f64)]>::to_vec)
         .collect()
+}
+
+/// The pieces of the polyline `run` (finite points) inside `lo <= y <= hi`, cut where its
+/// segments cross the bounds.
+fn clip(run: &[(f64, f64)], (lo, hi): (f64, f64)) -> Vec<Vec<(f64, f64)>> {
+    let inside = |p: (f64, f64)| (lo..=hi).contains(&p.1);
+    let mut pieces: Vec<Vec<(f64, f64)>> = Vec::new();
+    if let [p] = run {
+        if inside(*p) {
+            pieces.push(vec![*p]);
+        }
+        return pieces;
+    }
+    // Whether the last piece ends at the end of the previous segment (so the next joins it).
+    let mut open = false;
+    for w in run.windows(2) {
+        let (p, q) = (w[0], w[1]);
+        let dy = q.1 - p.1;
+        let (t0, t1) = if dy == 0.0 {
+            if inside(p) { (0.0, 1.0) } else { (1.0, 0.0) }
+        } else {
+            let (a, b) = ((lo - p.1) / dy, (hi - p.1) / dy);
+            (a.min(b).max(0.0), a.max(b).min(1.0))
+        };
+        if t0 > t1 {
+            open = false;
+            continue;
+        }
+        let at = |t: f64| (p.0 + t * (q.0 - p.0), p.1 + t * dy);
+        if !(open && t0 == 0.0) {
+            pieces.push(vec![at(t0)]);
+        }
+        pieces.last_mut().expect("pushed").push(at(t1));
+        open = t1 == 1.0;
+    }
+    pieces
 }
 
 #[cfg(test)]
@@ -233,6 +303,45 @@ mod tests {
         assert!(a > 1000, "{a}");
         // Dashed: fewer pixels than a solid line of the same length would have.
         assert!(b > 300 && b < a, "{b} {a}");
+    }
+
+    #[test]
+    fn lines_are_cut_at_a_fixed_y_range() {
+        // Up through the top, back in, along the bottom bound, out below and back.
+        let run = [
+            (0.0, 0.0),
+            (1.0, 4.0),
+            (2.0, 0.0),
+            (3.0, -1.0),
+            (4.0, -1.0),
+            (5.0, 1.0),
+        ];
+        assert_eq!(
+            clip(&run, (-1.0, 2.0)),
+            [
+                vec![(0.0, 0.0), (0.5, 2.0)],
+                vec![(1.5, 2.0), (2.0, 0.0), (3.0, -1.0), (4.0, -1.0), (5.0, 1.0)],
+            ]
+        );
+        assert_eq!(
+            clip(&run, (-0.5, 2.0))[1..],
+            [
+                vec![(1.5, 2.0), (2.0, 0.0), (2.5, -0.5)],
+                vec![(4.25, -0.5), (5.0, 1.0)]
+            ]
+        );
+        assert_eq!(clip(&[(0.0, 3.0)], (0.0, 2.0)), Vec::<Vec<_>>::new());
+        assert_eq!(clip(&[(0.0, 1.0)], (0.0, 2.0)), [vec![(0.0, 1.0)]]);
+        let image = LineChart::new("cut", "x", "y")
+            .y_range(-1.0, 2.0)
+            .series("run", &run, LineStyle::Solid)
+            .series("", &[(0.0, 1.0), (5.0, 1.0)], LineStyle::Faint)
+            .render((600, 400))
+            .unwrap();
+        assert!(count(&image, PALETTE[0]) > 300);
+        assert!(count(&image, FAINT) > 300);
+        // The faint series takes no palette colour.
+        assert_eq!(count(&image, PALETTE[1]), 0);
     }
 
     #[test]
