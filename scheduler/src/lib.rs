@@ -185,7 +185,7 @@ pub struct Stats {
     pub event_time: Duration,
     /// Time the workers spent without a tent, summed over workers: asleep with nothing ready,
     /// waiting for the state's lock (events) or, in deterministic mode, at the round's
-    /// barriers while others solve, the main thread records and events run.
+    /// barriers while others solve, the calling thread records and events run.
     pub wait_time: Duration,
 }
 

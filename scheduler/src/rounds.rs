@@ -43,7 +43,9 @@ pub(crate) fn run<'a, W: Work<'a>>(
         next: AtomicUsize::new(0),
         results: Vec::new(),
     });
-    let barrier = Barrier::new(threads + 1);
+    // The calling thread chooses and records the rounds and solves its share of each: with
+    // `threads` threads in all, a run never has more threads than workers.
+    let barrier = Barrier::new(threads);
     let done = AtomicBool::new(false);
     let mut stats = Stats {
         tents_per_thread: vec![0; threads],
@@ -59,17 +61,34 @@ pub(crate) fn run<'a, W: Work<'a>>(
     let mut taken = vec![false; n];
     let mut touched: Vec<VertexId> = Vec::with_capacity(n);
     let mut scan_all = true;
+    // Solves chosen tents of the round until none is left, then waits at the round's end.
+    let share = |id: usize, scratch: &mut W::Scratch| {
+        {
+            let r = round.read();
+            let state = state.read();
+            let chosen = &r.chosen;
+            loop {
+                let i = r.next.fetch_add(1, Ordering::Relaxed);
+                let Some(&v) = chosen.get(i) else { break };
+                // A panic is handed to the calling thread, which ends the run; the solving
+                // thread goes on to the barrier so that nobody waits for it.
+                let result = catch_unwind(AssertUnwindSafe(|| {
+                    work.tent(&**state, scratch, v, &events).map(|(_, o)| o)
+                }))
+                .map_err(panic_message);
+                *r.results[i].lock() = Some(result);
+                per_thread[id].fetch_add(1, Ordering::Relaxed);
+            }
+        }
+        let idle = std::time::Instant::now();
+        barrier.wait();
+        wait_time.add_since(idle);
+    };
+    let mut scratch = scratch.into_iter();
+    let mut own = scratch.next().expect("at least one thread");
     let outcome = std::thread::scope(|s| {
-        for (id, mut scratch) in scratch.into_iter().enumerate() {
-            let (round, barrier, done, events, per_thread, state, wait_time) = (
-                &round,
-                &barrier,
-                &done,
-                &events,
-                &per_thread,
-                &state,
-                &wait_time,
-            );
+        for (id, mut scratch) in scratch.enumerate() {
+            let (barrier, done, wait_time, share) = (&barrier, &done, &wait_time, &share);
             s.spawn(move || {
                 loop {
                     let idle = std::time::Instant::now();
@@ -78,26 +97,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                     if done.load(Ordering::Acquire) {
                         return;
                     }
-                    {
-                        let r = round.read();
-                        let state = state.read();
-                        let chosen = &r.chosen;
-                        loop {
-                            let i = r.next.fetch_add(1, Ordering::Relaxed);
-                            let Some(&v) = chosen.get(i) else { break };
-                            // A panic is handed to the main thread, which ends the run; the
-                            // worker goes on to the barrier so that nobody waits for it.
-                            let result = catch_unwind(AssertUnwindSafe(|| {
-                                work.tent(&**state, &mut scratch, v, events).map(|(_, o)| o)
-                            }))
-                            .map_err(panic_message);
-                            *r.results[i].lock() = Some(result);
-                            per_thread[id].fetch_add(1, Ordering::Relaxed);
-                        }
-                    }
-                    let idle = std::time::Instant::now();
-                    barrier.wait();
-                    wait_time.add_since(idle);
+                    share(id + 1, &mut scratch);
                 }
             });
         }
@@ -155,7 +155,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 // The round-setup lock is released before the workers start.
                 drop(guard);
                 barrier.wait();
-                barrier.wait();
+                share(0, &mut own);
                 let mut r = round.write();
                 let chosen = std::mem::take(&mut r.chosen);
                 {
