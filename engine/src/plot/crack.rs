@@ -57,7 +57,8 @@ pub fn crack_charts(
 }
 
 /// The extension chart above the speed chart of `tips`, with the LEFM reference under a
-/// `normalization`, and the Rayleigh speed `c_r` (m/s) as a line when given.
+/// `normalization`, and the Rayleigh speed `c_r` (m/s) as a line when given (the speed axis
+/// then cut as [`speed_axis`] says).
 fn render(
     tips: &[TipSeries],
     normalization: Option<Normalization>,
