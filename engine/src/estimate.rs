@@ -113,7 +113,8 @@ impl Estimate {
             reason: format!(
                 "{what}{}. It is driven by the fastest wave speed {:.3e} m/s (young = {:e} Pa, \
                  poisson = {}, density = {:e} kg/m^3, plane {}), the smallest edge {:.3e} m \
-                 and the end time {:e} s (tents per vertex about c t_end / (safety h)). Check \
+                 and the span {:e} s (time.end - time.start; tents per vertex about \
+                 c span / (safety h)). Check \
                  the units, raise the limit, or run with --force",
                 if self.lower_bound {
                     " (a lower bound: refinement and crack growth add more)"
@@ -126,7 +127,7 @@ impl Estimate {
                 m.density,
                 format!("{:?}", m.plane).to_lowercase(),
                 min_edge,
-                config.time.end
+                config.time.span()
             ),
         })
     }

@@ -171,7 +171,7 @@ pub struct MeshSummary {
     pub tents: u64,
     /// Spacetime tetrahedra built (one per triangle of each tent's star).
     pub tetrahedra: u64,
-    /// Earliest front time at the end, s: equals `time.end`.
+    /// Earliest front time at the end, s, on the config's clock: equals `time.end`.
     pub final_time: f64,
     /// Maximum over all front facets ever built of `c_max |grad tau|`; below `safety`.
     pub max_slope_ratio: f64,
@@ -192,7 +192,7 @@ pub fn mesh_job(
     let config = &problem.loaded.config;
     let mesh = &problem.mesh;
     let c_max = problem.material.max_wave_speed();
-    let pitcher = Pitcher::new(mesh, c_max, config.pitch.safety, config.time.end)
+    let pitcher = Pitcher::new(mesh, c_max, config.pitch.safety, config.time.span())
         .map_err(|e| EngineError::Runtime(e.to_string()))?;
     let scheduler = options.scheduler(problem);
     let estimate = estimate::mesh(mesh, &pitcher, scheduler.threads);
@@ -225,7 +225,7 @@ pub fn mesh_job(
             mesh,
             front: &front,
         },
-        config.time.end,
+        config.time.span(),
         &work,
         vec![(); scheduler.threads],
         &scheduler,
@@ -246,14 +246,16 @@ pub fn mesh_job(
         safety: config.pitch.safety,
         tents: stats.tents,
         tetrahedra: record.tetrahedra,
-        final_time: front.min_time(),
+        final_time: config.time.clock(front.min_time()),
         max_slope_ratio: record.max_slope_ratio,
         wall_time_s,
         threads: scheduler.threads,
         estimate,
     };
     if let Some(s) = record.spacetime {
-        let vtu = s.to_grid(c_max).to_vtu(config.output.vtu);
+        let vtu = s
+            .to_grid(c_max, config.time.start)
+            .to_vtu(config.output.vtu);
         write_atomic(&dir, "spacetime.vtu", vtu.as_bytes())?;
     }
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";

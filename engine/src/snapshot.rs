@@ -91,8 +91,12 @@ impl Triangle {
 struct Pending {
     /// Index in the sorted list of times, for the file name.
     index: usize,
-    /// Time, s.
+    /// Time, s, on the run's clock (from its start).
     time: f64,
+    /// The time the files are labelled with, s, on the config's clock (from `time.start`);
+    /// `time` when absent (checkpoints written before labels, all of runs from 0).
+    #[serde(default)]
+    label: Option<f64>,
     /// `c_ref * time`, m.
     tau: f64,
     /// Half-width of the band around `tau` counted as on the plane, m.
@@ -184,21 +188,32 @@ impl Snapshots {
     /// `times` in seconds (any order; sorted and deduplicated, non-finite times dropped; file
     /// numbers follow the sorted order), `c_ref` m/s (positive), output folder `dir`.
     pub fn new(times: &[f64], c_ref: f64, dir: PathBuf) -> Self {
+        Self::on_clock(times, 0.0, c_ref, dir)
+    }
+
+    /// [`Snapshots::new`] for a run that starts at `start` (s, `time.start`): each of `times`
+    /// (s, from the same origin as `start`) is cut at `time - start` on the run's clock and
+    /// its files are labelled `time`.
+    pub fn on_clock(times: &[f64], start: f64, c_ref: f64, dir: PathBuf) -> Self {
         assert!(
             c_ref.is_finite() && c_ref > 0.0,
             "c_ref must be positive, got {c_ref}"
         );
-        let mut sorted: Vec<f64> = times.iter().copied().filter(|t| t.is_finite()).collect();
-        sorted.sort_by(f64::total_cmp);
-        sorted.dedup();
+        let mut sorted: Vec<(f64, f64)> = (times.iter())
+            .filter(|t| t.is_finite())
+            .map(|&t| (t - start, t))
+            .collect();
+        sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+        sorted.dedup_by(|a, b| a.0 == b.0);
         let snapshots = sorted
             .into_iter()
             .enumerate()
-            .map(|(index, time)| {
+            .map(|(index, (time, label))| {
                 let tau = c_ref * time;
                 Pending {
                     index,
                     time,
+                    label: Some(label),
                     tau,
                     tol: 8.0 * f64::EPSILON * tau.abs(),
                     triangles: Vec::new(),
@@ -379,7 +394,7 @@ impl Snapshots {
                 std::mem::take(&mut snap.triangles)
             };
             let segments = std::mem::take(&mut snap.segments);
-            let (index, time) = (snap.index, snap.time);
+            let (index, time) = (snap.index, snap.label.unwrap_or(snap.time));
             let name = format!("snapshot_{index:04}.vtu");
             self.written.push((time, name.clone()));
             let cracks = format!("cracks_{index:04}.vtu");

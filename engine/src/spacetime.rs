@@ -65,18 +65,22 @@ impl SpacetimeMesh {
         self.tets.len()
     }
 
-    /// The mesh as a VTK grid with points `(x, y, t)` (metres, metres, seconds). Point fields:
-    /// `time` (s) and `ct`, `c * t` in metres, which a ParaView "Warp By Scalar" turns into a
-    /// view where causal cones look like cones; cell field `tent`, the tent index.
-    pub fn to_grid(&self, c: f64) -> UnstructuredGrid {
+    /// The mesh as a VTK grid with points `(x, y, start + t)` (metres, metres, seconds): the
+    /// run's times on the clock of a run that starts at `start` (s). Point fields: `time` (s)
+    /// and `ct`, `c * time` in metres, which a ParaView "Warp By Scalar" turns into a view where
+    /// causal cones look like cones; cell field `tent`, the tent index.
+    pub fn to_grid(&self, c: f64, start: f64) -> UnstructuredGrid {
+        let points: Vec<[f64; 3]> = (self.points.iter())
+            .map(|&[x, y, t]| [x, y, start + t])
+            .collect();
         UnstructuredGrid {
             cell_type: CellType::Tetra,
-            points: self.points.clone(),
             connectivity: self.tets.iter().flatten().copied().collect(),
             point_data: vec![
-                Field::scalar("time", self.points.iter().map(|p| p[2]).collect()),
-                Field::scalar("ct", self.points.iter().map(|p| c * p[2]).collect()),
+                Field::scalar("time", points.iter().map(|p| p[2]).collect()),
+                Field::scalar("ct", points.iter().map(|p| c * p[2]).collect()),
             ],
+            points,
             cell_data: vec![Field::scalar(
                 "tent",
                 self.tent_of_tet.iter().map(|&t| t as f64).collect(),

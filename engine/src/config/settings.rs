@@ -4,12 +4,48 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-/// `[time]`: the simulated span, starting at 0.
+/// `[time]`: the simulated span, from `start` to `end`.
+///
+/// `start` only names the instant the run starts at: the initial front is flat there, and every
+/// time a config gives (`end`, `output.snapshot_times`) or a run writes (CSV files, snapshots,
+/// `summary.json`, messages) is on this clock. Everything that varies in time (boundary
+/// histories, exact solutions) is a function of the time since `start`, and `checkpoint.every_sim_s`
+/// counts from it, so that moving `start` changes no result, only the times written.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct TimeConfig {
-    /// End time, s.
+    /// Start time, s. Default 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub start: f64,
+    /// End time, s, after `start`.
     pub end: f64,
+}
+
+fn is_zero(t: &f64) -> bool {
+    *t == 0.0
+}
+
+impl TimeConfig {
+    /// The simulated span `end - start`, s: the end on the run's own clock, which starts at 0.
+    pub fn span(&self) -> f64 {
+        self.end - self.start
+    }
+
+    /// The time `t` (s, on the config's clock) on the run's own clock: `t - start`.
+    pub fn elapsed(&self, t: f64) -> f64 {
+        t - self.start
+    }
+
+    /// The run's own time `tau` (s) on the config's clock, as outputs write it: `tau + start`,
+    /// and `end` itself at the run's end, [`TimeConfig::span`] (which `end - start + start`
+    /// may miss by a rounding).
+    pub fn clock(&self, tau: f64) -> f64 {
+        if tau == self.span() {
+            self.end
+        } else {
+            tau + self.start
+        }
+    }
 }
 
 /// `[pitch]`: tent pitching.

@@ -161,7 +161,7 @@ impl Solve<'_> {
             .find(|&&(w, _)| w == m)
             .map(|&(_, t)| t)
             .expect("the times include the vertex");
-        let t_end = self.problem.loaded.config.time.end;
+        let t_end = self.problem.loaded.config.time.span();
         let mut book = self.book.lock();
         self.add_patch(&mut book, report);
         interface.add_to(&mut book);
@@ -287,7 +287,7 @@ impl Solve<'_> {
     /// returns it for the scheduler: the touched vertices, sorted, and the new ones below the
     /// end time.
     fn count_refined(&self, refined: Refined) -> Changed {
-        let t_end = self.problem.loaded.config.time.end;
+        let t_end = self.problem.loaded.config.time.span();
         let mut book = self.book.lock();
         book.refinements += refined.vertices.len() as u64;
         book.initial_energy += refined.initial_energy;

@@ -260,10 +260,16 @@ impl Solve<'_> {
             - e.total
             - totals.dissipation
             - totals.interface_work;
+        let time = self
+            .problem
+            .loaded
+            .config
+            .time
+            .clock(state.front.min_time());
         let _ = writeln!(
             book.history,
             "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
-            state.front.min_time(),
+            time,
             book.patches,
             rho * e.total,
             rho * e.kinetic,
@@ -277,7 +283,7 @@ impl Solve<'_> {
         );
         // Progress for batch jobs, which have no progress bar: one line per history row.
         tracing::info!(
-            front_min_time_s = state.front.min_time(),
+            front_min_time_s = time,
             patches = book.patches,
             rejected = book.rejected,
             vertices = state.mesh.vertices().len(),

@@ -156,8 +156,9 @@ fn slope(points: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
 }
 
 /// `crack_tips.csv` and the summary from the crossings of every cracking interface, with the
-/// tag name of each crossing; `c_r` is the Rayleigh speed, m/s.
-pub fn write(crossings: &[(String, Crossing)], c_r: f64) -> (String, CrackSummary) {
+/// tag name of each crossing; `c_r` is the Rayleigh speed, m/s; `start` (s, `time.start`) is
+/// added to the times written.
+pub fn write(crossings: &[(String, Crossing)], c_r: f64, start: f64) -> (String, CrackSummary) {
     let mut by_tag: BTreeMap<&str, Vec<Crossing>> = BTreeMap::new();
     for (tag, c) in crossings {
         by_tag.entry(tag.as_str()).or_default().push(*c);
@@ -168,15 +169,18 @@ pub fn write(crossings: &[(String, Crossing)], c_r: f64) -> (String, CrackSummar
             .into_iter()
             .map(|(tag, list)| (tag, tip_states(&list))),
         c_r,
+        start,
     )
 }
 
 /// `crack_tips.csv` (one row per tip state, keyed by its crack in the column `key`) and its
-/// totals; `c_r` is the Rayleigh speed, m/s.
+/// totals; `c_r` is the Rayleigh speed, m/s; each state's time is written as `start` (s,
+/// `time.start`) plus its time on the run's clock.
 pub(super) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
     key: &str,
     cracks: impl IntoIterator<Item = (K, S)>,
     c_r: f64,
+    start: f64,
 ) -> (String, CrackSummary) {
     let mut csv = format!("t_s,{key},x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n");
     let mut summary = CrackSummary::default();
@@ -186,7 +190,12 @@ pub(super) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
             let _ = writeln!(
                 csv,
                 "{:e},{crack},{:e},{:e},{:e},{:e},{:e}",
-                s.time, s.point[0], s.point[1], s.extension, s.speed, s.process_zone_length
+                start + s.time,
+                s.point[0],
+                s.point[1],
+                s.extension,
+                s.speed,
+                s.process_zone_length
             );
             summary.max_speed = summary.max_speed.max(s.speed);
             summary.states_over_c_r += usize::from(s.speed > c_r);
@@ -242,14 +251,26 @@ mod tests {
                 .map(|c| ("crack".to_string(), *c))
                 .collect::<Vec<_>>(),
             600.0,
+            -1e-6,
         );
         assert_eq!(csv.lines().count(), 41);
+        // The times written count from `time.start` = -1 us: the first tip at 1 us is at 0.
+        let first: f64 = csv
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert_eq!(first, 1e-6 - 1e-6);
         assert!((summary.final_length - 39e-5).abs() < 1e-12);
         assert!((summary.max_speed_over_c_r - 0.5).abs() < 1e-6);
         assert_eq!(summary.states_over_c_r, 0);
         // At a Rayleigh speed below the crack's, every state is above it.
         let crossings: Vec<_> = list.iter().map(|c| ("crack".to_string(), *c)).collect();
-        assert_eq!(write(&crossings, 299.0).1.states_over_c_r, 40);
+        assert_eq!(write(&crossings, 299.0, 0.0).1.states_over_c_r, 40);
     }
 
     #[test]

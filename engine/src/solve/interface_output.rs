@@ -94,8 +94,13 @@ fn on_segment(x: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
     (-1e-9..=1.0 + 1e-9).contains(&along) && across <= 1e-9 * length2.sqrt()
 }
 
-/// `interface.csv`: one row per sample, sorted by probe and time.
-pub(super) fn csv(probes: &[Probe], samples: &mut [(usize, InterfaceSample)]) -> String {
+/// `interface.csv`: one row per sample, sorted by probe and time, at `start` (s, `time.start`)
+/// plus its time on the run's clock.
+pub(super) fn csv(
+    probes: &[Probe],
+    samples: &mut [(usize, InterfaceSample)],
+    start: f64,
+) -> String {
     samples.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.time.total_cmp(&b.1.time)));
     let mut out = String::from(
         "t_s,x_m,y_m,tag,s_n_pa,s_t_pa,sI_n_pa,sI_t_pa,delta_m,slip_m,jump_vn_m_s,jump_vt_m_s,\
@@ -106,7 +111,7 @@ pub(super) fn csv(probes: &[Probe], samples: &mut [(usize, InterfaceSample)]) ->
         let _ = writeln!(
             out,
             "{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{}",
-            s.time,
+            start + s.time,
             probe.at[0],
             probe.at[1],
             probe.tag,

@@ -20,14 +20,15 @@ use crate::run::RunOptions;
 pub(super) type Intervention = Box<dyn FnOnce(&mut Live<'_>) + Send>;
 
 /// [`crate::solve_job`], with `action` run once on the live front as soon as every vertex of the
-/// front has passed `after` (s, in `[0, time.end)`), as a scheduler event: no tent is in flight,
+/// front has passed `after` (s since `time.start`, in `[0, time.end - time.start)`), as a
+/// scheduler event: no tent is in flight,
 /// and the front is as the tents left it (not flat). What `action` changes through [`Live`]
 /// is booked like adaptive refinement (counts, energy accounting, progress) and the run then
 /// continues to the end time. Deterministic runs stay deterministic.
 ///
 /// `action` owns what it captures (`'static`): it reports back through shared handles such as
 /// an `Arc<Mutex<_>>`. Errors as [`crate::solve_job`], and a runtime error for an `after` outside
-/// `[0, time.end)`.
+/// `[0, time.end - time.start)`.
 #[doc(hidden)]
 pub fn solve_job_with(
     problem: &Problem,
@@ -35,10 +36,10 @@ pub fn solve_job_with(
     after: f64,
     action: impl FnOnce(&mut Live<'_>) + Send + 'static,
 ) -> Result<(RunSummary, PathBuf), EngineError> {
-    let t_end = problem.loaded.config.time.end;
+    let t_end = problem.loaded.config.time.span();
     if !(after >= 0.0 && after < t_end) {
         return Err(EngineError::Runtime(format!(
-            "an intervention at {after:e} s is not within the run [0, {t_end:e}) s"
+            "an intervention {after:e} s after the start is not within the run's {t_end:e} s"
         )));
     }
     run_job(problem, options, Some((after, Box::new(action))))

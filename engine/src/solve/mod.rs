@@ -70,6 +70,8 @@ struct Solve<'a> {
     /// initial mesh's shortest edge (cracks running through ever smaller triangles would
     /// otherwise shrink the tents without bound).
     min_edge: f64,
+    /// `output.snapshot_times` on the run's own clock (s since `time.start`).
+    snapshot_times: Vec<f64>,
     /// `Book::energy_max` as bits, read by tents without the book's lock.
     energy_reference: AtomicU64,
     initial: Initial<'a>,
@@ -209,7 +211,7 @@ impl Solve<'_> {
                 if star.is_empty() {
                     return Err(EngineError::Runtime(format!(
                         "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {failure}",
-                        tent.t_old
+                        self.problem.loaded.config.time.clock(tent.t_old)
                     )));
                 }
                 return Ok((tent.t_old, Outcome::Rejected { star }));
@@ -219,7 +221,7 @@ impl Solve<'_> {
             let [x, y] = mesh.vertex(v);
             self.control.fail(format!(
                 "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: {quantity}",
-                tent.t_old
+                self.problem.loaded.config.time.clock(tent.t_old)
             ));
             return Ok((tent.t_old, Outcome::Failed));
         }
@@ -313,7 +315,7 @@ impl Solve<'_> {
             plot::write_history_png(dir, &book.history);
         }
         if let Some((csv, _)) = self.crack_tips(&state.mesh, &book) {
-            self.write_crack_tips(dir, &csv, config.time.end)?;
+            self.write_crack_tips(dir, &csv)?;
         }
         self.write_fracture(state, &book.fracture_events, dir)?;
         self.write_probes(dir, &mut book)
@@ -334,7 +336,7 @@ impl Solve<'_> {
         write_atomic(
             dir,
             "events.csv",
-            propagation::events_csv(events).as_bytes(),
+            propagation::events_csv(events, config.time.start).as_bytes(),
         )?;
         let order = config.solver.order;
         let cracks = propagation::crack_edges(
@@ -348,7 +350,7 @@ impl Solve<'_> {
             },
         );
         if config.output.png {
-            let time = state.front.min_time();
+            let time = config.time.clock(state.front.min_time());
             let fork = (config.fracture.as_ref())
                 .and_then(|f| f.macro_length)
                 .and_then(|length| {
@@ -374,10 +376,11 @@ impl Solve<'_> {
     /// else per cohesive or damage interface tag; `None` when the run tracks no crack tips.
     fn crack_tips(&self, mesh: &Mesh, book: &Book) -> Option<(String, CrackSummary)> {
         let c_r = self.problem.material.c_r();
+        let start = self.problem.loaded.config.time.start;
         if self.problem.fracture.is_some() {
             let crossings: Vec<Crossing> = book.crossings.iter().map(|&(_, c)| c).collect();
             let branches = propagation::branch_tips(&book.fracture_events, &crossings);
-            Some(crack_output::tips_csv("branch", &branches, c_r))
+            Some(crack_output::tips_csv("branch", &branches, c_r, start))
         } else if self.problem.interfaces.any_cohesive() {
             let names = mesh.tag_names();
             let crossings: Vec<_> = book
@@ -388,7 +391,7 @@ impl Solve<'_> {
                     (name.to_string(), *c)
                 })
                 .collect();
-            Some(crack_output::write(&crossings, c_r))
+            Some(crack_output::write(&crossings, c_r, start))
         } else {
             None
         }
@@ -396,9 +399,10 @@ impl Solve<'_> {
 
     /// Writes `crack_tips.csv` (its text `csv`) and, with `output.png`, its picture: the branch
     /// tips' speeds with `[fracture]`, else the tips against LEFM in the normalized units of
-    /// `[loading]` up to the end time `t_end` (s).
-    fn write_crack_tips(&self, dir: &Path, csv: &str, t_end: f64) -> Result<(), EngineError> {
+    /// `[loading]` up to the end time.
+    fn write_crack_tips(&self, dir: &Path, csv: &str) -> Result<(), EngineError> {
         let problem = self.problem;
+        let time = &problem.loaded.config.time;
         write_atomic(dir, "crack_tips.csv", csv.as_bytes())?;
         if problem.loaded.config.output.png && problem.fracture.is_some() {
             plot::write_tip_speed_png(dir, csv, problem.material.c_r());
@@ -406,8 +410,8 @@ impl Solve<'_> {
             let normalization = problem.loading.map(|l| plot::Normalization {
                 tau: l.scales.tau,
                 c_r: l.scales.c_r,
-                arrival: l.arrival_time,
-                end: t_end,
+                arrival: time.clock(l.arrival_time),
+                end: time.end,
             });
             plot::write_crack_png(dir, csv, normalization);
         }
@@ -426,7 +430,8 @@ impl Solve<'_> {
     fn write_probes(&self, dir: &std::path::Path, book: &mut Book) -> Result<(), EngineError> {
         let probes = &self.problem.probes;
         if !probes.is_empty() {
-            let text = interface_output::csv(probes, &mut book.samples);
+            let start = self.problem.loaded.config.time.start;
+            let text = interface_output::csv(probes, &mut book.samples, start);
             write_atomic(dir, "interface.csv", text.as_bytes())?;
         }
         Ok(())
@@ -513,7 +518,7 @@ impl Solve<'_> {
         InterfaceRecords {
             samples: interface_output::sample(&self.problem.probes, mesh, solver),
             cuts: interface_output::snapshot_cuts(
-                &self.problem.loaded.config.output.snapshot_times,
+                &self.snapshot_times,
                 self.problem.system.c_ref(),
                 solver,
             ),
@@ -715,7 +720,7 @@ impl Start {
         let config = &problem.loaded.config;
         let mesh = &problem.mesh;
         let c_max = problem.material.max_wave_speed();
-        let pitcher = Pitcher::new(mesh, c_max, config.pitch.safety, config.time.end)
+        let pitcher = Pitcher::new(mesh, c_max, config.pitch.safety, config.time.span())
             .map_err(|e| EngineError::Runtime(e.to_string()))?;
         let adapt = Adapt::new(&config.adapt, mesh, c_max, problem.material.density());
         // Crack alignment splits edges as refinement does.
@@ -828,7 +833,10 @@ fn run_job(
     let system = &problem.system;
     let c_max = problem.material.max_wave_speed();
     let rho = problem.material.density();
-    let t_end = config.time.end;
+    let t_end = config.time.span();
+    let snapshot_times: Vec<f64> = (config.output.snapshot_times.iter())
+        .map(|&t| config.time.elapsed(t))
+        .collect();
     let scheduler = options.scheduler(problem);
     let Start {
         mut state,
@@ -886,6 +894,7 @@ fn run_job(
         max_star,
         threads: scheduler.threads,
         min_edge,
+        snapshot_times: snapshot_times.clone(),
         energy_reference: AtomicU64::new(energy0.total.to_bits()),
         initial,
         basis: basis.clone(),
@@ -909,13 +918,18 @@ fn run_job(
             dofs: 0,
             max_slope_ratio: 0.0,
             timings: Timings::default(),
-            snapshots: Snapshots::new(&config.output.snapshot_times, c_max, dir.clone())
-                .with_png(config.output.png)
-                .with_vtu(config.output.vtu),
+            snapshots: Snapshots::on_clock(
+                &config.output.snapshot_times,
+                config.time.start,
+                c_max,
+                dir.clone(),
+            )
+            .with_png(config.output.png)
+            .with_vtu(config.output.vtu),
             milestones: Milestones::new(
                 state.mesh.vertices().len(),
                 t_end,
-                &config.output.snapshot_times,
+                &snapshot_times,
                 config.checkpoint.every_sim_s,
                 after,
             ),
@@ -942,7 +956,7 @@ fn run_job(
         Some((file, restored)) => {
             tracing::info!(
                 checkpoint = %file.display(),
-                time = restored.header.time,
+                time = config.time.clock(restored.header.time),
                 "restarting"
             );
             counts = restored.counts;
@@ -957,7 +971,7 @@ fn run_job(
                 .energy_reference
                 .store(book.energy_max.to_bits(), Ordering::Relaxed);
             *solve.book.lock() = book;
-            Some((file, restored.header.time))
+            Some((file, config.time.clock(restored.header.time)))
         }
         None => {
             solve.history_row(&state, &mut solve.book.lock());
@@ -1019,7 +1033,7 @@ fn run_job(
         checkpoints.write_seconds += written.elapsed().as_secs_f64();
         tracing::info!(
             checkpoint = %path.display(),
-            time = state.front.min_time(),
+            time = config.time.clock(state.front.min_time()),
             seconds = written.elapsed().as_secs_f64(),
             "checkpoint written"
         );
@@ -1034,7 +1048,7 @@ fn run_job(
             solve.write_partial_outputs(&state, &dir)?;
             return Err(EngineError::Checkpointed {
                 reason,
-                time: state.front.min_time(),
+                time: config.time.clock(state.front.min_time()),
                 checkpoint: path,
             });
         }
@@ -1116,7 +1130,7 @@ fn run_job(
         patches: book.patches,
         elements: book.elements,
         dofs_per_patch: book.dofs as f64 / book.patches.max(1) as f64,
-        final_time: front.min_time(),
+        final_time: config.time.clock(front.min_time()),
         max_slope_ratio: book.max_slope_ratio,
         max_momentum_residual: book.totals.momentum_residual,
         mode: if scheduler.deterministic {
@@ -1141,8 +1155,8 @@ fn run_job(
                 &book.fracture_events,
                 &state,
                 fracture,
-                &initial_tips,
-                macro_length,
+                (&initial_tips, macro_length),
+                config.time.start,
             )
         }),
         error,
@@ -1169,7 +1183,7 @@ fn run_job(
     }
     solve.write_probes(&dir, &mut book)?;
     if let Some(csv) = crack_csv {
-        solve.write_crack_tips(&dir, &csv, t_end)?;
+        solve.write_crack_tips(&dir, &csv)?;
     }
     solve.write_fracture(&state, &book.fracture_events, &dir)?;
     solve.write_trace(options)?;

@@ -411,14 +411,15 @@ fn element_stress(
     [values[2], values[3], values[4]].map(|s| z * s)
 }
 
-/// `events.csv`: one line per fracture event in the order they happened.
-pub(super) fn events_csv(events: &[FractureEvent]) -> String {
+/// `events.csv`: one line per fracture event in the order they happened, at `start` (s,
+/// `time.start`) plus its time on the run's clock.
+pub(super) fn events_csv(events: &[FractureEvent], start: f64) -> String {
     let mut csv = String::from("time_s,event,branch,x_m,y_m,to_x_m,to_y_m\n");
     for e in events {
         let _ = writeln!(
             csv,
             "{:e},{},{},{:e},{:e},{:e},{:e}",
-            e.time,
+            start + e.time,
             e.kind,
             e.branch.map_or(String::new(), |b| b.to_string()),
             e.from[0],
@@ -635,18 +636,23 @@ const ZOOM_MAX_EDGED_VERTICES: usize = 1500;
 const CRACK_PATH_PNG_SIZE: (u32, u32) = (1200, 900);
 
 /// The summary of the fracture events of a run on the final `state`; `initial_tips` are the
-/// positions of the initial cracks' tips, m; `macro_length` the arms' reach of a macro fork, m.
+/// positions of the initial cracks' tips, m; `macro_length` the arms' reach of a macro fork, m;
+/// its times are `start` (s, `time.start`) plus those on the run's clock.
 pub(super) fn summary(
     events: &[FractureEvent],
     state: &Frontier,
     fracture: &Fracture,
-    initial_tips: &[[f64; 2]],
-    macro_length: Option<f64>,
+    (initial_tips, macro_length): (&[[f64; 2]], Option<f64>),
+    start: f64,
 ) -> FractureSummary {
     let count = |kind: &str| events.iter().filter(|e| e.kind == kind).count() as u64;
     let (first_branching_time, first_branching_distance) = first_branching(events, initial_tips);
     let macro_branching = macro_length
-        .and_then(|length| macro_fork(&state.mesh, fracture, events, length, initial_tips));
+        .and_then(|length| macro_fork(&state.mesh, fracture, events, length, initial_tips))
+        .map(|fork| MacroFork {
+            time: start + fork.time,
+            ..fork
+        });
     FractureSummary {
         nucleations: count("nucleation"),
         extensions: count("extension"),
@@ -661,7 +667,7 @@ pub(super) fn summary(
             .filter(|e| e.kind == "extension")
             .map(|e| (e.to[0] - e.from[0]).hypot(e.to[1] - e.from[1]))
             .fold(0.0, |a, b| a + b),
-        first_branching_time,
+        first_branching_time: first_branching_time.map(|t| start + t),
         first_branching_distance,
         macro_branching,
     }
@@ -881,7 +887,7 @@ mod tests {
         let tips = branch_tips(&events, &crossings);
         assert_eq!(tips.keys().copied().collect::<Vec<_>>(), [2]);
         assert_eq!(tips[&2].len(), 40);
-        let (_, summary) = crack_output::tips_csv("branch", &tips, 1000.0);
+        let (_, summary) = crack_output::tips_csv("branch", &tips, 1000.0, 0.0);
         assert!(
             (summary.max_speed_over_c_r - 0.4).abs() < 0.004,
             "{summary:?}"
@@ -924,7 +930,7 @@ mod tests {
             let tips = branch_tips(events, &crossings);
             (
                 tips[&0].len(),
-                crack_output::tips_csv("branch", &tips, 1000.0).1,
+                crack_output::tips_csv("branch", &tips, 1000.0, 0.0).1,
             )
         };
         let (states, summary) = tips(&events);
@@ -992,7 +998,7 @@ mod tests {
                 );
             }
         }
-        let (csv, summary) = crack_output::tips_csv("branch", &tips, 1000.0);
+        let (csv, summary) = crack_output::tips_csv("branch", &tips, 1000.0, 0.0);
         assert_eq!(csv.lines().count(), 185);
         assert!(csv.starts_with("t_s,branch,x_m,"));
         assert!(
