@@ -383,12 +383,12 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
         args.overhead_us * 1e-6,
         args.out.as_deref(),
     )?;
-    let one = sdg_engine::trace::replay(
-        &sdg_engine::trace::read(&args.trace)?,
-        1,
-        args.overhead_us * 1e-6,
-    )
-    .wall_time_s;
+    let entries = sdg_engine::trace::read(&args.trace)?;
+    let one = sdg_engine::trace::replay(&entries, 1, args.overhead_us * 1e-6).wall_time_s;
+    match sdg_engine::trace::rounds(&entries) {
+        0 => println!("model: the asynchronous scheduler (a trace without rounds)"),
+        n => println!("model: the deterministic scheduler's {n} rounds"),
+    }
     println!("workers  wall time (s)  speedup  mean ready tents");
     for p in &predictions {
         println!(

@@ -698,9 +698,13 @@ fn a_traced_run_replays_on_more_workers() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let table = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        table.starts_with("model: the asynchronous scheduler"),
+        "{table}"
+    );
     let speedups: Vec<f64> = table
         .lines()
-        .skip(1)
+        .skip(2)
         .take(3)
         .map(|l| l.split_whitespace().nth(2).unwrap().parse().unwrap())
         .collect();
@@ -716,6 +720,36 @@ fn a_traced_run_replays_on_more_workers() {
     assert!((1.0..=2.0).contains(&speedups[1]), "{speedups:?}");
     assert!(speedups[2] <= bound + 0.01, "{speedups:?} {bound}");
     assert!(png.is_file());
+    // A deterministic run's trace marks its rounds and is replayed as them.
+    let out = sdg(&[
+        "run",
+        &config,
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--force",
+        "--deterministic",
+        "--quiet",
+        "--trace",
+        trace.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("summary.json")).unwrap()).unwrap();
+    let rounds = summary["rounds"].as_u64().unwrap();
+    let text = std::fs::read_to_string(&trace).unwrap();
+    assert_eq!(
+        text.lines().filter(|l| l.contains(",round,")).count() as u64,
+        rounds
+    );
+    let out = sdg(&["scaling", trace.to_str().unwrap(), "--workers", "1,2"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        table.starts_with(&format!(
+            "model: the deterministic scheduler's {rounds} rounds"
+        )),
+        "{table}"
+    );
     std::fs::write(&trace, "id,kind\n").unwrap();
     expect_input_error(
         &["scaling", trace.to_str().unwrap()],

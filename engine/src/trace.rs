@@ -9,10 +9,15 @@
 //!
 //! The replay models the asynchronous scheduler: a tent is ready once its dependencies are done,
 //! and each free worker takes the ready tent that came first in the trace, paying a fixed claim
-//! overhead per tent; an event waits for every tent before it and runs alone. It predicts the
-//! wall time, the critical path (the time with unlimited workers) and the mean number of ready
-//! tents. The costs are those measured in the traced run, so the model leaves out what more
-//! threads do to each tent (shared caches and memory bandwidth).
+//! overhead per tent; an event waits for every tent before it and runs alone. A trace of a
+//! deterministic run also marks the end of each round (`round`, with the time the scheduler
+//! spent on it alone: choosing its vertices and recording its tents), and is replayed as those
+//! rounds, which are the same for any thread count: a round's tents go to the first free
+//! worker in trace order, then its events and the scheduler's own time run alone. Either way
+//! the replay predicts the wall time, the critical path (the time with unlimited workers) and
+//! the mean number of ready tents. The costs are those measured in the traced run, so the model
+//! leaves out what more threads do to each tent (shared caches and memory bandwidth) and the
+//! barriers' cost.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -38,6 +43,9 @@ pub enum Kind {
     Coarsen,
     /// A scheduler event.
     Event,
+    /// The end of a deterministic round: the time the scheduler spent on it alone (choosing its
+    /// vertices, recording its tents), after its tents and events.
+    Round,
 }
 
 impl Kind {
@@ -48,6 +56,7 @@ impl Kind {
             Self::Rejected => "rejected",
             Self::Coarsen => "coarsen",
             Self::Event => "event",
+            Self::Round => "round",
         }
     }
 
@@ -58,6 +67,7 @@ impl Kind {
             Self::Rejected,
             Self::Coarsen,
             Self::Event,
+            Self::Round,
         ]
         .into_iter()
         .find(|k| k.name() == name)
@@ -181,6 +191,24 @@ impl Tracer {
         result
     }
 
+    /// Traces the end of a deterministic round that kept the scheduler busy alone for `serial`.
+    pub(crate) fn round(&self, serial: std::time::Duration) {
+        let id = {
+            let mut ids = self.ids.lock();
+            ids.next += 1;
+            ids.next - 1
+        };
+        let start = self.started.elapsed().saturating_sub(serial);
+        self.entries.lock().push(Entry {
+            id,
+            kind: Kind::Round,
+            vertex: None,
+            start_s: start.as_secs_f64(),
+            duration_s: serial.as_secs_f64(),
+            deps: Vec::new(),
+        });
+    }
+
     /// Writes the trace as CSV to `path`.
     pub(crate) fn write(&self, path: &Path) -> Result<(), EngineError> {
         let mut entries = self.entries.lock().clone();
@@ -265,9 +293,18 @@ pub struct Prediction {
     pub mean_ready: f64,
 }
 
-/// Replays `entries` on `workers` simulated workers with `overhead_s` of claiming per tent.
+/// Deterministic rounds in a trace (the rounds model replays it); 0 for an asynchronous run.
+pub fn rounds(entries: &[Entry]) -> usize {
+    entries.iter().filter(|e| e.kind == Kind::Round).count()
+}
+
+/// Replays `entries` on `workers` simulated workers with `overhead_s` of claiming per tent: as
+/// the deterministic scheduler's rounds when the trace has them, else as the asynchronous one.
 pub fn replay(entries: &[Entry], workers: usize, overhead_s: f64) -> Prediction {
     let workers = workers.max(1);
+    if rounds(entries) > 0 {
+        return replay_rounds(entries, workers, overhead_s);
+    }
     let (mut clock, mut ready_area) = (0.0, 0.0);
     for segment in entries.split(|e| e.kind == Kind::Event) {
         let (span, area) = replay_segment(segment, workers, overhead_s);
@@ -286,8 +323,81 @@ pub fn replay(entries: &[Entry], workers: usize, overhead_s: f64) -> Prediction 
     }
 }
 
-/// The time with unlimited workers: the longest chain of dependencies, events included, s.
+/// The rounds of a deterministic trace: the tents of a round (all ready when it starts, none
+/// depending on another) go in trace order to the first free worker, each paying `overhead_s`,
+/// as the scheduler's shared counter hands them out; then the round's events and the
+/// scheduler's own time on it run alone. The rounds are the same for any number of threads, so
+/// the model needs no dependencies.
+fn replay_rounds(entries: &[Entry], workers: usize, overhead_s: f64) -> Prediction {
+    let (mut clock, mut ready_area) = (0.0, 0.0);
+    for round in entries.split_inclusive(|e| e.kind == Kind::Round) {
+        let (span, area) = list_schedule(round_tents(round), workers, overhead_s);
+        clock += span + serial_time(round);
+        ready_area += area;
+    }
+    Prediction {
+        workers,
+        wall_time_s: clock,
+        mean_ready: ready_area / clock.max(f64::MIN_POSITIVE),
+    }
+}
+
+/// The durations of the tents of `round`, s, in trace order.
+fn round_tents(round: &[Entry]) -> impl Iterator<Item = f64> + Clone + '_ {
+    round
+        .iter()
+        .filter(|e| !matches!(e.kind, Kind::Event | Kind::Round))
+        .map(|e| e.duration_s)
+}
+
+/// The time `round` runs alone (its events and the scheduler's own time), s.
+fn serial_time(round: &[Entry]) -> f64 {
+    round
+        .iter()
+        .filter(|e| matches!(e.kind, Kind::Event | Kind::Round))
+        .map(|e| e.duration_s)
+        .sum()
+}
+
+/// Makespan of `durations` (s; all ready at 0) taken in order by the first free of `workers`,
+/// each paying `overhead_s`, and the integral over time of the number not started yet (s).
+fn list_schedule(
+    durations: impl Iterator<Item = f64> + Clone,
+    workers: usize,
+    overhead_s: f64,
+) -> (f64, f64) {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    let n = durations.clone().count();
+    let mut free: BinaryHeap<Reverse<Time>> = (0..workers).map(|_| Reverse(Time(0.0))).collect();
+    let (mut span, mut area, mut last_start) = (0.0f64, 0.0, 0.0);
+    for (i, d) in durations.enumerate() {
+        let Some(Reverse(Time(start))) = free.pop() else {
+            unreachable!("at least one worker")
+        };
+        area += (n - i) as f64 * (start - last_start);
+        last_start = start;
+        let finish = start + overhead_s + d;
+        span = span.max(finish);
+        free.push(Reverse(Time(finish)));
+    }
+    (span, area)
+}
+
+/// The time with unlimited workers: the longest chain of dependencies, events included, s; for
+/// deterministic rounds, the longest tent of each round plus the time it runs alone.
 pub fn critical_path(entries: &[Entry], overhead_s: f64) -> f64 {
+    if rounds(entries) > 0 {
+        return entries
+            .split_inclusive(|e| e.kind == Kind::Round)
+            .map(|round| {
+                let longest = round_tents(round)
+                    .map(|d| d + overhead_s)
+                    .fold(0.0, f64::max);
+                longest + serial_time(round)
+            })
+            .sum();
+    }
     let events: f64 = entries
         .iter()
         .filter(|e| e.kind == Kind::Event)
@@ -471,6 +581,35 @@ mod tests {
         assert_eq!(replay(&entries, 2, 0.25).wall_time_s, 4.25);
     }
 
+    /// Two rounds: three unit tents, an event of 0.5 s and 0.25 s of the scheduler's own; then
+    /// one tent of 2 s and 0.25 s.
+    #[test]
+    fn the_rounds_replay_hands_each_round_s_tents_to_free_workers() {
+        let marker = |id: u64, duration_s: f64, kind: Kind| Entry {
+            kind,
+            vertex: None,
+            ..tent(id, duration_s, &[])
+        };
+        let entries = vec![
+            tent(0, 1.0, &[]),
+            tent(1, 1.0, &[]),
+            tent(2, 1.0, &[]),
+            marker(3, 0.5, Kind::Event),
+            marker(4, 0.25, Kind::Round),
+            tent(5, 2.0, &[]),
+            marker(6, 0.25, Kind::Round),
+        ];
+        assert_eq!(rounds(&entries), 2);
+        let wall = |workers, overhead| replay(&entries, workers, overhead).wall_time_s;
+        assert_eq!(wall(1, 0.0), 6.0);
+        assert_eq!(wall(2, 0.0), 5.0);
+        assert_eq!(wall(8, 0.0), 4.0);
+        assert_eq!(critical_path(&entries, 0.0), 4.0);
+        // Two workers: the third tent of the first round waits 1 s.
+        assert_eq!(replay(&entries, 2, 0.0).mean_ready, 1.0 / 5.0);
+        assert_eq!(wall(2, 0.5), 6.5);
+    }
+
     #[test]
     fn a_written_trace_reads_back_and_bad_ones_are_refused() {
         let tracer = Tracer::new();
@@ -493,12 +632,24 @@ mod tests {
         tracer.end(b, 1, Kind::Newton, true);
         let c = tracer.begin(&mesh, 0);
         tracer.end(c, 0, Kind::Patch, true);
+        tracer.round(std::time::Duration::from_micros(3));
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("trace.csv");
         tracer.write(&path).unwrap();
         let entries = read(&path).unwrap();
         let kinds: Vec<Kind> = entries.iter().map(|e| e.kind).collect();
-        assert_eq!(kinds, [Kind::Patch, Kind::Event, Kind::Newton, Kind::Patch]);
+        assert_eq!(
+            kinds,
+            [
+                Kind::Patch,
+                Kind::Event,
+                Kind::Newton,
+                Kind::Patch,
+                Kind::Round
+            ]
+        );
+        assert_eq!(entries[4].duration_s, 3e-6);
+        assert_eq!(rounds(&entries), 1);
         // After the event only the event and the later tent at a neighbour are dependencies.
         assert_eq!(entries[2].deps, [1]);
         assert_eq!(entries[3].deps, [1, 2]);

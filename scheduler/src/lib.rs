@@ -115,6 +115,13 @@ pub trait Work<'a>: Sync {
     fn pause(&self) -> bool {
         false
     }
+
+    /// Deterministic mode: called after each round and its events with the time the calling
+    /// thread spent on the round alone, `serial` (choosing its vertices and recording its
+    /// tents; not the events), for a trace of the rounds.
+    fn round(&self, serial: Duration) {
+        let _ = serial;
+    }
 }
 
 /// An event: runs with exclusive access to the state (no tent in flight) and reports what it

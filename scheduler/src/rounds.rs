@@ -104,6 +104,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
         // A panic here leaves the workers at the round's first barrier, as an error does.
         let result = catch_unwind(AssertUnwindSafe(|| {
             loop {
+                let choosing = std::time::Instant::now();
                 let guard = state.read();
                 let s: &W::State = &guard;
                 if scan_all {
@@ -154,8 +155,10 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 }
                 // The round-setup lock is released before the workers start.
                 drop(guard);
+                let mut serial = choosing.elapsed();
                 barrier.wait();
                 share(0, &mut own);
+                let recording = std::time::Instant::now();
                 let mut r = round.write();
                 let chosen = std::mem::take(&mut r.chosen);
                 {
@@ -171,6 +174,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 r.chosen = chosen;
                 stats.rounds += 1;
                 drop(r);
+                serial += recording.elapsed();
                 let mut guard = state.write();
                 let running = std::time::Instant::now();
                 for action in events.take() {
@@ -182,6 +186,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 event_time.add_since(running);
                 n = guard.mesh().vertices().len();
                 taken.resize(n, false);
+                work.round(serial);
             }
         }))
         .unwrap_or_else(|payload| Err(RunError::Panic(panic_message(payload))));

@@ -674,6 +674,12 @@ impl<'a> Work<'a> for Solve<'a> {
         Ok(())
     }
 
+    fn round(&self, serial: Duration) {
+        if let Some(tracer) = &self.tracer {
+            tracer.round(serial);
+        }
+    }
+
     fn pause(&self) -> bool {
         if self.control.is_pending() {
             return true;
