@@ -664,27 +664,37 @@ fn a_stopped_crack_run_leaves_its_crack_outputs() {
     assert_eq!(cracks.lines().count(), 1 + 16, "{cracks}");
 }
 
+/// `sdg run CONFIG --trace TRACE` into `out_dir` with `options`: the summary and the trace.
+fn traced_run(
+    config: &str,
+    out_dir: &Path,
+    trace: &Path,
+    options: &[&str],
+) -> (serde_json::Value, String) {
+    let mut args = vec![
+        "run",
+        config,
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--force",
+        "--quiet",
+        "--trace",
+        trace.to_str().unwrap(),
+    ];
+    args.extend(options);
+    let out = sdg(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let summary = serde_json::from_slice(&std::fs::read(out_dir.join("summary.json")).unwrap());
+    (summary.unwrap(), std::fs::read_to_string(trace).unwrap())
+}
+
 #[test]
 fn a_traced_run_replays_on_more_workers() {
     let (dir, config) = config_file(CONFIG);
     let out_dir = dir.path().join("out");
     let trace = dir.path().join("trace.csv");
-    let out = sdg(&[
-        "run",
-        &config,
-        "--output",
-        out_dir.to_str().unwrap(),
-        "--threads",
-        "1",
-        "--quiet",
-        "--trace",
-        trace.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out_dir.join("summary.json")).unwrap()).unwrap();
+    let (summary, text) = traced_run(&config, &out_dir, &trace, &["--threads", "1"]);
     let patches = summary["patches"].as_u64().unwrap();
-    let text = std::fs::read_to_string(&trace).unwrap();
     let tents = text.lines().filter(|l| l.contains(",patch,")).count() as u64;
     assert_eq!(tents, patches, "one line per patch");
     let png = dir.path().join("scaling.png");
@@ -721,22 +731,8 @@ fn a_traced_run_replays_on_more_workers() {
     assert!(speedups[2] <= bound + 0.01, "{speedups:?} {bound}");
     assert!(png.is_file());
     // A deterministic run's trace marks its rounds and is replayed as them.
-    let out = sdg(&[
-        "run",
-        &config,
-        "--output",
-        out_dir.to_str().unwrap(),
-        "--force",
-        "--deterministic",
-        "--quiet",
-        "--trace",
-        trace.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out_dir.join("summary.json")).unwrap()).unwrap();
+    let (summary, text) = traced_run(&config, &out_dir, &trace, &["--deterministic"]);
     let rounds = summary["rounds"].as_u64().unwrap();
-    let text = std::fs::read_to_string(&trace).unwrap();
     assert_eq!(
         text.lines().filter(|l| l.contains(",round,")).count() as u64,
         rounds
