@@ -76,8 +76,14 @@ fn signal(child: &Child, name: &str) {
 }
 
 /// Kills a run with `before` threads after its first checkpoint, restarts it from the folder on
-/// `after` threads, and compares every output with an uninterrupted run's.
-fn killed_and_restarted(config: &str, overrides: &[&str], before: &str, after: &str) {
+/// `after` threads, and compares every output with an uninterrupted run's; returns the
+/// restarted run's summary.
+fn killed_and_restarted(
+    config: &str,
+    overrides: &[&str],
+    before: &str,
+    after: &str,
+) -> serde_json::Value {
     let reference = tempfile::tempdir().unwrap();
     let (code, err) = finish(spawn(
         config,
@@ -101,8 +107,9 @@ fn killed_and_restarted(config: &str, overrides: &[&str], before: &str, after: &
     let from = summary["checkpoint"]["restarted_from"].as_str().unwrap();
     let time = summary["checkpoint"]["restart_time"].as_f64().unwrap();
     eprintln!("{config}: restarted from {from} at t = {time:e} s");
+    let start = common::shipped(config, overrides).loaded.config.time.start;
     assert!(
-        time > 0.0,
+        time > start,
         "the restart went on from the checkpoint's front"
     );
     let (expected, got) = (outputs(reference.path()), outputs(dir.path()));
@@ -113,21 +120,29 @@ fn killed_and_restarted(config: &str, overrides: &[&str], before: &str, after: &
     for ((name, a), (_, b)) in expected.iter().zip(&got) {
         assert!(a == b, "{config}: {name} differs after the restart");
     }
+    summary
 }
 
 #[test]
 fn a_killed_crack_run_restarts_bitwise_on_two_threads() {
-    // Damage interfaces, crack tips extending by edge splits, snapshots with interface cuts.
-    killed_and_restarted(
+    // Damage interfaces, crack tips extending by edge splits, snapshots with interface cuts, a
+    // run that starts before 0 (its snapshots keep their labels through the checkpoint).
+    let summary = killed_and_restarted(
         "crack_growth.toml",
         &[
-            "time.end=8e-7",
+            "time.start=-3e-7",
+            "time.end=5e-7",
             "checkpoint.every_sim_s=2e-7",
-            "output.snapshot_times=[4e-7, 8e-7]",
+            "output.snapshot_times=[1e-7, 5e-7]",
         ],
         "1",
         "2",
     );
+    let labels: Vec<f64> = (summary["snapshots"].as_array().unwrap().iter())
+        .map(|s| s[0].as_f64().unwrap())
+        .collect();
+    assert_eq!(labels, [1e-7, 5e-7]);
+    assert_eq!(summary["final_time"].as_f64(), Some(5e-7));
 }
 
 #[test]

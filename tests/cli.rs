@@ -185,10 +185,10 @@ fn malformed_config() {
 
 #[test]
 fn unknown_key() {
-    let (_dir, config) = config_file(&CONFIG.replace("[time]", "[time]\nstart = 0.0"));
+    let (_dir, config) = config_file(&CONFIG.replace("[time]", "[time]\nbegin = 0.0"));
     expect_input_error(
         &["validate", &config],
-        &["case.toml", "time", "unknown field `start`"],
+        &["case.toml", "time", "unknown field `begin`"],
     );
     let (_dir, config) = config_file(CONFIG);
     expect_input_error(&["mesh", &config, "--set", "pitch.speed=2"], &["speed"]);

@@ -15,7 +15,7 @@ impl Config {
         if !(end.is_finite() && self.time.span() > 0.0) {
             return fail(
                 "time.end",
-                format!("must be a time in s after time.start = {start}, got {end}"),
+                format!("must be a time in s after time.start = {start:e}, got {end:e}"),
             );
         }
         let safety = self.pitch.safety;
@@ -282,7 +282,7 @@ impl Config {
         {
             return Err((
                 "output.snapshot_times".into(),
-                format!("{t} s is outside [time.start, time.end]"),
+                format!("{t:e} s is outside [time.start, time.end]"),
             ));
         }
         if let Some(i) = self
