@@ -399,9 +399,14 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
             p.mean_ready
         );
     }
+    let parts = sdg_engine::trace::critical_path_parts(&entries, args.overhead_us * 1e-6);
     println!(
-        "critical path {critical:.4} s: at most {:.2}x over one worker",
-        one / critical
+        "critical path {critical:.4} s: at most {:.2}x over one worker; tents {:.4} s, events \
+         {:.4} s, the scheduler alone {:.4} s",
+        one / critical,
+        parts.tents_s,
+        parts.events_s,
+        parts.scheduler_s
     );
     Ok(())
 }

@@ -384,26 +384,50 @@ fn list_schedule(
     (span, area)
 }
 
-/// The time with unlimited workers: the longest chain of dependencies, events included, s; for
+/// The time with unlimited workers, s: the longest chain of dependencies, events included; for
 /// deterministic rounds, the longest tent of each round plus the time it runs alone.
 pub fn critical_path(entries: &[Entry], overhead_s: f64) -> f64 {
+    let parts = critical_path_parts(entries, overhead_s);
+    parts.tents_s + parts.events_s + parts.scheduler_s
+}
+
+/// What the critical path is made of, s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CriticalPath {
+    /// Tents on it, with their claim overhead: the longest chains between events, or the
+    /// longest tent of each round.
+    pub tents_s: f64,
+    /// Events, each of which runs alone.
+    pub events_s: f64,
+    /// The deterministic scheduler's own time on its rounds (0 for an asynchronous trace).
+    pub scheduler_s: f64,
+}
+
+/// The parts of [`critical_path`].
+pub fn critical_path_parts(entries: &[Entry], overhead_s: f64) -> CriticalPath {
+    let time_of = |kind: Kind| -> f64 {
+        (entries.iter())
+            .filter(|e| e.kind == kind)
+            .map(|e| e.duration_s)
+            .sum()
+    };
+    let (events_s, scheduler_s) = (time_of(Kind::Event), time_of(Kind::Round));
     if rounds(entries) > 0 {
-        return entries
+        let tents_s = entries
             .split_inclusive(|e| e.kind == Kind::Round)
             .map(|round| {
-                let longest = round_tents(round)
+                round_tents(round)
                     .map(|d| d + overhead_s)
-                    .fold(0.0, f64::max);
-                longest + serial_time(round)
+                    .fold(0.0, f64::max)
             })
             .sum();
+        return CriticalPath {
+            tents_s,
+            events_s,
+            scheduler_s,
+        };
     }
-    let events: f64 = entries
-        .iter()
-        .filter(|e| e.kind == Kind::Event)
-        .map(|e| e.duration_s)
-        .sum();
-    let segments: f64 = entries
+    let tents_s = entries
         .split(|e| e.kind == Kind::Event)
         .map(|segment| {
             let index = index_of(segment);
@@ -420,7 +444,11 @@ pub fn critical_path(entries: &[Entry], overhead_s: f64) -> f64 {
             finish.iter().copied().fold(0.0, f64::max)
         })
         .sum();
-    segments + events
+    CriticalPath {
+        tents_s,
+        events_s,
+        scheduler_s,
+    }
 }
 
 /// Position in `segment` (sorted by id) of a tent id, if it is there.
@@ -572,6 +600,11 @@ mod tests {
         assert_eq!(two.wall_time_s, 3.5);
         assert_eq!(replay(&entries, 8, 0.0).wall_time_s, 3.5);
         assert_eq!(critical_path(&entries, 0.0), 3.5);
+        let parts = critical_path_parts(&entries, 0.0);
+        assert_eq!(
+            (parts.tents_s, parts.events_s, parts.scheduler_s),
+            (3.0, 0.5, 0.0)
+        );
         // One worker: one tent waits while the other runs, for the first three tents.
         assert!(
             (one.mean_ready - 3.0 / 5.5).abs() < 1e-12,
@@ -605,6 +638,11 @@ mod tests {
         assert_eq!(wall(2, 0.0), 5.0);
         assert_eq!(wall(8, 0.0), 4.0);
         assert_eq!(critical_path(&entries, 0.0), 4.0);
+        let parts = critical_path_parts(&entries, 0.0);
+        assert_eq!(
+            (parts.tents_s, parts.events_s, parts.scheduler_s),
+            (3.0, 0.5, 0.5)
+        );
         // Two workers: the third tent of the first round waits 1 s.
         assert_eq!(replay(&entries, 2, 0.0).mean_ready, 1.0 / 5.0);
         assert_eq!(wall(2, 0.5), 6.5);
