@@ -377,29 +377,18 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
         )));
     }
     let workers: Vec<usize> = args.workers.iter().map(|w| w.get()).collect();
-    let (predictions, critical) = sdg_engine::trace::scaling_job(
-        &args.trace,
-        &workers,
-        args.overhead_us * 1e-6,
-        args.out.as_deref(),
-    )?;
+    let overhead_s = args.overhead_us * 1e-6;
+    let scaling =
+        sdg_engine::trace::scaling_job(&args.trace, &workers, overhead_s, args.out.as_deref())?;
     let entries = sdg_engine::trace::read(&args.trace)?;
-    let one = sdg_engine::trace::replay(&entries, 1, args.overhead_us * 1e-6).wall_time_s;
+    let one = sdg_engine::trace::replay(&entries, 1, overhead_s).wall_time_s;
     match sdg_engine::trace::rounds(&entries) {
         0 => println!("model: the asynchronous scheduler (a trace without rounds)"),
         n => println!("model: the deterministic scheduler's {n} rounds"),
     }
-    println!("workers  wall time (s)  speedup  mean ready tents");
-    for p in &predictions {
-        println!(
-            "{:>7}  {:>13.4}  {:>7.2}  {:>16.1}",
-            p.workers,
-            p.wall_time_s,
-            one / p.wall_time_s,
-            p.mean_ready
-        );
-    }
-    let parts = sdg_engine::trace::critical_path_parts(&entries, args.overhead_us * 1e-6);
+    print_predictions(&scaling.predictions, one);
+    let critical = scaling.critical_s;
+    let parts = sdg_engine::trace::critical_path_parts(&entries, overhead_s);
     println!(
         "critical path {critical:.4} s: at most {:.2}x over one worker; tents {:.4} s, events \
          {:.4} s, the scheduler alone {:.4} s",
@@ -408,7 +397,34 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
         parts.events_s,
         parts.scheduler_s
     );
+    if let Some((regional, critical)) = &scaling.regional {
+        println!(
+            "with regional events (a model of a scheduler not built: each of the {} refinements, \
+             coarsenings and crack extensions waits only for the tents at the vertices it changes and their \
+             neighbours and takes one worker; the other events still run alone):",
+            sdg_engine::trace::regions(&entries)
+        );
+        print_predictions(regional, one);
+        println!(
+            "critical path {critical:.4} s: at most {:.2}x over one worker",
+            one / critical
+        );
+    }
     Ok(())
+}
+
+/// Prints a table of predictions, with speedups over `one` (s, the 1-worker wall time).
+fn print_predictions(predictions: &[sdg_engine::trace::Prediction], one: f64) {
+    println!("workers  wall time (s)  speedup  mean ready tents");
+    for p in predictions {
+        println!(
+            "{:>7}  {:>13.4}  {:>7.2}  {:>16.1}",
+            p.workers,
+            p.wall_time_s,
+            one / p.wall_time_s,
+            p.mean_ready
+        );
+    }
 }
 
 fn plot(args: &PlotArgs) -> Result<(), EngineError> {

@@ -720,12 +720,7 @@ fn a_traced_run_replays_on_more_workers() {
         .collect();
     eprintln!("{table}");
     // Two workers at most halve the time; no number of workers beats the critical path.
-    let bound: f64 = table
-        .split("at most ")
-        .nth(1)
-        .and_then(|rest| rest.split('x').next())
-        .and_then(|x| x.parse().ok())
-        .expect("the critical path's bound");
+    let bound = number_after(&table, "at most ", 'x');
     assert_eq!(speedups[0], 1.0);
     assert!((1.0..=2.0).contains(&speedups[1]), "{speedups:?}");
     assert!(speedups[2] <= bound + 0.01, "{speedups:?} {bound}");
@@ -751,4 +746,57 @@ fn a_traced_run_replays_on_more_workers() {
         &["scaling", trace.to_str().unwrap()],
         &["trace.csv:1", "header"],
     );
+}
+
+/// The number after `key` in `text`, up to `end`.
+fn number_after(text: &str, key: &str, end: char) -> f64 {
+    text.split(key)
+        .nth(1)
+        .and_then(|rest| rest.split(end).next())
+        .and_then(|x| x.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no number after {key:?} in {text}"))
+}
+
+/// An adaptive run's refinements and coarsenings are traced as regional events, and `sdg scaling` also
+/// predicts what a scheduler that ran them regionally would give: its critical path is no
+/// longer than with every event alone.
+#[test]
+fn a_traced_adaptive_run_also_models_regional_events() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out_dir, trace) = (dir.path().join("out"), dir.path().join("trace.csv"));
+    let config = repo("configs/adaptive_pulse.toml");
+    let (summary, text) = traced_run(
+        config.to_str().unwrap(),
+        &out_dir,
+        &trace,
+        &[
+            "--threads",
+            "2",
+            "--set",
+            "time.end=3e-7",
+            "--set",
+            "output.snapshot_times=[]",
+        ],
+    );
+    let regions = text.lines().filter(|l| l.contains(",region,")).count();
+    assert!(regions > 0, "no refinement in {summary}");
+    let out = sdg(&["scaling", trace.to_str().unwrap(), "--workers", "1,2,16"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8(out.stdout).unwrap();
+    let (alone, regional) = table
+        .split_once("with regional events")
+        .unwrap_or_else(|| panic!("no regional model in {table}"));
+    assert!(regional.contains(&format!("each of the {regions} refinements,")));
+    let bound = |part: &str| number_after(part, "at most ", 'x');
+    assert!(bound(regional) >= bound(alone) - 1e-9, "{table}");
+    // No number of workers beats the critical path (a list schedule need not be monotone in
+    // what it may run, so the two models' rows are not compared).
+    let at_16 = |part: &str| -> f64 {
+        let line = part
+            .lines()
+            .find(|l| l.trim_start().starts_with("16 "))
+            .unwrap_or_else(|| panic!("no 16-worker row in {part}"));
+        line.split_whitespace().nth(2).unwrap().parse().unwrap()
+    };
+    assert!(at_16(regional) <= bound(regional) + 0.01, "{table}");
 }

@@ -3,21 +3,25 @@
 //!
 //! A trace lists every tent with its vertex, its kind, when it ran, how long it took and the
 //! earlier tents it depends on: the last tents at its vertex and at the vertex's neighbours
-//! (their front times and the elements it reads), and the last scheduler event. Events (mesh
-//! changes, history rows) hold the whole state: every tent before an event precedes it and
-//! every tent after follows it.
+//! (their front times and the elements it reads), or the regional event that last changed
+//! them. Events that change the mesh only around some vertices (refinement, coarsening, crack
+//! extension: `region` rows) list as dependencies the last tents and events at the vertices
+//! they changed and at those vertices' neighbours; the other events (`event` rows: history
+//! rows, interventions) hold the whole state.
 //!
 //! The replay models the asynchronous scheduler: a tent is ready once its dependencies are done,
 //! and each free worker takes the ready tent that came first in the trace, paying a fixed claim
-//! overhead per tent; an event waits for every tent before it and runs alone. A trace of a
-//! deterministic run also marks the end of each round (`round`, with the time the scheduler
-//! spent on it alone: choosing its vertices and recording its tents), and is replayed as those
-//! rounds, which are the same for any thread count: a round's tents go to the first free
-//! worker in trace order, then its events and the scheduler's own time run alone. Either way
-//! the replay predicts the wall time, the critical path (the time with unlimited workers) and
-//! the mean number of ready tents. The costs are those measured in the traced run, so the model
-//! leaves out what more threads do to each tent (shared caches and memory bandwidth) and the
-//! barriers' cost.
+//! overhead per tent; an event, of either kind, waits for every tent before it and runs alone,
+//! as the scheduler runs them. [`replay_regional`] models a scheduler that is not built: a
+//! `region` event waits only for its dependencies and takes one worker, while the others go on
+//! solving. A trace of a deterministic run also marks the end of each round (`round`, with the
+//! time the scheduler spent on it alone: choosing its vertices and recording its tents), and is
+//! replayed as those rounds, which are the same for any thread count: a round's tents go to the
+//! first free worker in trace order, then its events and the scheduler's own time run alone.
+//! Either way the replay predicts the wall time, the critical path (the time with unlimited
+//! workers) and the mean number of ready tents. The costs are those measured in the traced run,
+//! so the model leaves out what more threads do to each tent (shared caches and memory
+//! bandwidth) and the barriers' cost.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -41,8 +45,11 @@ pub enum Kind {
     Rejected,
     /// A coarsening patch.
     Coarsen,
-    /// A scheduler event.
+    /// A scheduler event that holds the whole state.
     Event,
+    /// A scheduler event that changes the mesh only around some vertices (refinement,
+    /// coarsening, crack extension); its dependencies are the tents and events there.
+    Region,
     /// The end of a deterministic round: the time the scheduler spent on it alone (choosing its
     /// vertices, recording its tents), after its tents and events.
     Round,
@@ -56,6 +63,7 @@ impl Kind {
             Self::Rejected => "rejected",
             Self::Coarsen => "coarsen",
             Self::Event => "event",
+            Self::Region => "region",
             Self::Round => "round",
         }
     }
@@ -67,10 +75,18 @@ impl Kind {
             Self::Rejected,
             Self::Coarsen,
             Self::Event,
+            Self::Region,
             Self::Round,
         ]
         .into_iter()
         .find(|k| k.name() == name)
+    }
+}
+
+impl Kind {
+    /// Events of either kind: the scheduler runs them alone, between tents.
+    fn is_event(self) -> bool {
+        matches!(self, Self::Event | Self::Region)
     }
 }
 
@@ -97,21 +113,46 @@ pub(crate) struct Begun {
     deps: Vec<u64>,
 }
 
+/// A regional event being traced.
+#[derive(Debug)]
+pub(crate) struct BegunRegion {
+    id: u64,
+    start: Instant,
+}
+
 /// Records the trace of a running solve.
 #[derive(Debug)]
 pub(crate) struct Tracer {
     started: Instant,
-    /// The next id, the last event's id plus one (0: none yet) and per vertex the last tent's
-    /// id plus one.
     ids: Mutex<Ids>,
     entries: Mutex<Vec<Entry>>,
 }
 
+/// Ids plus one per vertex (0: none yet); vertex ids as at the time.
 #[derive(Debug, Default)]
 struct Ids {
+    /// The next id.
     next: u64,
-    last_event: u64,
+    /// The last tent that changed the solution under the vertex's star, or the last regional
+    /// event that changed its star.
     last: Vec<u64>,
+    /// The last tent at the vertex, whatever it did.
+    last_any: Vec<u64>,
+}
+
+impl Ids {
+    fn take(&mut self) -> u64 {
+        self.next += 1;
+        self.next - 1
+    }
+}
+
+/// Sets `table[v]` to `id + 1`, growing the table as needed.
+fn set(table: &mut Vec<u64>, v: VertexId, id: u64) {
+    if table.len() <= v as usize {
+        table.resize(v as usize + 1, 0);
+    }
+    table[v as usize] = id + 1;
 }
 
 impl Tracer {
@@ -126,19 +167,14 @@ impl Tracer {
     /// Starts tracing the tent at `v` (claimed): its id and dependencies.
     pub(crate) fn begin(&self, mesh: &Mesh, v: VertexId) -> Begun {
         let mut ids = self.ids.lock();
-        let id = ids.next;
-        ids.next += 1;
-        let after = ids.last_event;
+        let id = ids.take();
         let mut deps: Vec<u64> = std::iter::once(&v)
             .chain(mesh.vertex_neighbors(v))
             .filter_map(|&w| ids.last.get(w as usize).copied())
-            .filter(|&last| last > after)
+            .filter(|&last| last > 0)
             .map(|last| last - 1)
             .collect();
         drop(ids);
-        if after > 0 {
-            deps.push(after - 1);
-        }
         deps.sort_unstable();
         deps.dedup();
         Begun {
@@ -152,12 +188,12 @@ impl Tracer {
     /// star (`changed`) becomes a dependency of the next tents there.
     pub(crate) fn end(&self, begun: Begun, v: VertexId, kind: Kind, changed: bool) {
         let duration_s = begun.start.elapsed().as_secs_f64();
-        if changed {
+        {
             let mut ids = self.ids.lock();
-            if ids.last.len() <= v as usize {
-                ids.last.resize(v as usize + 1, 0);
+            set(&mut ids.last_any, v, begun.id);
+            if changed {
+                set(&mut ids.last, v, begun.id);
             }
-            ids.last[v as usize] = begun.id + 1;
         }
         self.entries.lock().push(Entry {
             id: begun.id,
@@ -169,17 +205,13 @@ impl Tracer {
         });
     }
 
-    /// Runs the event `action` (the state held exclusively) and traces it.
+    /// Runs the event `action` (the state held exclusively) and traces it as one that holds
+    /// the whole state.
     pub(crate) fn event<T>(&self, action: impl FnOnce() -> T) -> T {
-        let id = {
-            let mut ids = self.ids.lock();
-            ids.next += 1;
-            ids.next - 1
-        };
+        let id = self.ids.lock().take();
         let start = Instant::now();
         let result = action();
         let duration_s = start.elapsed().as_secs_f64();
-        self.ids.lock().last_event = id + 1;
         self.entries.lock().push(Entry {
             id,
             kind: Kind::Event,
@@ -191,13 +223,73 @@ impl Tracer {
         result
     }
 
+    /// Starts tracing a regional event.
+    pub(crate) fn begin_region(&self) -> BegunRegion {
+        BegunRegion {
+            id: self.ids.lock().take(),
+            start: Instant::now(),
+        }
+    }
+
+    /// Ends the regional event `begun`, which changed the stars of `changed` (ids as after it;
+    /// appended vertices included) in `mesh` (as after it) and, with `removed`, removed that
+    /// vertex, the last vertex taking its id (coarsening): it depends on the last tents and
+    /// events at those vertices and their neighbours (the removed one included), and the next
+    /// tents there depend on it.
+    pub(crate) fn end_region(
+        &self,
+        begun: BegunRegion,
+        mesh: &Mesh,
+        changed: &[VertexId],
+        removed: Option<VertexId>,
+    ) {
+        let duration_s = begun.start.elapsed().as_secs_f64();
+        let count = mesh.vertices().len() as VertexId;
+        // The id a vertex had before the event.
+        let before = |v: VertexId| match removed {
+            Some(m) if v == m => count,
+            _ => v,
+        };
+        let mut ids = self.ids.lock();
+        let mut deps: Vec<u64> = changed
+            .iter()
+            .flat_map(|&v| std::iter::once(v).chain(mesh.vertex_neighbors(v).iter().copied()))
+            .map(before)
+            .chain(removed)
+            .flat_map(|w| [ids.last.get(w as usize), ids.last_any.get(w as usize)])
+            .flatten()
+            .filter(|&&last| last > 0)
+            .map(|&last| last - 1)
+            .collect();
+        if let Some(m) = removed {
+            let ids = &mut *ids;
+            for table in [&mut ids.last, &mut ids.last_any] {
+                let moved = table.get(count as usize).copied().unwrap_or(0);
+                if let Some(slot) = table.get_mut(m as usize) {
+                    *slot = moved;
+                }
+                table.truncate(count as usize);
+            }
+        }
+        for &v in changed {
+            set(&mut ids.last, v, begun.id);
+        }
+        drop(ids);
+        deps.sort_unstable();
+        deps.dedup();
+        self.entries.lock().push(Entry {
+            id: begun.id,
+            kind: Kind::Region,
+            vertex: None,
+            start_s: (begun.start - self.started).as_secs_f64(),
+            duration_s,
+            deps,
+        });
+    }
+
     /// Traces the end of a deterministic round that kept the scheduler busy alone for `serial`.
     pub(crate) fn round(&self, serial: std::time::Duration) {
-        let id = {
-            let mut ids = self.ids.lock();
-            ids.next += 1;
-            ids.next - 1
-        };
+        let id = self.ids.lock().take();
         let start = self.started.elapsed().saturating_sub(serial);
         self.entries.lock().push(Entry {
             id,
@@ -305,15 +397,36 @@ pub fn replay(entries: &[Entry], workers: usize, overhead_s: f64) -> Prediction 
     if rounds(entries) > 0 {
         return replay_rounds(entries, workers, overhead_s);
     }
+    replay_between(entries, workers, overhead_s, Kind::is_event)
+}
+
+/// [`replay`] of an asynchronous trace for a scheduler that runs `region` events as the
+/// claims layer would let it (not built): each waits only for the tents and events at the
+/// vertices it changes and their neighbours, takes one worker and pays the claim overhead, and
+/// the tents there after it wait for it; the other events still run alone.
+pub fn replay_regional(entries: &[Entry], workers: usize, overhead_s: f64) -> Prediction {
+    replay_between(entries, workers.max(1), overhead_s, |k| {
+        matches!(k, Kind::Event | Kind::Round)
+    })
+}
+
+/// The dependency-graph replay of `entries` in segments between the events `alone` says run
+/// alone, which are added to the wall time.
+fn replay_between(
+    entries: &[Entry],
+    workers: usize,
+    overhead_s: f64,
+    alone: impl Fn(Kind) -> bool,
+) -> Prediction {
     let (mut clock, mut ready_area) = (0.0, 0.0);
-    for segment in entries.split(|e| e.kind == Kind::Event) {
+    for segment in entries.split(|e| alone(e.kind)) {
         let (span, area) = replay_segment(segment, workers, overhead_s);
         clock += span;
         ready_area += area;
     }
     clock += entries
         .iter()
-        .filter(|e| e.kind == Kind::Event)
+        .filter(|e| alone(e.kind))
         .map(|e| e.duration_s)
         .sum::<f64>();
     Prediction {
@@ -346,7 +459,7 @@ fn replay_rounds(entries: &[Entry], workers: usize, overhead_s: f64) -> Predicti
 fn round_tents(round: &[Entry]) -> impl Iterator<Item = f64> + Clone + '_ {
     round
         .iter()
-        .filter(|e| !matches!(e.kind, Kind::Event | Kind::Round))
+        .filter(|e| !(e.kind.is_event() || e.kind == Kind::Round))
         .map(|e| e.duration_s)
 }
 
@@ -354,7 +467,7 @@ fn round_tents(round: &[Entry]) -> impl Iterator<Item = f64> + Clone + '_ {
 fn serial_time(round: &[Entry]) -> f64 {
     round
         .iter()
-        .filter(|e| matches!(e.kind, Kind::Event | Kind::Round))
+        .filter(|e| e.kind.is_event() || e.kind == Kind::Round)
         .map(|e| e.duration_s)
         .sum()
 }
@@ -405,13 +518,16 @@ pub struct CriticalPath {
 
 /// The parts of [`critical_path`].
 pub fn critical_path_parts(entries: &[Entry], overhead_s: f64) -> CriticalPath {
+    // A sum of no f64 is -0.0: start from +0.0.
     let time_of = |kind: Kind| -> f64 {
         (entries.iter())
             .filter(|e| e.kind == kind)
-            .map(|e| e.duration_s)
-            .sum()
+            .fold(0.0, |sum, e| sum + e.duration_s)
     };
-    let (events_s, scheduler_s) = (time_of(Kind::Event), time_of(Kind::Round));
+    let (events_s, scheduler_s) = (
+        time_of(Kind::Event) + time_of(Kind::Region),
+        time_of(Kind::Round),
+    );
     if rounds(entries) > 0 {
         let tents_s = entries
             .split_inclusive(|e| e.kind == Kind::Round)
@@ -427,28 +543,45 @@ pub fn critical_path_parts(entries: &[Entry], overhead_s: f64) -> CriticalPath {
             scheduler_s,
         };
     }
-    let tents_s = entries
-        .split(|e| e.kind == Kind::Event)
-        .map(|segment| {
-            let index = index_of(segment);
-            let mut finish = vec![0.0f64; segment.len()];
-            for (i, e) in segment.iter().enumerate() {
-                let start = e
-                    .deps
-                    .iter()
-                    .filter_map(|d| index(*d))
-                    .map(|j| finish[j])
-                    .fold(0.0, f64::max);
-                finish[i] = start + overhead_s + e.duration_s;
-            }
-            finish.iter().copied().fold(0.0, f64::max)
-        })
-        .sum();
     CriticalPath {
-        tents_s,
+        tents_s: entries
+            .split(|e| e.kind.is_event())
+            .map(|segment| longest_chain(segment, overhead_s))
+            .sum(),
         events_s,
         scheduler_s,
     }
+}
+
+/// The critical path of [`replay_regional`], s: the longest chains of tents and `region`
+/// events between the events that run alone, plus those events.
+pub fn critical_path_regional(entries: &[Entry], overhead_s: f64) -> f64 {
+    let alone = |k: Kind| matches!(k, Kind::Event | Kind::Round);
+    entries
+        .split(|e| alone(e.kind))
+        .map(|segment| longest_chain(segment, overhead_s))
+        .sum::<f64>()
+        + (entries.iter())
+            .filter(|e| alone(e.kind))
+            .map(|e| e.duration_s)
+            .sum::<f64>()
+}
+
+/// The longest chain of dependencies in `segment` (sorted by id), each item with `overhead_s`,
+/// s.
+fn longest_chain(segment: &[Entry], overhead_s: f64) -> f64 {
+    let index = index_of(segment);
+    let mut finish = vec![0.0f64; segment.len()];
+    for (i, e) in segment.iter().enumerate() {
+        let start = e
+            .deps
+            .iter()
+            .filter_map(|d| index(*d))
+            .map(|j| finish[j])
+            .fold(0.0, f64::max);
+        finish[i] = start + overhead_s + e.duration_s;
+    }
+    finish.iter().copied().fold(0.0, f64::max)
 }
 
 /// Position in `segment` (sorted by id) of a tent id, if it is there.
@@ -520,14 +653,31 @@ impl Ord for Time {
     }
 }
 
-/// `sdg scaling`: replays the trace at `path` on each of `workers`; prints a table and, with
-/// `png`, draws the predicted speedup. Returns the predictions and the critical path (s).
+/// Regional events in a trace (`region` rows).
+pub fn regions(entries: &[Entry]) -> usize {
+    entries.iter().filter(|e| e.kind == Kind::Region).count()
+}
+
+/// What `sdg scaling` predicts for a trace.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scaling {
+    /// One per number of workers asked for, as the scheduler runs ([`replay`]).
+    pub predictions: Vec<Prediction>,
+    /// Its critical path, s.
+    pub critical_s: f64,
+    /// The same with regional events ([`replay_regional`]) and its critical path (s), for an
+    /// asynchronous trace with `region` rows.
+    pub regional: Option<(Vec<Prediction>, f64)>,
+}
+
+/// `sdg scaling`: replays the trace at `path` on each of `workers`; with `png`, draws the
+/// predicted speedups.
 pub fn scaling_job(
     path: &Path,
     workers: &[usize],
     overhead_s: f64,
     png: Option<&Path>,
-) -> Result<(Vec<Prediction>, f64), EngineError> {
+) -> Result<Scaling, EngineError> {
     let entries = read(path)?;
     if entries.is_empty() {
         return Err(EngineError::Input(format!(
@@ -535,33 +685,60 @@ pub fn scaling_job(
             path.display()
         )));
     }
-    let predictions: Vec<Prediction> = workers
-        .iter()
-        .map(|&w| replay(&entries, w, overhead_s))
-        .collect();
-    let critical = critical_path(&entries, overhead_s);
+    let predict = |model: fn(&[Entry], usize, f64) -> Prediction| -> Vec<Prediction> {
+        workers
+            .iter()
+            .map(|&w| model(&entries, w, overhead_s))
+            .collect()
+    };
+    let scaling = Scaling {
+        predictions: predict(replay),
+        critical_s: critical_path(&entries, overhead_s),
+        regional: (rounds(&entries) == 0 && regions(&entries) > 0).then(|| {
+            (
+                predict(replay_regional),
+                critical_path_regional(&entries, overhead_s),
+            )
+        }),
+    };
     if let Some(png) = png {
         let one = replay(&entries, 1, overhead_s).wall_time_s;
-        let points: Vec<(f64, f64)> = predictions
-            .iter()
-            .map(|p| (p.workers as f64, one / p.wall_time_s))
-            .collect();
-        let ideal: Vec<(f64, f64)> = predictions
-            .iter()
+        let speedups = |predictions: &[Prediction]| -> Vec<(f64, f64)> {
+            (predictions.iter())
+                .map(|p| (p.workers as f64, one / p.wall_time_s))
+                .collect()
+        };
+        let at = |y: f64| -> Vec<(f64, f64)> {
+            (scaling.predictions.iter())
+                .map(|p| (p.workers as f64, y))
+                .collect()
+        };
+        let ideal: Vec<(f64, f64)> = (scaling.predictions.iter())
             .map(|p| (p.workers as f64, p.workers as f64))
             .collect();
-        let bound = one / critical;
-        let limit: Vec<(f64, f64)> = predictions
-            .iter()
-            .map(|p| (p.workers as f64, bound))
-            .collect();
-        LineChart::new("predicted speedup", "workers", "speedup over 1 worker")
-            .series("replayed trace", &points, LineStyle::Solid)
+        let mut chart = LineChart::new("predicted speedup", "workers", "speedup over 1 worker")
+            .series(
+                "replayed trace",
+                &speedups(&scaling.predictions),
+                LineStyle::Solid,
+            );
+        if let Some((regional, _)) = &scaling.regional {
+            chart = chart.series(
+                "with regional events (model)",
+                &speedups(regional),
+                LineStyle::Solid,
+            );
+        }
+        chart
             .series("ideal", &ideal, LineStyle::Dashed)
-            .series("critical path bound", &limit, LineStyle::Dashed)
+            .series(
+                "critical path bound",
+                &at(one / scaling.critical_s),
+                LineStyle::Dashed,
+            )
             .write_png(png, (900, 600))?;
     }
-    Ok((predictions, critical))
+    Ok(scaling)
 }
 
 #[cfg(test)]
@@ -612,6 +789,35 @@ mod tests {
             one.mean_ready
         );
         assert_eq!(replay(&entries, 2, 0.25).wall_time_s, 4.25);
+    }
+
+    /// A regional event waits only for its dependencies and takes one worker; an event of the
+    /// other kind still runs alone.
+    #[test]
+    fn the_regional_replay_lets_other_tents_run_beside_a_region_event() {
+        let event = |id: u64, duration_s: f64, kind: Kind, deps: &[u64]| Entry {
+            kind,
+            vertex: None,
+            ..tent(id, duration_s, deps)
+        };
+        let entries = vec![
+            tent(0, 1.0, &[]),
+            tent(1, 2.0, &[]),
+            event(2, 0.5, Kind::Region, &[0]),
+            tent(3, 1.0, &[2]),
+            event(4, 0.25, Kind::Event, &[]),
+            tent(5, 1.0, &[]),
+        ];
+        assert_eq!(regions(&entries), 1);
+        // As the scheduler runs: max(1, 2) + 0.5 + 1 + 0.25 + 1.
+        assert_eq!(replay(&entries, 2, 0.0).wall_time_s, 4.75);
+        assert_eq!(critical_path(&entries, 0.0), 4.75);
+        // Regional: tent 1 runs beside the event and tent 3 (1 + 0.5 + 1), then 0.25 + 1.
+        assert_eq!(replay_regional(&entries, 2, 0.0).wall_time_s, 3.75);
+        assert_eq!(critical_path_regional(&entries, 0.0), 3.75);
+        // One worker does everything in turn either way.
+        assert_eq!(replay_regional(&entries, 1, 0.0).wall_time_s, 5.75);
+        assert_eq!(replay(&entries, 1, 0.0).wall_time_s, 5.75);
     }
 
     /// Two rounds: three unit tents, an event of 0.5 s and 0.25 s of the scheduler's own; then
@@ -668,8 +874,14 @@ mod tests {
         tracer.event(|| ());
         let b = tracer.begin(&mesh, 1);
         tracer.end(b, 1, Kind::Newton, true);
+        let rejected = tracer.begin(&mesh, 8);
+        tracer.end(rejected, 8, Kind::Rejected, false);
+        let region = tracer.begin_region();
+        tracer.end_region(region, &mesh, &[8], None);
         let c = tracer.begin(&mesh, 0);
         tracer.end(c, 0, Kind::Patch, true);
+        let d = tracer.begin(&mesh, 5);
+        tracer.end(d, 5, Kind::Patch, true);
         tracer.round(std::time::Duration::from_micros(3));
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("trace.csv");
@@ -682,15 +894,24 @@ mod tests {
                 Kind::Patch,
                 Kind::Event,
                 Kind::Newton,
+                Kind::Rejected,
+                Kind::Region,
+                Kind::Patch,
                 Kind::Patch,
                 Kind::Round
             ]
         );
-        assert_eq!(entries[4].duration_s, 3e-6);
+        assert_eq!(entries[7].duration_s, 3e-6);
         assert_eq!(rounds(&entries), 1);
-        // After the event only the event and the later tent at a neighbour are dependencies.
-        assert_eq!(entries[2].deps, [1]);
-        assert_eq!(entries[3].deps, [1, 2]);
+        // Tents depend on the last tents at their vertex and its neighbours (vertices 0, 1, 3
+        // and 4 of the 3 x 3 grid are neighbours), across an event that holds the whole state.
+        assert_eq!(entries[2].deps, [0]);
+        // The regional event at the corner 8 depends on the rejected tent there (its
+        // neighbours 5 and 7 have had none); the later tent at 5 depends on the event and on
+        // the tent at its diagonal neighbour 1.
+        assert_eq!(entries[4].deps, [3]);
+        assert_eq!(entries[5].deps, [0, 2]);
+        assert_eq!(entries[6].deps, [2, 4]);
         std::fs::write(&path, "id,kind\n").unwrap();
         assert!(read(&path).unwrap_err().to_string().contains("header"));
         std::fs::write(

@@ -138,12 +138,31 @@ impl Solve<'_> {
 }
 
 impl Solve<'_> {
-    /// Runs the event `action`, traced with `--trace`.
+    /// Runs the event `action`, traced with `--trace` as one that holds the whole state.
     fn traced<T>(&self, action: impl FnOnce() -> T) -> T {
         match &self.tracer {
             Some(tracer) => tracer.event(action),
             None => action(),
         }
+    }
+
+    /// Runs the event `action` on `state`, which changes the mesh only around the vertices it
+    /// offers (refinement, crack extension; with `coarsening`, the coarsening of that vertex,
+    /// which the last vertex may replace), traced with `--trace` as a regional event.
+    fn traced_region(
+        &self,
+        state: &mut Frontier,
+        coarsening: Option<VertexId>,
+        action: impl FnOnce(&mut Frontier) -> Changed,
+    ) -> Changed {
+        let Some(tracer) = &self.tracer else {
+            return action(state);
+        };
+        let (begun, count) = (tracer.begin_region(), state.mesh.vertices().len());
+        let changed = action(state);
+        let removed = coarsening.filter(|_| state.mesh.vertices().len() < count);
+        tracer.end_region(begun, &state.mesh, &changed.offer, removed);
+        changed
     }
 
     /// [`Work::tent`] without its trace.
@@ -594,7 +613,7 @@ impl<'a> Work<'a> for Solve<'a> {
                 }
                 if let Some(extension) = extension {
                     events.push(Box::new(move |state: &mut Frontier| {
-                        self.traced(|| self.extend(state, v, &extension))
+                        self.traced_region(state, None, |state| self.extend(state, v, &extension))
                     }));
                 }
                 if self.problem.fracture.is_some() {
@@ -602,7 +621,9 @@ impl<'a> Work<'a> for Solve<'a> {
                     for &u in state.mesh.vertex_neighbors(v) {
                         if let Some(retry) = Extension::retry(state, u) {
                             events.push(Box::new(move |state: &mut Frontier| {
-                                self.traced(|| self.extend(state, u, &retry))
+                                self.traced_region(state, None, |state| {
+                                    self.extend(state, u, &retry)
+                                })
                             }));
                         }
                     }
@@ -615,7 +636,10 @@ impl<'a> Work<'a> for Solve<'a> {
                 interface,
             } => {
                 events.push(Box::new(move |state: &mut Frontier| {
-                    self.traced(|| self.coarsen(state, &coarsening, &report, interface))
+                    let m = coarsening.vertex;
+                    self.traced_region(state, Some(m), |state| {
+                        self.coarsen(state, &coarsening, &report, interface)
+                    })
                 }));
                 return Ok(());
             }
@@ -626,7 +650,7 @@ impl<'a> Work<'a> for Solve<'a> {
                 book.rejected += 1;
                 let at = state.mesh.vertex(v);
                 events.push(Box::new(move |state: &mut Frontier| {
-                    self.traced(|| self.refine(state, v, at, &star))
+                    self.traced_region(state, None, |state| self.refine(state, v, at, &star))
                 }));
                 return Ok(());
             }
