@@ -204,7 +204,9 @@ impl Solve<'_> {
             book.newton_iterations += report.newton_iterations as u64;
             book.newton_max = book.newton_max.max(report.newton_iterations);
         }
-        book.totals.momentum_residual = book.totals.momentum_residual.max(report.momentum_residual);
+        let totals = &mut book.totals;
+        totals.momentum_imbalance = totals.momentum_imbalance.max(report.momentum_imbalance);
+        totals.momentum_flux = totals.momentum_flux.max(report.momentum_flux);
         book.energy_max = book
             .energy_max
             .max(book.initial_energy + book.totals.boundary_work);

@@ -81,8 +81,9 @@ pub struct RunSummary {
     pub final_time: f64,
     /// Maximum `c_max |grad tau|` over all front facets.
     pub max_slope_ratio: f64,
-    /// Largest relative momentum residual of an element (zero to round-off: every element
-    /// balances linear momentum).
+    /// Largest momentum imbalance of an element (the sum of its faces' momentum fluxes),
+    /// relative to the largest momentum flux through the faces of any element: zero to
+    /// round-off, as every element balances linear momentum.
     pub max_momentum_residual: f64,
     /// `"deterministic"` or `"asynchronous"`.
     pub mode: &'static str,

@@ -71,8 +71,14 @@ pub struct ElementReport {
     /// Dissipation from the energy balance `energy_in - energy_out + vertical_work`; equal to
     /// `dissipation` to round-off when the element equations hold.
     pub dissipation_balance: f64,
-    /// `|sum over faces of the momentum target flux| / sum over faces of its magnitude`: zero to
-    /// round-off when the element balances linear momentum.
+    /// `|sum over faces of the momentum target flux|` (scaled units): zero to round-off when
+    /// the element balances linear momentum.
+    pub momentum_imbalance: f64,
+    /// Sum over faces of the magnitude of the momentum target flux (scaled units).
+    pub momentum_flux: f64,
+    /// `momentum_imbalance / momentum_flux`: zero to round-off when the element balances
+    /// linear momentum and its fluxes are not themselves round-off (an element at rest reads
+    /// anything up to 1).
     pub momentum_residual: f64,
 }
 
@@ -100,6 +106,10 @@ pub struct PatchReport {
     pub dissipation: f64,
     /// Largest [`ElementReport::momentum_residual`] of its elements.
     pub momentum_residual: f64,
+    /// Largest [`ElementReport::momentum_imbalance`] of its elements.
+    pub momentum_imbalance: f64,
+    /// Largest [`ElementReport::momentum_flux`] of its elements.
+    pub momentum_flux: f64,
     /// Newton iterations (linear solves) of a patch with nonlinear faces; zero for a linear
     /// patch.
     pub newton_iterations: usize,
@@ -765,6 +775,8 @@ impl PatchSolver {
             report.fracture_work += r.fracture_work;
             report.dissipation += r.dissipation;
             report.momentum_residual = report.momentum_residual.max(r.momentum_residual);
+            report.momentum_imbalance = report.momentum_imbalance.max(r.momentum_imbalance);
+            report.momentum_flux = report.momentum_flux.max(r.momentum_flux);
             self.reports[i] = r;
             self.displacement(i);
         }
@@ -1164,7 +1176,9 @@ impl PatchSolver {
             add_momentum(face_momentum);
         }
         r.dissipation_balance = r.energy_in - r.energy_out + r.vertical_work;
-        r.momentum_residual = momentum[0].hypot(momentum[1]) / scale.max(f64::MIN_POSITIVE);
+        r.momentum_imbalance = momentum[0].hypot(momentum[1]);
+        r.momentum_flux = scale;
+        r.momentum_residual = r.momentum_imbalance / scale.max(f64::MIN_POSITIVE);
         r
     }
 
