@@ -269,13 +269,20 @@ fn validate(args: &ValidateArgs) -> Result<(), EngineError> {
         ..RunOptions::default()
     };
     let estimate = sdg_engine::estimate_job(&problem, &options)?;
+    // What `sdg run` would refuse, `validate` refuses too, after saying why.
+    let check = estimate.check(&problem);
     if !args.config.quiet {
         let m = &problem.material;
         println!(
-            "{}: valid ({} vertices, {} triangles)\n\
+            "{}: {} ({} vertices, {} triangles)\n\
              wave speeds: c_d = {:.6e} m/s, c_s = {:.6e} m/s, c_R = {:.6e} m/s\n\
              estimate: {}",
             args.config.config.display(),
+            if check.is_ok() {
+                "valid"
+            } else {
+                "valid input, over its [limits]"
+            },
             problem.mesh.vertices().len(),
             problem.mesh.triangles().len(),
             m.c_d(),
@@ -284,8 +291,7 @@ fn validate(args: &ValidateArgs) -> Result<(), EngineError> {
             estimate.describe()
         );
     }
-    // What `sdg run` would refuse, `validate` refuses too.
-    estimate.check(&problem)?;
+    check?;
     Ok(())
 }
 

@@ -800,3 +800,57 @@ fn a_traced_adaptive_run_also_models_regional_events() {
     };
     assert!(at_16(regional) <= bound(regional) + 0.01, "{table}");
 }
+
+/// An output folder that cannot be made is bad input (exit 2) naming where it came from; an
+/// unknown table an override adds is the override's error; a shortened run's snapshot times
+/// outside its span say how to drop them.
+#[test]
+fn output_folders_overrides_and_snapshot_times_are_blamed_on_their_source() {
+    let (dir, config) = config_file(CONFIG);
+    let file = dir.path().join("a_file");
+    std::fs::write(&file, "").unwrap();
+    expect_input_error(
+        &[
+            "run",
+            &config,
+            "--output",
+            file.to_str().unwrap(),
+            "--quiet",
+        ],
+        &[
+            "--output",
+            "cannot create the output folder",
+            "a file, not a folder",
+        ],
+    );
+    expect_input_error(
+        &["validate", &config, "--set", "foo.bar=1"],
+        &["--set foo.bar=1: foo: unknown field"],
+    );
+    let branching = repo("configs/crack_branching.toml");
+    expect_input_error(
+        &[
+            "validate",
+            branching.to_str().unwrap(),
+            "--set",
+            "time.end=-1.5e-6",
+        ],
+        &[
+            "output.snapshot_times",
+            "[-2.392e-6, -1.5e-6]",
+            "--set 'output.snapshot_times=[]'",
+        ],
+    );
+}
+
+/// `validate` on a config over its limits says so before the error, which tells how `sdg run`
+/// would accept it.
+#[test]
+fn validate_over_the_limits_says_so() {
+    let (_dir, config) = config_file(CONFIG);
+    let out = sdg(&["validate", &config, "--set", "material.density=1e-30"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    assert!(text.contains(": valid input, over its [limits]"), "{text}");
+    assert!(stderr(&out).contains("pass --force to `sdg run`"));
+}

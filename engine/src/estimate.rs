@@ -115,7 +115,7 @@ impl Estimate {
                  poisson = {}, density = {:e} kg/m^3, plane {}), the smallest edge {:.3e} m \
                  and the span {:e} s (time.end - time.start; tents per vertex about \
                  c span / (safety h)). Check \
-                 the units, raise the limit, or run with --force",
+                 the units, raise the limit, or pass --force to `sdg run`",
                 if self.lower_bound {
                     " (a lower bound: refinement and crack growth add more)"
                 } else {

@@ -52,13 +52,23 @@ impl RunOptions {
         }
     }
 
-    /// The output folder for `problem`, created.
+    /// The output folder for `problem`, created; a folder that cannot be created is bad input,
+    /// named with where it came from (`--output` or `output.dir`).
     pub fn output_dir(&self, problem: &Problem) -> Result<PathBuf, EngineError> {
-        let dir = self
-            .output_dir
-            .clone()
-            .unwrap_or_else(|| problem.loaded.config.output.dir.clone());
-        std::fs::create_dir_all(&dir).map_err(|e| EngineError::io(&dir, e))?;
+        let (dir, from) = match &self.output_dir {
+            Some(dir) => (dir.clone(), "--output"),
+            None => (problem.loaded.config.output.dir.clone(), "output.dir"),
+        };
+        let bad = |reason: String| {
+            EngineError::Input(format!(
+                "{from} {}: cannot create the output folder: {reason}",
+                dir.display()
+            ))
+        };
+        if dir.exists() && !dir.is_dir() {
+            return Err(bad("it is a file, not a folder".into()));
+        }
+        std::fs::create_dir_all(&dir).map_err(|e| bad(e.to_string()))?;
         Ok(dir)
     }
 }

@@ -30,8 +30,8 @@ pub use settings::{
     SolverConfig, TimeConfig, VtuFormat, ZoneConfig,
 };
 
-use overrides::apply_override;
 pub use overrides::attribute;
+use overrides::{apply_override, attribute_added};
 
 /// A configuration error: where it came from, which key, and why.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -141,8 +141,11 @@ impl Config {
                 + &line_of(text, e.span()),
         })?;
         let mut root = toml::Value::Table(table);
+        let mut added = Vec::new();
         for spec in overrides {
-            apply_override(&mut root, spec)?;
+            if let Some(path) = apply_override(&mut root, spec)? {
+                added.push((spec.as_str(), path));
+            }
         }
         let config: Config = serde_path_to_error::deserialize(root).map_err(|e| {
             let path = e.path().to_string();
@@ -151,7 +154,7 @@ impl Config {
                 key: (path != ".").then_some(path),
                 reason: e.into_inner().message().to_string(),
             };
-            attribute(error, overrides)
+            attribute_added(attribute(error, overrides), &added)
         })?;
         config.validate().map_err(|(key, reason)| {
             let error = ConfigError {
@@ -159,7 +162,7 @@ impl Config {
                 key: Some(key),
                 reason,
             };
-            attribute(error, overrides)
+            attribute_added(attribute(error, overrides), &added)
         })?;
         Ok(config)
     }

@@ -5,8 +5,13 @@ use super::ConfigError;
 /// Applies one `key.path=value` override to the config's `root` table. The value is read as a
 /// TOML value (`3`, `1e-6`, `true`, `"text"`, `[0.0, 1.0]`), or as a string when it is not one;
 /// the schema then checks its type like any other key. A number in the path selects an entry
-/// of an array of tables: `interface.0.r_c`.
-pub(super) fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), ConfigError> {
+/// of an array of tables that exists: `interface.0.r_c`. Returns the key path (as errors spell
+/// it) of the outermost table the override added, if it added one: an error there is the
+/// override's.
+pub(super) fn apply_override(
+    root: &mut toml::Value,
+    spec: &str,
+) -> Result<Option<String>, ConfigError> {
     let source = format!("--set {spec}");
     let err = |key: &[&str], reason: String| ConfigError {
         file: source.clone(),
@@ -26,11 +31,43 @@ pub(super) fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), C
         .and_then(|mut t| t.remove("v"))
         .unwrap_or_else(|| toml::Value::String(raw.to_string()));
     let mut node = root;
+    let mut added = None;
     for (i, key) in keys.iter().enumerate() {
+        let missing = matches!(&*node, toml::Value::Table(t) if !t.contains_key(*key));
+        if missing && keys.get(i + 1).is_some_and(|k| k.parse::<usize>().is_ok()) {
+            return Err(err(
+                &keys[..=i],
+                "is not in the config: an override sets keys of list entries the config has, \
+                 it does not add entries"
+                    .into(),
+            ));
+        }
+        if missing && added.is_none() {
+            added = Some(dotted(&keys[..=i].join(".")));
+        }
         node = entry(node, key).map_err(|reason| err(&keys[..i], reason))?;
     }
     *node = value;
-    Ok(())
+    Ok(added)
+}
+
+/// `error` blamed on the last override that added a table containing its key (`added`: each
+/// override with the key path [`apply_override`] returned), unless it already names one.
+pub(super) fn attribute_added(mut error: ConfigError, added: &[(&str, String)]) -> ConfigError {
+    let Some(key) = error.key.clone() else {
+        return error;
+    };
+    if error.file.starts_with("--set ") {
+        return error;
+    }
+    let culprit = added.iter().rev().find(|(_, path)| {
+        key.strip_prefix(path.as_str())
+            .is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']))
+    });
+    if let Some((spec, _)) = culprit {
+        error.file = format!("--set {spec}");
+    }
+    error
 }
 
 /// `error` (from the file after the overrides were applied) blamed on the last override that set
@@ -120,6 +157,17 @@ mod tests {
         assert_eq!(e.key.as_deref(), Some("mesh.nx"));
         assert!(!e.file.starts_with("--set"), "{e}");
         assert_eq!(super::dotted("interface.0.r_c"), "interface[0].r_c");
+        // A table the override added: an unknown one is the override's, not the file's.
+        let e = parse(BASE, &["foo.bar=1"]).unwrap_err();
+        assert_eq!(
+            (e.file.as_str(), e.key.as_deref()),
+            ("--set foo.bar=1", Some("foo"))
+        );
+        // An entry of a list the config does not have.
+        let e = parse(BASE, &["adapt.zone.0.radius=-1"]).unwrap_err();
+        assert_eq!(e.file, "--set adapt.zone.0.radius=-1");
+        assert_eq!(e.key.as_deref(), Some("adapt.zone"));
+        assert!(e.reason.contains("does not add entries"), "{e}");
     }
 
     #[test]

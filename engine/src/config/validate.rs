@@ -282,7 +282,12 @@ impl Config {
         {
             return Err((
                 "output.snapshot_times".into(),
-                format!("{t:e} s is outside [time.start, time.end]"),
+                format!(
+                    "{t:e} s is outside [time.start, time.end] = [{:e}, {:e}] s (a run \
+                     shortened with --set time.end=... needs its snapshot times too, e.g. \
+                     --set 'output.snapshot_times=[]')",
+                    self.time.start, self.time.end
+                ),
             ));
         }
         if let Some(i) = self
