@@ -454,29 +454,29 @@ fn typed_value(rng: &mut Rng, old: &str, pool: &[String]) -> String {
             _ => rng.pick(&strings).to_string(),
         };
     }
-    if let Some(inner) = old.strip_prefix('[').and_then(|o| o.strip_suffix(']')) {
-        if !inner.contains('[') {
-            let mut items: Vec<String> = inner
-                .split(',')
-                .map(|i| i.trim().to_string())
-                .filter(|i| !i.is_empty())
-                .collect();
-            match rng.below(4) {
-                0 => {
-                    items.pop();
-                }
-                1 => items.push(items.last().cloned().unwrap_or_else(|| "0.0".into())),
-                _ if !items.is_empty() => {
-                    let k = rng.below(items.len());
-                    items[k] = match items[k].parse::<f64>() {
-                        Ok(_) => number(rng, &items[k]),
-                        Err(_) => rng.pick(pool).clone(),
-                    };
-                }
-                _ => {}
+    if let Some(inner) = old.strip_prefix('[').and_then(|o| o.strip_suffix(']'))
+        && !inner.contains('[')
+    {
+        let mut items: Vec<String> = inner
+            .split(',')
+            .map(|i| i.trim().to_string())
+            .filter(|i| !i.is_empty())
+            .collect();
+        match rng.below(4) {
+            0 => {
+                items.pop();
             }
-            return format!("[{}]", items.join(", "));
+            1 => items.push(items.last().cloned().unwrap_or_else(|| "0.0".into())),
+            _ if !items.is_empty() => {
+                let k = rng.below(items.len());
+                items[k] = match items[k].parse::<f64>() {
+                    Ok(_) => number(rng, &items[k]),
+                    Err(_) => rng.pick(pool).clone(),
+                };
+            }
+            _ => {}
         }
+        return format!("[{}]", items.join(", "));
     }
     rng.pick(pool).clone()
 }

@@ -188,7 +188,7 @@ fn sample(mesh: &Mesh, pitcher: &Pitcher, max_tents: u64, max_seconds: f64) -> S
             break;
         }
         if pitched >= max_tents
-            || (pitched % 1024 == 0 && start.elapsed().as_secs_f64() > max_seconds)
+            || (pitched.is_multiple_of(1024) && start.elapsed().as_secs_f64() > max_seconds)
         {
             break;
         }

@@ -270,10 +270,10 @@ impl Mesh {
             return false;
         }
         let [a, b] = [halves[0].a, halves[0].b];
-        if let [_, other] = halves {
-            if [other.a, other.b] != [b, a] {
-                return false;
-            }
+        if let [_, other] = halves
+            && [other.a, other.b] != [b, a]
+        {
+            return false;
         }
         let (pa, pb) = (self.vertex(a), self.vertex(b));
         let off = geometry::distance(self.vertex(m), midpoint(pa, pb));

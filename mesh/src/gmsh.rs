@@ -43,14 +43,15 @@ pub struct GmshError {
 pub fn read_msh(path: &Path) -> Result<Mesh, GmshError> {
     let file = path.display().to_string();
     // A device or pipe (`/dev/zero`) may never end.
-    if let Ok(meta) = std::fs::metadata(path) {
-        if !meta.is_file() && !meta.is_dir() {
-            return Err(GmshError {
-                file,
-                line: 0,
-                reason: "not a regular file".into(),
-            });
-        }
+    if let Ok(meta) = std::fs::metadata(path)
+        && !meta.is_file()
+        && !meta.is_dir()
+    {
+        return Err(GmshError {
+            file,
+            line: 0,
+            reason: "not a regular file".into(),
+        });
     }
     match std::fs::read(path) {
         Ok(bytes) => parse_msh(&String::from_utf8_lossy(&bytes), &file),

@@ -238,15 +238,15 @@ impl Mesh {
         while let Some(&s) = pending.last() {
             let e = self.refinement_edge_id(s);
             let triangles = self.edges[e as usize].triangles;
-            if let Some(u) = triangles.into_iter().flatten().find(|&u| u != s) {
-                if self.refinement_edge_id(u) != e {
-                    assert!(
-                        !pending.contains(&u),
-                        "refinement edges around triangle {u} form a cycle"
-                    );
-                    pending.push(u);
-                    continue;
-                }
+            if let Some(u) = triangles.into_iter().flatten().find(|&u| u != s)
+                && self.refinement_edge_id(u) != e
+            {
+                assert!(
+                    !pending.contains(&u),
+                    "refinement edges around triangle {u} form a cycle"
+                );
+                pending.push(u);
+                continue;
             }
             // Only `t`'s own edge, the last step, is split off its midpoint.
             let step = if pending.len() == 1 { fraction } else { 0.5 };

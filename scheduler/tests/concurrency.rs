@@ -161,7 +161,7 @@ where
         events: &Events<'a, Fixed<'m>>,
     ) -> Result<(), String> {
         let k = self.records.fetch_add(1, Ordering::Relaxed);
-        if self.event_every > 0 && k % self.event_every == 0 {
+        if self.event_every > 0 && k.is_multiple_of(self.event_every) {
             events.push(Box::new(move |state: &mut Fixed<'m>| {
                 self.smooth(state.mesh, v);
                 Changed {
@@ -471,7 +471,7 @@ impl<'a, 'm: 'a> Work<'a> for Listed<'m> {
     ) -> Result<(), String> {
         let mut order = self.order.lock();
         order.push(v);
-        if order.len() % self.event_every == 0 {
+        if order.len().is_multiple_of(self.event_every) {
             events.push(Box::new(|_: &mut Fixed<'m>| Changed::default()));
         }
         Ok(())
@@ -564,7 +564,11 @@ impl<'a, 'm: 'a> Work<'a> for Deferring<'m> {
         _: &Events<'a, Fixed<'m>>,
     ) -> Result<(f64, Self::Outcome), String> {
         let Fixed { mesh, front } = *state;
-        if v % 5 == 0 && self.visits[v as usize].fetch_add(1, Ordering::Relaxed) % 3 == 0 {
+        if v.is_multiple_of(5)
+            && self.visits[v as usize]
+                .fetch_add(1, Ordering::Relaxed)
+                .is_multiple_of(3)
+        {
             let star = mesh
                 .vertex_neighbors(v)
                 .iter()

@@ -643,16 +643,16 @@ mod tests {
         let label = format!("{shape:?}, {coupling:?}");
         let order: Vec<usize> = (0..shape.0).rev().collect();
         let (dense, b) = assemble(&mut system, shape, coupling, seed);
-        if let (Coupling::Factored(&[rank]), (blocks, _, m)) = (coupling, shape) {
-            if blocks > 1 {
-                let kept = system.index[1];
-                assert_eq!(
-                    kept,
-                    Some(Block::Factored(kept.map_or(0, slot), rank)),
-                    "{label}"
-                );
-                assert!(rank <= m / 2);
-            }
+        if let (Coupling::Factored(&[rank]), (blocks, _, m)) = (coupling, shape)
+            && blocks > 1
+        {
+            let kept = system.index[1];
+            assert_eq!(
+                kept,
+                Some(Block::Factored(kept.map_or(0, slot), rank)),
+                "{label}"
+            );
+            assert!(rank <= m / 2);
         }
         let expected = dense_solve(&dense, &b);
         system.solve(&order);

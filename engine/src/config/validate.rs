@@ -120,10 +120,10 @@ impl Config {
             ("tip_edge", a.tip_edge),
             ("far_edge", a.far_edge),
         ] {
-            if let Some(v) = value {
-                if !(v.is_finite() && v > 0.0) {
-                    return fail(key, format!("must be a positive length in m, got {v}"));
-                }
+            if let Some(v) = value
+                && !(v.is_finite() && v > 0.0)
+            {
+                return fail(key, format!("must be a positive length in m, got {v}"));
             }
         }
         if let Some(e) = a.reference_energy.filter(|e| !(e.is_finite() && *e > 0.0)) {
@@ -132,13 +132,13 @@ impl Config {
                 format!("must be a positive energy in J/m, got {e}"),
             );
         }
-        if let (Some(lo), Some(hi)) = (a.min_edge, a.max_edge) {
-            if 2.0 * lo > hi {
-                return fail(
-                    "max_edge",
-                    format!("must be at least twice adapt.min_edge ({lo} m), got {hi} m"),
-                );
-            }
+        if let (Some(lo), Some(hi)) = (a.min_edge, a.max_edge)
+            && 2.0 * lo > hi
+        {
+            return fail(
+                "max_edge",
+                format!("must be at least twice adapt.min_edge ({lo} m), got {hi} m"),
+            );
         }
         for (i, z) in a.zone.iter().enumerate() {
             let key = |k: &str| format!("zone[{i}].{k}");
@@ -223,18 +223,18 @@ impl Config {
                 return Err((key("incoming"), "is only used by transmitting".into()));
             }
             for (name, v) in [("value", &b.value), ("incoming", &b.incoming)] {
-                if let Some(v) = v {
-                    if v.len() != components || v.iter().any(|x| !x.is_finite()) {
-                        let want = if antiplane {
-                            "[z] in anti-plane"
-                        } else {
-                            "[x, y] (or [normal, tangential])"
-                        };
-                        return Err((
-                            key(name),
-                            format!("must be {components} finite numbers: {want}"),
-                        ));
-                    }
+                if let Some(v) = v
+                    && (v.len() != components || v.iter().any(|x| !x.is_finite()))
+                {
+                    let want = if antiplane {
+                        "[z] in anti-plane"
+                    } else {
+                        "[x, y] (or [normal, tangential])"
+                    };
+                    return Err((
+                        key(name),
+                        format!("must be {components} finite numbers: {want}"),
+                    ));
                 }
             }
             if let Some(h) = &b.history {

@@ -145,10 +145,10 @@ fn time_from_pvd(vtu: &Path) -> Option<f64> {
                 Some(&tag[start..start + len])
             };
             let listed = attr("file").and_then(|f| Path::new(f).file_name()?.to_str());
-            if listed == Some(name) {
-                if let Some(t) = attr("timestep").and_then(|t| t.parse().ok()) {
-                    return Some(t);
-                }
+            if listed == Some(name)
+                && let Some(t) = attr("timestep").and_then(|t| t.parse().ok())
+            {
+                return Some(t);
             }
         }
     }

@@ -181,10 +181,10 @@ impl Solve<'_> {
                 self.max_star
             )));
         }
-        if let Some(adapt) = &self.adapt {
-            if let Some(outcome) = self.try_coarsening(adapt, state, solver, v) {
-                return Ok((front.time(v), outcome));
-            }
+        if let Some(adapt) = &self.adapt
+            && let Some(outcome) = self.try_coarsening(adapt, state, solver, v)
+        {
+            return Ok((front.time(v), outcome));
         }
         let pitching = Instant::now();
         let t_new = state.pitcher.pole_height(mesh, front, v).ok_or_else(|| {
@@ -720,11 +720,11 @@ impl<'a> Work<'a> for Solve<'a> {
             return true;
         }
         let now = Instant::now();
-        if let Some((deadline, reason)) = &self.deadline {
-            if now >= *deadline {
-                self.control.stop(reason.clone());
-                return true;
-            }
+        if let Some((deadline, reason)) = &self.deadline
+            && now >= *deadline
+        {
+            self.control.stop(reason.clone());
+            return true;
         }
         let due = self.next_wall_checkpoint_ns.load(Ordering::Relaxed);
         if due != u64::MAX && now.duration_since(self.started).as_nanos() >= u128::from(due) {
