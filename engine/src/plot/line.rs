@@ -4,7 +4,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::{Image, finite_range, font_family, font_px, plot_error, tick_label, widen};
+use super::{Image, finite_range, font_family, font_px, plot_error, tick_label_within, widen};
 use crate::error::EngineError;
 
 /// How a series is drawn.
@@ -127,15 +127,16 @@ impl LineChart {
                 .y_label_area_size((5.0 * f) as u32)
                 .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
                 .map_err(plot_error)?;
-            let formatter = |v: &f64| tick_label(*v);
+            let x_label = |v: &f64| tick_label_within(*v, x1 - x0);
+            let y_label = |v: &f64| tick_label_within(*v, y1 - y0 + 2.0 * pad);
             chart
                 .configure_mesh()
                 .x_desc(self.x_label.as_str())
                 .y_desc(self.y_label.as_str())
                 .label_style((family, f))
                 .axis_desc_style((family, f))
-                .x_label_formatter(&formatter)
-                .y_label_formatter(&formatter)
+                .x_label_formatter(&x_label)
+                .y_label_formatter(&y_label)
                 .light_line_style(WHITE)
                 .bold_line_style(RGBColor(225, 225, 225))
                 .draw()

@@ -126,6 +126,22 @@ impl Image {
 /// A compact label for a tick value: four significant digits at most, scientific notation
 /// outside `[1e-3, 1e5)`, no float noise (`0.30000000000000004` is `0.3`).
 pub fn tick_label(v: f64) -> String {
+    label_with_digits(v, 4)
+}
+
+/// [`tick_label`] with enough significant digits to tell apart ticks about a tenth of `span`
+/// apart (an axis from 2.9011 to 2.9013 needs six), at most twelve.
+pub fn tick_label_within(v: f64, span: f64) -> String {
+    let digits = if span > 0.0 && span.is_finite() && v.is_finite() {
+        ((v.abs().max(span) / span).log10().ceil() as i32 + 2).clamp(4, 12) as usize
+    } else {
+        4
+    };
+    label_with_digits(v, digits)
+}
+
+/// `v` with `digits` significant digits at most (trailing zeros dropped).
+fn label_with_digits(v: f64, digits: usize) -> String {
     if !v.is_finite() {
         return String::new();
     }
@@ -134,7 +150,7 @@ pub fn tick_label(v: f64) -> String {
         return "0".into();
     }
     if (1e-3..1e5).contains(&a) {
-        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        let decimals = (digits as i32 - 1 - a.log10().floor() as i32).max(0) as usize;
         let s = format!("{v:.decimals$}");
         let s = if s.contains('.') {
             s.trim_end_matches('0').trim_end_matches('.').to_string()
@@ -143,7 +159,7 @@ pub fn tick_label(v: f64) -> String {
         };
         if s == "-0" { "0".into() } else { s }
     } else {
-        let s = format!("{v:.3e}");
+        let s = format!("{v:.prec$e}", prec = digits - 1);
         let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
         let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
         format!("{mantissa}e{exponent}")
@@ -185,6 +201,13 @@ mod tests {
         assert_eq!(tick_label(-2.0e-7), "-2e-7");
         assert_eq!(tick_label(0.00123456), "0.001235");
         assert_eq!(tick_label(f64::NAN), "");
+        // Ticks a tenth of the span apart stay apart.
+        assert_eq!(tick_label(2.9012), "2.901");
+        assert_eq!(tick_label_within(2.9012, 4e-4), "2.9012");
+        assert_eq!(tick_label_within(2.90125, 4e-4), "2.90125");
+        assert_eq!(tick_label_within(12.5, 10.0), "12.5");
+        assert_eq!(tick_label_within(1.5e6, 1e6), "1.5e6");
+        assert_eq!(tick_label_within(1.000001e6, 1.0), "1.000001e6");
     }
 
     #[test]
