@@ -513,15 +513,20 @@ fn run_solves_and_reports() {
     assert!(out_dir.join("history.csv").exists());
 }
 
+/// An output folder that cannot be created is a bad argument: nothing runs, exit 2 (until
+/// 2026-11-28 it was exit 1 with the bare OS error). A write that fails during a run is still
+/// exit 1.
 #[test]
-fn unwritable_output_is_a_runtime_failure() {
+fn an_output_folder_that_cannot_be_created_is_bad_input() {
     let (dir, config) = config_file(CONFIG);
-    // A file where the output folder should be: creating the folder fails.
+    // A file where the output folder's parent should be: creating the folder fails.
     let blocker = dir.path().join("blocker");
     std::fs::write(&blocker, b"").unwrap();
-    let out = sdg(&["run", &config, "--output", blocker.to_str().unwrap()]);
-    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
-    assert!(stderr(&out).contains("blocker"), "{}", stderr(&out));
+    let inside = blocker.join("out");
+    expect_input_error(
+        &["run", &config, "--output", inside.to_str().unwrap()],
+        &["--output", "blocker", "cannot create the output folder"],
+    );
 }
 
 /// The unit slips: runs whose wave speed makes the tent count astronomical are refused

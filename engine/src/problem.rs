@@ -95,8 +95,9 @@ impl Problem {
                     .path
                     .as_deref()
                     .expect("validated: gmsh has a path");
-                sdg_mesh::read_msh(&loaded.resolve(path))
-                    .map_err(|e| EngineError::Mesh(e.to_string()))?
+                sdg_mesh::read_msh(&loaded.resolve(path)).map_err(|e| {
+                    EngineError::Mesh(format!("{}: mesh.path: {e}", loaded.file.display()))
+                })?
             }
         };
         let exact = config

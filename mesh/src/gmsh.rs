@@ -29,7 +29,7 @@ use crate::mesh::{Mesh, MeshError, TagId, VertexId};
 /// Why an MSH file cannot be read: the file, the 1-based line (0 when the problem concerns no
 /// single line, e.g. an I/O error or a missing section) and the reason.
 #[derive(Debug, thiserror::Error)]
-#[error("{file}:{line}: {reason}")]
+#[error("{file}{}: {reason}", line_suffix(*line))]
 pub struct GmshError {
     /// File name as given to [`read_msh`] or [`parse_msh`].
     pub file: String,
@@ -37,6 +37,15 @@ pub struct GmshError {
     pub line: usize,
     /// What is wrong.
     pub reason: String,
+}
+
+/// `:N` for line `N`, nothing for line 0 (the whole file).
+fn line_suffix(line: usize) -> String {
+    if line > 0 {
+        format!(":{line}")
+    } else {
+        String::new()
+    }
 }
 
 /// Reads a planar triangulation from the MSH 4.1 ASCII file at `path` (see the module docs).

@@ -199,7 +199,8 @@ pub fn plot_vtu(request: &PlotRequest) -> Result<PathBuf, EngineError> {
     let cells = grid.triangles();
     if cells.is_empty() {
         return Err(EngineError::Input(format!(
-            "{file}: no triangles or quadrilaterals to draw"
+            "{file}: no triangles or quadrilaterals to draw (a cracks_NNNN.vtu holds the crack's \
+             edges as lines: `crack_path.png` draws them, or open the file in ParaView)"
         )));
     }
     let triangles: Vec<[u32; 3]> = cells.iter().map(|c| c.0).collect();
