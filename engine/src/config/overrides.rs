@@ -60,10 +60,7 @@ pub(super) fn attribute_added(mut error: ConfigError, added: &[(&str, String)]) 
     if error.file.starts_with("--set ") {
         return error;
     }
-    let culprit = added.iter().rev().find(|(_, path)| {
-        key.strip_prefix(path.as_str())
-            .is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']))
-    });
+    let culprit = added.iter().rev().find(|(_, path)| is_within(&key, path));
     if let Some((spec, _)) = culprit {
         error.file = format!("--set {spec}");
     }
@@ -79,15 +76,19 @@ pub fn attribute(mut error: ConfigError, overrides: &[String]) -> ConfigError {
     };
     let culprit = overrides.iter().rev().find_map(|spec| {
         let path = dotted(spec.split_once('=')?.0.trim());
-        let inside = key
-            .strip_prefix(path.as_str())
-            .is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']));
-        inside.then_some(spec)
+        is_within(&key, &path).then_some(spec)
     });
     if let Some(spec) = culprit {
         error.file = format!("--set {spec}");
     }
     error
+}
+
+/// True when error key `key` is `path` or a key inside it (`adapt.tol`, `interface[0].r_c`
+/// inside `adapt`, `interface`).
+fn is_within(key: &str, path: &str) -> bool {
+    key.strip_prefix(path)
+        .is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']))
 }
 
 /// An override's key path as error keys spell it: `interface.0.r_c` is `interface[0].r_c`.
