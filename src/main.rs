@@ -299,7 +299,7 @@ fn mesh(job: &JobArgs) -> Result<(), EngineError> {
     let (summary, dir) = sdg_engine::mesh_job(&setup(&job.config)?, &options(job))?;
     if !job.config.quiet {
         println!(
-            "{} tents, {} tetrahedra to t = {} s, max slope ratio {} (safety {}), \
+            "{} tents, {} tetrahedra to t = {:e} s, max slope ratio {:.4} (safety {}), \
              {:.3} s; outputs in {}",
             summary.tents,
             summary.tetrahedra,
@@ -339,7 +339,7 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
             )
         });
         println!(
-            "{} patches (order {}, {:.0} dofs each) to t = {} s in {:.3} s on {} \
+            "{} patches (order {}, {:.0} dofs each) to t = {:e} s in {:.3} s on {} \
              threads ({}){error}; energy balance residual {:.1e}; outputs in {}",
             summary.patches,
             summary.order,

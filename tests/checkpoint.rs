@@ -226,6 +226,39 @@ fn damaged_and_foreign_checkpoints_are_refused() {
     assert!(err.contains("skipped") && err.contains("checksum"), "{err}");
 }
 
+/// A new run into a folder that holds an earlier run's checkpoints is refused (exit 2) before
+/// it writes anything: it would number its own from 1 and the rotation would keep the earlier
+/// run's. `--restart` on the folder goes on from them.
+#[test]
+fn a_new_run_beside_an_earlier_run_s_checkpoints_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("checkpoints");
+    let limit = ["--threads", "1", "--max-wall-time", "0.3"];
+    let (code, err) = finish(spawn("plane_wave.toml", dir.path(), &limit, &[]));
+    assert_eq!(code, 3, "{err}");
+    let before = checkpoints(&folder);
+    assert!(!before.is_empty());
+    let (code, err) = finish(spawn(
+        "plane_wave.toml",
+        dir.path(),
+        &["--threads", "1"],
+        &[],
+    ));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.starts_with("error: "), "{err}");
+    for needle in ["checkpoints", "earlier run", "--restart", "checkpoint.dir"] {
+        assert!(err.contains(needle), "`{needle}` not in: {err}");
+    }
+    assert_eq!(
+        checkpoints(&folder),
+        before,
+        "the refused run changed the checkpoints"
+    );
+    let restart = ["--threads", "1", "--restart", folder.to_str().unwrap()];
+    let (code, err) = finish(spawn("plane_wave.toml", dir.path(), &restart, &[]));
+    assert_eq!(code, 0, "{err}");
+}
+
 /// Runs plane_wave with `value` written into the element under triangle 0 at half the end
 /// time, as a bug or an unstable law would leave it; returns the error, the options and the
 /// output folder.

@@ -513,6 +513,37 @@ fn run_solves_and_reports() {
     assert!(out_dir.join("history.csv").exists());
 }
 
+/// A new run into a folder of an earlier run removes that run's snapshot files, which its own
+/// collection would not list, and keeps everything else.
+#[test]
+fn a_rerun_with_fewer_snapshots_leaves_none_of_the_earlier_ones() {
+    let (dir, config) = config_file(CONFIG);
+    let out_dir = dir.path().join("out");
+    let run = |times: &str| {
+        let set = format!("output.snapshot_times={times}");
+        let out = sdg(&[
+            "run",
+            &config,
+            "--output",
+            out_dir.to_str().unwrap(),
+            "--quiet",
+            "--set",
+            &set,
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+    };
+    run("[5e-8, 1e-7]");
+    assert!(out_dir.join("snapshot_0001.vtu").exists());
+    std::fs::write(out_dir.join("notes.txt"), b"mine").unwrap();
+    run("[1e-7]");
+    assert!(out_dir.join("snapshot_0000.vtu").exists());
+    assert!(!out_dir.join("snapshot_0001.vtu").exists());
+    assert!(!out_dir.join("snapshot_0001.png").exists());
+    let pvd = std::fs::read_to_string(out_dir.join("snapshots.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 1, "{pvd}");
+    assert!(out_dir.join("notes.txt").exists());
+}
+
 /// An output folder that cannot be created is a bad argument: nothing runs, exit 2 (until
 /// 2026-11-28 it was exit 1 with the bare OS error). A write that fails during a run is still
 /// exit 1.

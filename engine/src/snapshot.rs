@@ -28,7 +28,7 @@
 //! written.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::config::VtuFormat;
 use crate::error::EngineError;
@@ -474,6 +474,39 @@ struct Corners {
 
 /// The slice of the element `v` by the plane `tau = tau_s` (vertices within `tol` of it are on
 /// it), or `None` when neither rule applies or the slice has fewer than three corners.
+/// Removes from `dir` the snapshot files a run writes (`snapshot_NNNN.vtu` and `.png`,
+/// `cracks_NNNN.vtu`, `snapshots.pvd`), so that a new run's folder holds no snapshot of an
+/// earlier run that its collection does not list. Returns how many files were removed.
+pub fn remove_earlier(dir: &Path) -> Result<usize, EngineError> {
+    let numbered = |name: &str, prefix: &str, extensions: &[&str]| {
+        name.strip_prefix(prefix)
+            .and_then(|rest| rest.split_once('.'))
+            .is_some_and(|(digits, extension)| {
+                !digits.is_empty()
+                    && digits.bytes().all(|b| b.is_ascii_digit())
+                    && extensions.contains(&extension)
+            })
+    };
+    let entries = std::fs::read_dir(dir).map_err(|e| EngineError::io(dir, e))?;
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(name) = name.to_str() else { continue };
+        if !entry.file_type().is_ok_and(|t| t.is_file()) {
+            continue;
+        }
+        if name == "snapshots.pvd"
+            || numbered(name, "snapshot_", &["vtu", "png"])
+            || numbered(name, "cracks_", &["vtu"])
+        {
+            let path = entry.path();
+            std::fs::remove_file(&path).map_err(|e| EngineError::io(&path, e))?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
 fn slice(v: &[[f64; 3]; 4], tau_s: f64, tol: f64) -> Option<Corners> {
     let side = |p: &[f64; 3]| {
         if p[2] < tau_s - tol {
@@ -680,6 +713,39 @@ pub fn cut_face(corners: [[f64; 3]; 3], tau_s: f64) -> Option<[[f64; 3]; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_earlier_run_s_snapshot_files_are_removed_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let removed = [
+            "snapshot_0000.vtu",
+            "snapshot_0012.png",
+            "snapshot_12345.vtu",
+            "cracks_0003.vtu",
+            "snapshots.pvd",
+        ];
+        let kept = [
+            "summary.json",
+            "snapshot_notes.txt",
+            "snapshot_.vtu",
+            "snapshot_0001.vtu.bak",
+            "cracks_0003.png",
+            "my_snapshot_0001.vtu",
+            "crack_path.png",
+        ];
+        for name in removed.iter().chain(&kept) {
+            std::fs::write(dir.path().join(name), b"x").unwrap();
+        }
+        std::fs::create_dir(dir.path().join("snapshot_0002.vtu")).unwrap();
+        assert_eq!(remove_earlier(dir.path()).unwrap(), removed.len());
+        for name in removed {
+            assert!(!dir.path().join(name).exists(), "{name} left");
+        }
+        for name in kept.iter().chain(&["snapshot_0002.vtu"]) {
+            assert!(dir.path().join(name).exists(), "{name} removed");
+        }
+        assert_eq!(remove_earlier(dir.path()).unwrap(), 0);
+    }
 
     /// Unit square: 4 vertices, 2 counter-clockwise triangles.
     const SQUARE: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];

@@ -163,6 +163,38 @@ impl Folder {
         }
     }
 
+    /// Refuses (exit 2) to write into a folder that already holds checkpoints, unless the run
+    /// restarts from that folder (`restart` is it or a file in it): a new run numbers its files
+    /// from 1, so the rotation by number would keep the earlier run's files and delete its own,
+    /// and `--restart` on the folder would pick up the earlier run.
+    pub(super) fn check_unmixed(&self, restart: Option<&Path>) -> Result<(), EngineError> {
+        let existing = list(&self.dir);
+        let Some(newest) = existing.last() else {
+            return Ok(());
+        };
+        let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        };
+        let source = restart.and_then(|p| if p.is_dir() { Some(p) } else { p.parent() });
+        if source.is_some_and(|s| same(s, &self.dir)) {
+            return Ok(());
+        }
+        let name = newest.file_name().map_or_else(
+            || newest.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        Err(EngineError::Input(format!(
+            "{}: holds {} checkpoint file(s) of an earlier run (the newest {name}); a new run \
+             would number its own from 1 beside them and keep theirs. Go on from them with \
+             `--restart {}`, or move them away, or write elsewhere (`--output` or \
+             `checkpoint.dir`)",
+            self.dir.display(),
+            existing.len(),
+            self.dir.display()
+        )))
+    }
+
     /// Writes checkpoint number `counts.written` of `frontier` and `book` (held still by the
     /// caller), then removes all but the newest `keep`. Returns its path.
     pub(super) fn write(

@@ -904,6 +904,13 @@ fn run_job(
         Some(path) => Some(checkpoint::restore(path, config)?),
         None => None,
     };
+    folder.check_unmixed(options.restart.as_deref())?;
+    if restored.is_none() {
+        let removed = crate::snapshot::remove_earlier(&dir)?;
+        if removed > 0 {
+            tracing::info!(removed, dir = %dir.display(), "snapshot files of an earlier run removed");
+        }
+    }
     let (basis, width) = {
         let solver = PatchSolver::new(system.clone(), config.solver.order, 0);
         (solver.basis().clone(), solver.width())
