@@ -259,6 +259,108 @@ fn a_new_run_beside_an_earlier_run_s_checkpoints_is_refused() {
     assert_eq!(code, 0, "{err}");
 }
 
+/// Copies the files of `from` into `to` (one level of folders, as a run's output has).
+fn copy_folder(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        let target = to.join(path.file_name().unwrap());
+        if path.is_dir() {
+            copy_folder(&path, &target);
+        } else {
+            std::fs::copy(&path, &target).unwrap();
+        }
+    }
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+/// A run with `checkpoint.at_end` goes on to a later `time.end` from its last checkpoint, with
+/// more snapshots: as accurate as a run straight to that end, bitwise the same on 1 and 2
+/// threads. Moving the end before the front, or a snapshot the front has passed, is refused.
+#[test]
+fn a_finished_run_goes_on_to_a_later_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = dir.path().join("first");
+    let short = [
+        "time.end=1e-6",
+        "output.snapshot_times=[0.0, 1e-6]",
+        "checkpoint.at_end=true",
+    ];
+    let (code, err) = finish(spawn(
+        "plane_wave.toml",
+        &first,
+        &["--threads", "1"],
+        &short,
+    ));
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(checkpoints(&first.join("checkpoints")).len(), 1);
+    let copies = ["two_threads", "refused"].map(|name| dir.path().join(name));
+    for copy in &copies {
+        copy_folder(&first, copy);
+    }
+    let long = ["output.snapshot_times=[0.0, 1e-6, 2e-6]"];
+    let go_on = |out: &Path, threads: &str, overrides: &[&str]| {
+        let folder = out.join("checkpoints");
+        let args = ["--threads", threads, "--restart", folder.to_str().unwrap()];
+        finish(spawn("plane_wave.toml", out, &args, overrides))
+    };
+    let (code, err) = go_on(&first, "1", &long);
+    assert_eq!(code, 0, "{err}");
+    let (code, err) = go_on(&copies[0], "2", &long);
+    assert_eq!(code, 0, "{err}");
+    let (one, two) = (summary(&first), summary(&copies[0]));
+    assert_eq!(one["final_time"].as_f64(), Some(2e-6));
+    assert_eq!(one["state_hash"], two["state_hash"]);
+    for name in [
+        "snapshot_0000.vtu",
+        "snapshot_0001.vtu",
+        "snapshot_0002.vtu",
+    ] {
+        assert!(first.join(name).exists(), "{name}");
+    }
+    let pvd = std::fs::read_to_string(first.join("snapshots.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
+    let history = std::fs::read_to_string(first.join("history.csv")).unwrap();
+    let last: f64 = (history.lines().last().unwrap().split(',').next().unwrap())
+        .parse()
+        .unwrap();
+    assert_eq!(last, 2e-6);
+    assert!(one["energy"]["balance_residual_rel"].as_f64().unwrap() < 1e-10);
+    // As accurate as the run straight to 2e-6 (whose tents near 1e-6 were not cut at it).
+    let straight = dir.path().join("straight");
+    let (code, err) = finish(spawn(
+        "plane_wave.toml",
+        &straight,
+        &["--threads", "2"],
+        &[],
+    ));
+    assert_eq!(code, 0, "{err}");
+    let error = |s: &serde_json::Value| s["error"]["velocity_l2_rel"].as_f64().unwrap();
+    let (extended, direct) = (error(&one), error(&summary(&straight)));
+    assert!(
+        extended < 1.2 * direct && direct < 1.2 * extended,
+        "velocity errors: extended {extended:e}, straight {direct:e}"
+    );
+    // The front is at 1e-6: an end before it, or a new snapshot at or before it, is refused.
+    for (overrides, needle) in [
+        (
+            &["time.end=5e-7", "output.snapshot_times=[0.0]"][..],
+            "time.end",
+        ),
+        (
+            &["output.snapshot_times=[0.0, 5e-7, 1e-6, 2e-6]"][..],
+            "output.snapshot_times",
+        ),
+    ] {
+        let (code, err) = go_on(&copies[1], "1", overrides);
+        assert_eq!(code, 2, "{overrides:?}: {err}");
+        assert!(err.contains(needle) && err.contains("checkpoint"), "{err}");
+    }
+}
+
 /// Runs plane_wave with `value` written into the element under triangle 0 at half the end
 /// time, as a bug or an unstable law would leave it; returns the error, the options and the
 /// output folder.

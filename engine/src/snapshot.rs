@@ -109,6 +109,28 @@ struct Pending {
     segments: Vec<Segment>,
 }
 
+impl Pending {
+    /// Snapshot number `index` at `time` (s, run clock) labelled `label` (s), nothing collected.
+    fn new(index: usize, time: f64, label: f64, c_ref: f64) -> Self {
+        let tau = c_ref * time;
+        Self {
+            index,
+            time,
+            label: Some(label),
+            tau,
+            tol: 8.0 * f64::EPSILON * tau.abs(),
+            triangles: Vec::new(),
+            fallback: Vec::new(),
+            segments: Vec::new(),
+        }
+    }
+
+    /// The time the files are labelled with, s.
+    fn label(&self) -> f64 {
+        self.label.unwrap_or(self.time)
+    }
+}
+
 /// Collects the t = const slices of spacetime elements as they are solved and writes each snapshot
 /// as `snapshot_NNNN.vtu` plus a ParaView collection `snapshots.pvd` once it is complete.
 ///
@@ -208,19 +230,7 @@ impl Snapshots {
         let snapshots = sorted
             .into_iter()
             .enumerate()
-            .map(|(index, (time, label))| {
-                let tau = c_ref * time;
-                Pending {
-                    index,
-                    time,
-                    label: Some(label),
-                    tau,
-                    tol: 8.0 * f64::EPSILON * tau.abs(),
-                    triangles: Vec::new(),
-                    fallback: Vec::new(),
-                    segments: Vec::new(),
-                }
-            })
+            .map(|(index, (time, label))| Pending::new(index, time, label, c_ref))
             .collect();
         Self {
             c_ref,
@@ -233,6 +243,51 @@ impl Snapshots {
             vtu: VtuFormat::default(),
             writer: None,
         }
+    }
+
+    /// Makes `times` (s, from the origin of `start`, as [`Self::on_clock`] takes them) the
+    /// snapshot times of a run resumed from a front whose latest time is `reached` (s, on the
+    /// run's clock): snapshots written stay as they are, pending ones among `times` keep what
+    /// they collected, other pending ones are dropped, and new times are numbered after every
+    /// earlier snapshot. Fails, changing nothing, with the first new time at or before
+    /// `reached`: elements solved before the restart crossed its plane uncollected.
+    pub fn retime(&mut self, times: &[f64], start: f64, reached: f64) -> Result<(), f64> {
+        let mut wanted: Vec<(f64, f64)> = (times.iter())
+            .filter(|t| t.is_finite())
+            .map(|&t| (t - start, t))
+            .collect();
+        wanted.sort_by(|a, b| a.0.total_cmp(&b.0));
+        wanted.dedup_by(|a, b| a.0 == b.0);
+        let known = |label: f64| self.snapshots.iter().any(|s| s.label() == label);
+        if let Some(&(_, label)) = wanted
+            .iter()
+            .find(|&&(time, label)| !known(label) && time <= reached)
+        {
+            return Err(label);
+        }
+        let mut index = self
+            .snapshots
+            .iter()
+            .map(|s| s.index + 1)
+            .max()
+            .unwrap_or(0);
+        let mut earlier: Vec<Pending> = self.snapshots.drain(self.next..).collect();
+        let mut pending = Vec::new();
+        for (time, label) in wanted {
+            if self.snapshots.iter().any(|s| s.label() == label) {
+                continue;
+            }
+            match earlier.iter().position(|s| s.label() == label) {
+                Some(k) => pending.push(earlier.swap_remove(k)),
+                None => {
+                    pending.push(Pending::new(index, time, label, self.c_ref));
+                    index += 1;
+                }
+            }
+        }
+        pending.sort_by(|a, b| a.time.total_cmp(&b.time));
+        self.snapshots.extend(pending);
+        Ok(())
     }
 
     /// Also draw each snapshot as `snapshot_NNNN.png` (velocity magnitude, interfaces in red).
@@ -886,6 +941,28 @@ mod tests {
         }
         assert_eq!(snaps.written().len(), 5);
         assert!(snaps.snapshots.iter().all(|s| s.triangles.capacity() == 0));
+    }
+
+    #[test]
+    fn retimed_snapshots_keep_what_is_written_and_collected() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut snaps = Snapshots::new(&[0.3, 1.0, 1.7], 1.0, dir.path().to_path_buf());
+        for e in tets(&[[0.0; 4], [1.2; 4]]) {
+            snaps.add_element(&e, linear);
+        }
+        assert_eq!(snaps.flush(0.5).unwrap(), 1);
+        snaps.finish().unwrap();
+        let before = format!("{snaps:?}");
+        // 0.5 is new and the front has reached 1.2: refused, nothing changed.
+        assert_eq!(snaps.retime(&[0.3, 0.5, 1.0, 2.5], 0.0, 1.2), Err(0.5));
+        assert_eq!(format!("{snaps:?}"), before);
+        // 1.7 dropped, 1.0 kept with its slices, 2.5 and 3.0 new (numbered after 1.7's 2).
+        snaps.retime(&[3.0, 1.0, 0.3, 2.5], 0.0, 1.2).unwrap();
+        let pending: Vec<(usize, f64, usize)> = (snaps.snapshots[snaps.next..].iter())
+            .map(|s| (s.index, s.time, s.triangles.len()))
+            .collect();
+        assert_eq!(pending, [(1, 1.0, 8), (3, 2.5, 0), (4, 3.0, 0)]);
+        assert_eq!(snaps.written()[0].1, "snapshot_0000.vtu");
     }
 
     #[test]

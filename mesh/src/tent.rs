@@ -231,6 +231,13 @@ impl Pitcher {
         self.t_end
     }
 
+    /// Moves the end time to `t_end` (s, finite), for a run that goes on past its first end. The
+    /// budgets do not depend on it.
+    pub fn set_t_end(&mut self, t_end: f64) {
+        assert!(t_end.is_finite(), "the end time must be finite");
+        self.t_end = t_end;
+    }
+
     /// The fastest wave speed the front is causal for, m/s.
     pub fn c_max(&self) -> f64 {
         self.c_max

@@ -118,6 +118,10 @@ pub struct CheckpointConfig {
     /// How many checkpoints to keep, the newest; default 2.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub keep: Option<u32>,
+    /// Also write a checkpoint when the front reaches the end time, so that a restart with a
+    /// later `time.end` extends the finished run; default false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub at_end: bool,
 }
 
 fn default_every_wall_s() -> f64 {
@@ -131,6 +135,7 @@ impl Default for CheckpointConfig {
             every_sim_s: None,
             dir: None,
             keep: None,
+            at_end: false,
         }
     }
 }

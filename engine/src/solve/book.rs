@@ -77,6 +77,24 @@ impl Milestones {
         }
     }
 
+    /// The milestones of [`Self::new`] for the rest of a run resumed from a front with the
+    /// vertex times `times` (s): those after its earliest time, each counting the vertices
+    /// still below it.
+    pub(super) fn resumed(
+        times: &[f64],
+        t_end: f64,
+        snapshots: &[f64],
+        checkpoint_every: Option<f64>,
+    ) -> Self {
+        let earliest = times.iter().copied().fold(f64::INFINITY, f64::min);
+        let mut milestones = Self::new(0, t_end, snapshots, checkpoint_every, None);
+        milestones.times.retain(|&(t, _)| t > earliest);
+        milestones.below = (milestones.times.iter())
+            .map(|&(t, _)| times.iter().filter(|&&v| v < t).count())
+            .collect();
+        milestones
+    }
+
     /// Counts a vertex added at time `t` (s) by refinement.
     pub(super) fn add_vertex(&mut self, t: f64) {
         for (i, &(time, _)) in self.times.iter().enumerate().skip(self.next) {
@@ -340,6 +358,34 @@ fn point_values(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn resumed_milestones_count_the_vertices_still_below() {
+        let m = Milestones::resumed(&[0.5, 0.55, 0.7], 1.0, &[0.3, 0.6, 0.9], Some(0.25));
+        let after: Vec<(f64, Milestone, usize)> = (m.times.iter().zip(&m.below))
+            .map(|(&(t, w), &b)| (t, w, b))
+            .collect();
+        assert!(after.iter().all(|&(t, _, _)| t > 0.5), "{after:?}");
+        assert_eq!(
+            after.iter().filter(|a| a.1 == Milestone::History).count(),
+            49
+        );
+        let below = |time: f64, what: Milestone| {
+            after
+                .iter()
+                .find(|a| a.0 == time && a.1 == what)
+                .map(|a| a.2)
+        };
+        assert_eq!(below(0.6, Milestone::Snapshot), Some(2));
+        assert_eq!(below(0.9, Milestone::Snapshot), Some(3));
+        assert_eq!(below(0.75, Milestone::Checkpoint), Some(3));
+        assert_eq!(
+            below(0.3, Milestone::Snapshot),
+            None,
+            "passed before the restart"
+        );
+        assert_eq!(below(0.51, Milestone::History), Some(1));
+    }
 
     #[test]
     fn milestones_pass_when_every_vertex_has() {

@@ -44,6 +44,9 @@ const FREE_KEYS: [&str; 5] = [
     "output.vtu",
 ];
 
+/// Configuration keys a restart may change to extend the run (after the checkpoint's front).
+const EXTENSION_KEYS: [&str; 2] = ["time.end", "output.snapshot_times"];
+
 /// Requests to a running solve from outside its workers (signals, job control): it pauses at
 /// the next quiescent point, writes a checkpoint and goes on, or stops with exit code 3.
 #[derive(Debug, Default)]
@@ -357,6 +360,21 @@ fn payload(bytes: &[u8]) -> Result<&[u8], String> {
 }
 
 /// The first key (dotted) where two configurations in JSON differ, ignoring [`FREE_KEYS`].
+/// True when `config` moves the end time or the snapshot times of the run whose checkpoint
+/// holds the configuration `saved`.
+pub(super) fn extends(saved: &str, config: &Config) -> bool {
+    let (Ok(saved), Ok(current)) = (
+        serde_json::from_str::<serde_json::Value>(saved),
+        serde_json::to_value(config),
+    ) else {
+        return false;
+    };
+    EXTENSION_KEYS.iter().any(|key| {
+        let pointer = format!("/{}", key.replace('.', "/"));
+        saved.pointer(&pointer) != current.pointer(&pointer)
+    })
+}
+
 fn config_difference(saved: &str, current: &str) -> Option<String> {
     let parse = |text: &str| serde_json::from_str::<serde_json::Value>(text).ok();
     let (Some(saved), Some(current)) = (parse(saved), parse(current)) else {
@@ -367,7 +385,7 @@ fn config_difference(saved: &str, current: &str) -> Option<String> {
 
 fn first_difference(a: &serde_json::Value, b: &serde_json::Value, at: &str) -> Option<String> {
     use serde_json::Value;
-    if FREE_KEYS.contains(&at) {
+    if FREE_KEYS.contains(&at) || EXTENSION_KEYS.contains(&at) {
         return None;
     }
     let key = |k: &str| {
@@ -382,7 +400,12 @@ fn first_difference(a: &serde_json::Value, b: &serde_json::Value, at: &str) -> O
             let keys: std::collections::BTreeSet<&String> = a.keys().chain(b.keys()).collect();
             keys.into_iter().find_map(|k| match (a.get(k), b.get(k)) {
                 (Some(x), Some(y)) => first_difference(x, y, &key(k)),
-                _ => (!FREE_KEYS.contains(&key(k).as_str())).then(|| key(k)),
+                _ => {
+                    let k = key(k);
+                    let free =
+                        FREE_KEYS.contains(&k.as_str()) || EXTENSION_KEYS.contains(&k.as_str());
+                    (!free).then_some(k)
+                }
             })
         }
         (Value::Array(x), Value::Array(y)) if x.len() == y.len() => x

@@ -854,6 +854,87 @@ fn initial_tip_points(fracture: &crate::fracture::Fracture, mesh: &Mesh) -> Vec<
         .collect()
 }
 
+impl Solve<'_> {
+    /// Writes a checkpoint of `state`, quiescent (no tent in flight, no event queued), once the
+    /// snapshots it counts as written are on disk; counts it in `counts` and `summary`.
+    fn checkpoint(
+        &self,
+        folder: &checkpoint::Folder,
+        state: &Frontier,
+        counts: &mut Counts,
+        summary: &mut CheckpointSummary,
+    ) -> Result<PathBuf, EngineError> {
+        let config = &self.problem.loaded.config;
+        let written = Instant::now();
+        let mut book = self.book.lock();
+        book.snapshots.finish()?;
+        let path = folder.write(config, *counts, state, &book)?;
+        drop(book);
+        counts.written += 1;
+        summary.written += 1;
+        summary.write_seconds += written.elapsed().as_secs_f64();
+        tracing::info!(
+            checkpoint = %path.display(),
+            time = config.time.clock(state.front.min_time()),
+            seconds = written.elapsed().as_secs_f64(),
+            "checkpoint written"
+        );
+        Ok(path)
+    }
+}
+
+/// A resumed run whose `time.end` or `output.snapshot_times` differ from its checkpoint's: the
+/// pitcher ends at the config's end (s, run clock `t_end`), the snapshots and milestones are
+/// the config's after the checkpoint's front. `checkpoint` names the file in errors (exit 2).
+fn extend(
+    state: &mut Frontier,
+    book: &mut Book,
+    config: &crate::config::Config,
+    t_end: f64,
+    checkpoint: &Path,
+) -> Result<(), EngineError> {
+    let times = state.front.snapshot();
+    let reached = times.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let clock = |t: f64| config.time.clock(t);
+    let refuse = |reason: String| {
+        EngineError::Input(format!(
+            "{}: {reason}; a restart may only move the end and add snapshots after the \
+             checkpoint's front, which reaches {:e} s in places",
+            checkpoint.display(),
+            clock(reached)
+        ))
+    };
+    if t_end < reached {
+        return Err(refuse(format!(
+            "time.end = {:e} s is before the front",
+            config.time.end
+        )));
+    }
+    let start = config.time.start;
+    (book.snapshots)
+        .retime(&config.output.snapshot_times, start, reached)
+        .map_err(|t| {
+            refuse(format!(
+                "output.snapshot_times: {t:e} s is not a snapshot of the run so far"
+            ))
+        })?;
+    let snapshot_times: Vec<f64> = (config.output.snapshot_times.iter())
+        .map(|&t| config.time.elapsed(t))
+        .collect();
+    book.milestones = Milestones::resumed(
+        &times,
+        t_end,
+        &snapshot_times,
+        config.checkpoint.every_sim_s,
+    );
+    state.pitcher.set_t_end(t_end);
+    tracing::info!(
+        end = config.time.end,
+        "the run goes on to a new end time or snapshot times"
+    );
+    Ok(())
+}
+
 /// `sdg run`: solves the problem to the end time; writes `summary.json`, `history.csv` and the
 /// configured snapshots. Returns the summary and the output folder.
 pub fn solve_job(
@@ -1011,6 +1092,9 @@ fn run_job(
             state = restored.frontier;
             let mut book = restored.book;
             book.resume(&dir, config.output.vtu, basis.len(), width);
+            if checkpoint::extends(&restored.header.config, config) {
+                extend(&mut state, &mut book, config, t_end, &file)?;
+            }
             let done: f64 = state.front.snapshot().iter().sum();
             book.progress =
                 Progress::new(options.progress, state.mesh.vertices().len() as f64 * t_end);
@@ -1070,21 +1154,7 @@ fn run_job(
         }
         // Quiescent: no tent in flight, no event queued.
         let request = solve.control.take();
-        let written = Instant::now();
-        let mut book = solve.book.lock();
-        // The snapshots the checkpoint counts as written must be on disk.
-        book.snapshots.finish()?;
-        let path = folder.write(config, counts, &state, &book)?;
-        drop(book);
-        counts.written += 1;
-        checkpoints.written += 1;
-        checkpoints.write_seconds += written.elapsed().as_secs_f64();
-        tracing::info!(
-            checkpoint = %path.display(),
-            time = config.time.clock(state.front.min_time()),
-            seconds = written.elapsed().as_secs_f64(),
-            "checkpoint written"
-        );
+        let path = solve.checkpoint(&folder, &state, &mut counts, &mut checkpoints)?;
         if let Some(failure) = request.failure {
             solve.write_partial_outputs(&state, &dir)?;
             return Err(EngineError::Runtime(format!(
@@ -1100,6 +1170,9 @@ fn run_job(
                 checkpoint: path,
             });
         }
+    }
+    if config.checkpoint.at_end {
+        solve.checkpoint(&folder, &state, &mut counts, &mut checkpoints)?;
     }
     let wall_time_s = counts.wall_time_s;
     let stats = counts;
