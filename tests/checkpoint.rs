@@ -277,6 +277,39 @@ fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
 }
 
+/// A restart that writes to another folder than the run it goes on from copies the snapshots
+/// written before into it: the folder's collection is whole, and every output is the
+/// uninterrupted run's.
+#[test]
+fn a_restart_into_another_folder_takes_the_earlier_snapshots_along() {
+    let dir = tempfile::tempdir().unwrap();
+    let (first, second) = (dir.path().join("first"), dir.path().join("second"));
+    let every = ["checkpoint.every_sim_s=1e-6"];
+    let (code, err) = finish(spawn(
+        "plane_wave.toml",
+        &first,
+        &["--threads", "1"],
+        &every,
+    ));
+    assert_eq!(code, 0, "{err}");
+    let file = checkpoints(&first.join("checkpoints")).remove(0);
+    let restart = ["--threads", "2", "--restart", file.to_str().unwrap()];
+    let (code, err) = finish(spawn("plane_wave.toml", &second, &restart, &every));
+    assert_eq!(code, 0, "{err}");
+    let restarted = summary(&second);
+    assert!(restarted["checkpoint"]["restart_time"].as_f64().unwrap() > 0.0);
+    let (expected, got) = (outputs(&first), outputs(&second));
+    let names = |files: &[(String, Vec<u8>)]| files.iter().map(|f| f.0.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&expected), names(&got));
+    assert!(names(&got).contains(&"snapshot_0000.vtu".to_string()));
+    for ((name, a), (_, b)) in expected.iter().zip(&got) {
+        assert!(
+            a == b,
+            "{name} differs after the restart into another folder"
+        );
+    }
+}
+
 /// A run with `checkpoint.at_end` goes on to a later `time.end` from its last checkpoint, with
 /// more snapshots: as accurate as a run straight to that end, bitwise the same on 1 and 2
 /// threads. Moving the end before the front, or a snapshot the front has passed, is refused.

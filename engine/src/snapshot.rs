@@ -403,9 +403,41 @@ impl Snapshots {
     }
 
     /// Writes the snapshots still to come to `dir` in `vtu` (a run restored from a checkpoint).
-    pub fn set_output(&mut self, dir: &std::path::Path, vtu: VtuFormat) {
-        self.dir = dir.to_path_buf();
+    /// The files of snapshots written before into another folder are copied into `dir`, so that
+    /// its collection finds them; a `.vtu` file that is not there any more is warned about.
+    pub fn set_output(&mut self, dir: &Path, vtu: VtuFormat) -> Result<(), EngineError> {
+        let earlier = std::mem::replace(&mut self.dir, dir.to_path_buf());
         self.vtu = vtu;
+        let same = match (earlier.canonicalize(), dir.canonicalize()) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => earlier == dir,
+        };
+        if same {
+            return Ok(());
+        }
+        let files = (self.written.iter().chain(&self.crack_files)).flat_map(|(_, name)| {
+            let picture = name
+                .strip_suffix(".vtu")
+                .filter(|stem| stem.starts_with("snapshot_"))
+                .map(|stem| format!("{stem}.png"));
+            std::iter::once(name.clone()).chain(picture)
+        });
+        for name in files {
+            let (from, to) = (earlier.join(&name), dir.join(&name));
+            if to.exists() {
+                continue;
+            }
+            if from.is_file() {
+                std::fs::copy(&from, &to).map_err(|e| EngineError::io(&to, e))?;
+            } else if name.ends_with(".vtu") {
+                tracing::warn!(
+                    "{}: not found, so not copied to {}; snapshots.pvd lists it",
+                    from.display(),
+                    dir.display()
+                );
+            }
+        }
+        Ok(())
     }
 
     /// Hands `job` to the writer thread, started if need be.

@@ -1091,7 +1091,7 @@ fn run_job(
             counts = restored.counts;
             state = restored.frontier;
             let mut book = restored.book;
-            book.resume(&dir, config.output.vtu, basis.len(), width);
+            book.resume(&dir, config.output.vtu, basis.len(), width)?;
             if checkpoint::extends(&restored.header.config, config) {
                 extend(&mut state, &mut book, config, t_end, &file)?;
             }
