@@ -12,9 +12,17 @@ pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, Eng
     std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e))?;
     let path = dir.join(name);
     let tmp = dir.join(format!(".{name}.tmp"));
-    std::fs::write(&tmp, bytes).map_err(|e| EngineError::io(&tmp, e))?;
-    std::fs::rename(&tmp, &path).map_err(|e| EngineError::io(&path, e))?;
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, &path))
+        .map_err(|e| discard(&tmp, e))?;
     Ok(path)
+}
+
+/// The error of a failed write through the temporary file `tmp`, which is removed so that it
+/// holds no space (a full disk is the usual cause).
+pub(crate) fn discard(tmp: &Path, e: std::io::Error) -> EngineError {
+    let _ = std::fs::remove_file(tmp);
+    EngineError::io(tmp, e)
 }
 
 /// VTK cell types used here.
@@ -285,5 +293,15 @@ mod tests {
         let path = write_atomic(dir.path(), "a.json", b"2").unwrap();
         assert_eq!(std::fs::read(path).unwrap(), b"2");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_failed_atomic_write_leaves_no_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        // A folder that is not empty where the file should go: the rename fails.
+        std::fs::create_dir_all(dir.path().join("a.json").join("inside")).unwrap();
+        let err = write_atomic(dir.path(), "a.json", b"1").unwrap_err();
+        assert!(err.to_string().contains("a.json"), "{err}");
+        assert!(!dir.path().join(".a.json.tmp").exists());
     }
 }

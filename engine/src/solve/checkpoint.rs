@@ -247,12 +247,10 @@ fn write_synced(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineE
     std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e))?;
     let path = dir.join(name);
     let tmp = dir.join(format!(".{name}.tmp"));
-    let mut file = std::fs::File::create(&tmp).map_err(|e| EngineError::io(&tmp, e))?;
-    file.write_all(bytes)
-        .and_then(|()| file.sync_all())
-        .map_err(|e| EngineError::io(&tmp, e))?;
-    drop(file);
-    std::fs::rename(&tmp, &path).map_err(|e| EngineError::io(&path, e))?;
+    std::fs::File::create(&tmp)
+        .and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()))
+        .and_then(|()| std::fs::rename(&tmp, &path))
+        .map_err(|e| crate::output::discard(&tmp, e))?;
     if let Ok(folder) = std::fs::File::open(dir) {
         // Not every file system syncs folders; the rename itself is atomic either way.
         let _ = folder.sync_all();
