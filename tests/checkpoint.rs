@@ -193,13 +193,19 @@ fn sigusr1_checkpoints_and_goes_on_and_sigterm_stops_with_exit_3() {
     assert!(err.contains("--max-wall-time = 1 s is up"), "{err}");
 }
 
+/// Runs plane_wave into `dir` until `--max-wall-time` stops it with a checkpoint (exit 3);
+/// returns the checkpoint folder.
+fn stopped_plane_wave(dir: &Path) -> PathBuf {
+    let limit = ["--threads", "1", "--max-wall-time", "0.3"];
+    let (code, err) = finish(spawn("plane_wave.toml", dir, &limit, &[]));
+    assert_eq!(code, 3, "{err}");
+    dir.join("checkpoints")
+}
+
 #[test]
 fn damaged_and_foreign_checkpoints_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let folder = dir.path().join("checkpoints");
-    let limit = ["--threads", "1", "--max-wall-time", "0.3"];
-    let (code, err) = finish(spawn("plane_wave.toml", dir.path(), &limit, &[]));
-    assert_eq!(code, 3, "{err}");
+    let folder = stopped_plane_wave(dir.path());
     let good = checkpoints(&folder).pop().expect("a checkpoint");
     let bytes = std::fs::read(&good).unwrap();
     let restart = |file: &Path, overrides: &[&str]| {
@@ -232,10 +238,7 @@ fn damaged_and_foreign_checkpoints_are_refused() {
 #[test]
 fn a_new_run_beside_an_earlier_run_s_checkpoints_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let folder = dir.path().join("checkpoints");
-    let limit = ["--threads", "1", "--max-wall-time", "0.3"];
-    let (code, err) = finish(spawn("plane_wave.toml", dir.path(), &limit, &[]));
-    assert_eq!(code, 3, "{err}");
+    let folder = stopped_plane_wave(dir.path());
     let before = checkpoints(&folder);
     assert!(!before.is_empty());
     let (code, err) = finish(spawn(
