@@ -899,7 +899,7 @@ fn extend(
     let refuse = |reason: String| {
         EngineError::Input(format!(
             "{}: {reason}; a restart may only move the end and add snapshots after the \
-             checkpoint's front, which reaches {:e} s in places",
+             checkpoint's front, which reaches {:.6e} s in places",
             checkpoint.display(),
             clock(reached)
         ))
