@@ -218,9 +218,12 @@ fn options(job: &JobArgs) -> RunOptions {
     }
 }
 
+/// A second SIGTERM or SIGINT within this long of the first is taken as the same request.
+const SAME_REQUEST: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// Turns signals into requests to the run: SIGTERM and SIGINT checkpoint and stop (exit 3),
-/// SIGUSR1 checkpoints and goes on. A second SIGTERM or SIGINT ends the process at once with
-/// code 130, without waiting for the checkpoint (the one before it is left whole).
+/// SIGUSR1 checkpoints and goes on. A second SIGTERM or SIGINT, [`SAME_REQUEST`] or more after
+/// the first, ends the process at once with code 130, without waiting for the checkpoint (the one before it is left whole).
 fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError> {
     use tokio::signal::unix::{SignalKind, signal};
     let runtime = tokio::runtime::Builder::new_current_thread()
@@ -238,7 +241,7 @@ fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError> {
     );
     std::thread::spawn(move || {
         runtime.block_on(async move {
-            let mut stopping = false;
+            let mut stopping: Option<std::time::Instant> = None;
             loop {
                 let name = tokio::select! {
                     _ = term.recv() => "SIGTERM",
@@ -249,11 +252,16 @@ fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError> {
                         continue;
                     }
                 };
-                if stopping {
+                if let Some(first) = stopping {
+                    // A batch system may signal both the job's shell and sdg, and the shell
+                    // pass its signal on: one within a second is the same request.
+                    if first.elapsed() < SAME_REQUEST {
+                        continue;
+                    }
                     eprintln!("{name} again: exiting without waiting for the checkpoint");
                     std::process::exit(130);
                 }
-                stopping = true;
+                stopping = Some(std::time::Instant::now());
                 eprintln!("{name}: writing a checkpoint, then stopping (again to exit at once)");
                 control.stop(format!("{name} received"));
             }

@@ -167,6 +167,10 @@ fn sigusr1_checkpoints_and_goes_on_and_sigterm_stops_with_exit_3() {
     wait_for_checkpoint(&mut child, &folder);
     assert!(child.try_wait().unwrap().is_none(), "SIGUSR1 ends no run");
     let sent = Instant::now();
+    // Twice within a second, as a batch system signalling the job's shell and sdg does: one
+    // request, a checkpoint and exit 3 (not 130).
+    signal(&child, "TERM");
+    std::thread::sleep(Duration::from_millis(50));
     signal(&child, "TERM");
     let (code, err) = finish(child);
     let took = sent.elapsed();
@@ -179,6 +183,8 @@ fn sigusr1_checkpoints_and_goes_on_and_sigterm_stops_with_exit_3() {
     );
     assert_eq!(checkpoints(&folder).len(), 2, "USR1's and TERM's");
     assert!(dir.path().join("history.csv").is_file(), "outputs so far");
+    let newest = checkpoints(&folder).pop().unwrap();
+    let bytes = std::fs::read(&newest).unwrap();
     // The newest checkpoint is whole: the run goes on from it, and stops again at the limit.
     let restart = [
         "--threads",
@@ -191,6 +197,17 @@ fn sigusr1_checkpoints_and_goes_on_and_sigterm_stops_with_exit_3() {
     let (code, err) = finish(spawn("plane_wave.toml", dir.path(), &restart, &long));
     assert_eq!(code, 3, "{err}");
     assert!(err.contains("--max-wall-time = 1 s is up"), "{err}");
+    // The restart numbered its checkpoint after the folder's files: the one it started from
+    // is kept whole, and the newest is the last written.
+    let names: Vec<String> = (checkpoints(&folder).iter())
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["checkpoint_000001.sdgc", "checkpoint_000002.sdgc"]);
+    assert_eq!(
+        std::fs::read(&newest).unwrap(),
+        bytes,
+        "the restart's start changed"
+    );
 }
 
 /// Runs plane_wave into `dir` until `--max-wall-time` stops it with a checkpoint (exit 3);
@@ -233,7 +250,7 @@ fn damaged_and_foreign_checkpoints_are_refused() {
 }
 
 /// A new run into a folder that holds an earlier run's checkpoints is refused (exit 2) before
-/// it writes anything: it would number its own from 1 and the rotation would keep the earlier
+/// it writes anything: it would number its own from 0 and the rotation would keep the earlier
 /// run's. `--restart` on the folder goes on from them.
 #[test]
 fn a_new_run_beside_an_earlier_run_s_checkpoints_is_refused() {

@@ -188,14 +188,29 @@ impl Folder {
             |n| n.to_string_lossy().into_owned(),
         );
         Err(EngineError::Input(format!(
-            "{}: holds {} checkpoint file(s) of an earlier run (the newest {name}); a new run \
-             would number its own from 1 beside them and keep theirs. Go on from them with \
+            "{}: holds {} checkpoint file(s) of an earlier run (the newest {name}); a run \
+             would number its own from 0 beside them and keep theirs. Go on from them with \
              `--restart {}`, or move them away, or write elsewhere (`--output` or \
              `checkpoint.dir`)",
             self.dir.display(),
             existing.len(),
             self.dir.display()
         )))
+    }
+
+    /// The number of the next checkpoint file of a run restarted from one that recorded
+    /// `written` files before it: after that one and after every file already in the folder,
+    /// so that a restart never overwrites the checkpoint it started from, and the newest file
+    /// (what `--restart` on the folder takes) is always the last one written.
+    pub(super) fn next_number(&self, written: u64) -> u64 {
+        let numbered = list(&self.dir).into_iter().filter_map(|p| {
+            p.file_stem()?
+                .to_str()?
+                .strip_prefix("checkpoint_")?
+                .parse::<u64>()
+                .ok()
+        });
+        numbered.map(|n| n + 1).fold(written + 1, u64::max)
     }
 
     /// Writes checkpoint number `counts.written` of `frontier` and `book` (held still by the

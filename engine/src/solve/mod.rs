@@ -1089,6 +1089,7 @@ fn run_job(
                 "restarting"
             );
             counts = restored.counts;
+            counts.written = folder.next_number(counts.written);
             state = restored.frontier;
             let mut book = restored.book;
             book.resume(&dir, config.output.vtu, basis.len(), width)?;
