@@ -17,8 +17,14 @@ const STOP_WITHIN: Duration = Duration::from_secs(10);
 
 /// `sdg run` on the shipped `config` with `args` and `overrides`, started.
 fn spawn(config: &str, out: &Path, args: &[&str], overrides: &[&str]) -> Child {
+    spawn_in(Path::new("."), config, out, args, overrides)
+}
+
+/// [`spawn`] in the working directory `cwd`.
+fn spawn_in(cwd: &Path, config: &str, out: &Path, args: &[&str], overrides: &[&str]) -> Child {
     let mut command = Command::new(env!("CARGO_BIN_EXE_sdg"));
     command
+        .current_dir(cwd)
         .arg("run")
         .arg(
             Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -309,18 +315,31 @@ fn summary(dir: &Path) -> serde_json::Value {
 #[test]
 fn a_restart_into_another_folder_takes_the_earlier_snapshots_along() {
     let dir = tempfile::tempdir().unwrap();
-    let (first, second) = (dir.path().join("first"), dir.path().join("second"));
+    let [here, there] = ["here", "there"].map(|name| dir.path().join(name));
+    let (first, second) = (here.join("first"), there.join("second"));
+    std::fs::create_dir_all(&here).unwrap();
     let every = ["checkpoint.every_sim_s=1e-6"];
-    let (code, err) = finish(spawn(
+    // Both runs name their folders relative to their own working directories.
+    let (code, err) = finish(spawn_in(
+        &here,
         "plane_wave.toml",
-        &first,
+        Path::new("first"),
         &["--threads", "1"],
         &every,
     ));
     assert_eq!(code, 0, "{err}");
     let file = checkpoints(&first.join("checkpoints")).remove(0);
+    // Another run's file of the same name in the new folder gives way to the first run's.
+    std::fs::create_dir_all(&second).unwrap();
+    std::fs::write(second.join("snapshot_0000.vtu"), "another run's").unwrap();
     let restart = ["--threads", "2", "--restart", file.to_str().unwrap()];
-    let (code, err) = finish(spawn("plane_wave.toml", &second, &restart, &every));
+    let (code, err) = finish(spawn_in(
+        &there,
+        "plane_wave.toml",
+        Path::new("second"),
+        &restart,
+        &every,
+    ));
     assert_eq!(code, 0, "{err}");
     let restarted = summary(&second);
     assert!(restarted["checkpoint"]["restart_time"].as_f64().unwrap() > 0.0);

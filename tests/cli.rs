@@ -110,6 +110,16 @@ fn mesh_writes_summary_and_spacetime_mesh() {
     let vtu = std::fs::read_to_string(out_dir.join("spacetime.vtu")).unwrap();
     let cells = format!("NumberOfCells=\"{}\"", s["tetrahedra"]);
     assert!(vtu.contains(&cells));
+    // A folder with the summary of `sdg run` keeps it: `sdg mesh` refuses to write there.
+    let run_summary = r#"{"command": "run", "patches": 7}"#;
+    std::fs::write(out_dir.join("summary.json"), run_summary).unwrap();
+    let out_arg = out_dir.to_str().unwrap();
+    expect_input_error(
+        &["mesh", &config, "--output", out_arg, "--quiet"],
+        &["summary.json", "sdg run", "--output"],
+    );
+    let kept = std::fs::read_to_string(out_dir.join("summary.json")).unwrap();
+    assert_eq!(kept, run_summary);
 }
 
 #[test]
@@ -557,6 +567,58 @@ fn an_output_folder_that_cannot_be_created_is_bad_input() {
     expect_input_error(
         &["run", &config, "--output", inside.to_str().unwrap()],
         &["--output", "blocker", "cannot create the output folder"],
+    );
+    // The checkpoint folder and the trace are checked before the run too (until 2026-11-28
+    // only their first write found them: exit 1 after the whole solve).
+    let out = dir.path().join("out");
+    let (out, inside) = (out.to_str().unwrap(), inside.to_str().unwrap());
+    let checkpoint_dir = format!("checkpoint.dir={inside}");
+    expect_input_error(
+        &["run", &config, "--output", out, "--set", &checkpoint_dir],
+        &["checkpoint.dir", "blocker", "is a file, not a folder"],
+    );
+    expect_input_error(
+        &["run", &config, "--output", out, "--trace", inside],
+        &["--trace", "blocker", "is a file, not a folder"],
+    );
+    assert!(!dir.path().join("out").join("history.csv").exists());
+}
+
+/// A run whose checkpoint cannot be written fails (exit 1) naming the file, and leaves the
+/// outputs so far; an earlier run's `summary.json` in its folder does not survive it, so that
+/// a job script never reads it as this run's.
+#[test]
+fn a_failed_checkpoint_write_leaves_the_outputs_so_far_and_no_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("out");
+    // A folder that is not empty where the checkpoint should go: its rename fails.
+    std::fs::create_dir_all(out_dir.join("checkpoints/checkpoint_000000.sdgc/x")).unwrap();
+    std::fs::write(out_dir.join("summary.json"), "{}").unwrap();
+    let out = sdg(&[
+        "run",
+        repo("configs/crack_growth.toml").to_str().unwrap(),
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--set",
+        "time.end=2e-7",
+        "--set",
+        "checkpoint.at_end=true",
+        "--quiet",
+    ]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("checkpoint_000000.sdgc") && !err.contains(".sdgc.tmp"),
+        "{err}"
+    );
+    for name in ["history.csv", "events.csv", "cracks.csv", "crack_tips.csv"] {
+        assert!(out_dir.join(name).is_file(), "{name}");
+    }
+    assert!(!out_dir.join("summary.json").exists());
+    assert!(
+        !out_dir
+            .join("checkpoints/.checkpoint_000000.sdgc.tmp")
+            .exists()
     );
 }
 

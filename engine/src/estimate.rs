@@ -50,7 +50,8 @@ pub const REPEATS: usize = 3;
 /// A run's estimated cost, written to `summary.json` beside the actual values.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 pub struct Estimate {
-    /// Tents to the end time (patches of `sdg run`).
+    /// Tents to the end time (patches of `sdg run`; of a restarted run, from its checkpoint's
+    /// front on).
     pub tents: f64,
     /// True when refinement or crack growth may add tents: `tents` is a lower bound.
     pub lower_bound: bool,
@@ -68,6 +69,20 @@ pub struct Estimate {
 }
 
 impl Estimate {
+    /// The part of this estimate (of a whole run) still ahead of a run restarted from a front
+    /// with vertex `times` (s on the run's clock, which ends at `t_end`): tents and wall time
+    /// scaled by the share of the vertices' time still to go.
+    pub(crate) fn remaining(self, times: &[f64], t_end: f64) -> Self {
+        let to_go: f64 = times.iter().map(|&t| (t_end - t).clamp(0.0, t_end)).sum();
+        let share = to_go / (times.len() as f64 * t_end).max(f64::MIN_POSITIVE);
+        Self {
+            tents: self.tents * share,
+            exact_tents: false,
+            wall_time_s: self.wall_time_s * share,
+            ..self
+        }
+    }
+
     /// Tents per second on all threads.
     pub fn tents_per_second(&self) -> f64 {
         self.tents / self.wall_time_s.max(f64::MIN_POSITIVE)
@@ -77,6 +92,22 @@ impl Estimate {
     /// estimate and what drives it (exit 2).
     pub fn check(&self, problem: &Problem) -> Result<(), ConfigError> {
         let config = &problem.loaded.config;
+        if let Some(total) = machine_memory_bytes()
+            && self.memory_bytes > total
+        {
+            let gib = |b: f64| b / (1024.0 * 1024.0 * 1024.0);
+            return Err(ConfigError {
+                file: format!("--threads {}", self.threads),
+                key: None,
+                reason: format!(
+                    "the run needs about {:.1} GiB of memory with {} worker thread(s), more \
+                     than this machine's {:.1} GiB: use fewer threads, or pass --force",
+                    gib(self.memory_bytes),
+                    self.threads,
+                    gib(total)
+                ),
+            });
+        }
         let limits = &config.limits;
         let exceeded = if self.tents > limits.max_tents {
             Some((
@@ -312,9 +343,43 @@ pub fn peak_resident_bytes() -> Option<f64> {
     memory_status("VmHWM:")
 }
 
+/// Memory this process may use, bytes (Linux only): the machine's, or its control group's
+/// limit when lower (a batch job's allocation under Slurm's cgroups).
+fn machine_memory_bytes() -> Option<f64> {
+    let total = kb_line("/proc/meminfo", "MemTotal:")?;
+    Some(cgroup_limit_bytes().map_or(total, |limit| limit.min(total)))
+}
+
+/// The memory limit of this process's control group (v2 `memory.max`, or v1
+/// `memory.limit_in_bytes`), bytes; `None` when unlimited or unknown.
+fn cgroup_limit_bytes() -> Option<f64> {
+    let groups = std::fs::read_to_string("/proc/self/cgroup").ok()?;
+    groups.lines().find_map(|line| {
+        let mut parts = line.splitn(3, ':');
+        let (_, controllers, path) = (parts.next()?, parts.next()?, parts.next()?);
+        let file = if controllers.is_empty() {
+            format!("/sys/fs/cgroup{path}/memory.max")
+        } else if controllers.split(',').any(|c| c == "memory") {
+            format!("/sys/fs/cgroup/memory{path}/memory.limit_in_bytes")
+        } else {
+            return None;
+        };
+        std::fs::read_to_string(file)
+            .ok()?
+            .trim()
+            .parse::<f64>()
+            .ok()
+    })
+}
+
 /// A `kB` line of `/proc/self/status`, in bytes.
 fn memory_status(key: &str) -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    kb_line("/proc/self/status", key)
+}
+
+/// The line starting with `key` of the `kB` table at `path`, in bytes.
+fn kb_line(path: &str, key: &str) -> Option<f64> {
+    let status = std::fs::read_to_string(path).ok()?;
     let line = status.lines().find(|l| l.starts_with(key))?;
     let kb: f64 = line[key.len()..]
         .trim()
@@ -405,6 +470,25 @@ mod tests {
         }
         .build()
         .unwrap()
+    }
+
+    #[test]
+    fn a_restart_is_estimated_for_the_time_its_front_has_still_to_go() {
+        let whole = Estimate {
+            tents: 1000.0,
+            lower_bound: true,
+            exact_tents: true,
+            seconds_per_tent: 1e-3,
+            threads: 2,
+            wall_time_s: 0.5,
+            memory_bytes: 1e6,
+        };
+        // Vertices at a quarter, half and three quarters of the way, one past the end.
+        let rest = whole.remaining(&[0.25, 0.5, 0.75, 1.5], 1.0);
+        assert!((rest.tents - 1000.0 * 1.5 / 4.0).abs() < 1e-9, "{rest:?}");
+        assert!((rest.wall_time_s - 0.5 * 1.5 / 4.0).abs() < 1e-12);
+        assert!(!rest.exact_tents && rest.lower_bound);
+        assert_eq!(rest.memory_bytes, whole.memory_bytes);
     }
 
     /// The tents of pitching the whole front, least time first.

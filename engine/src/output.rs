@@ -14,15 +14,47 @@ pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, Eng
     let tmp = dir.join(format!(".{name}.tmp"));
     std::fs::write(&tmp, bytes)
         .and_then(|()| std::fs::rename(&tmp, &path))
-        .map_err(|e| discard(&tmp, e))?;
+        .map_err(|e| discard(&path, &tmp, e))?;
     Ok(path)
 }
 
-/// The error of a failed write through the temporary file `tmp`, which is removed so that it
-/// holds no space (a full disk is the usual cause).
-pub(crate) fn discard(tmp: &Path, e: std::io::Error) -> EngineError {
+/// Checks, before any work, that the folder `dir` can be made and written into: the nearest
+/// part of it that exists must be a folder that takes a file. Creates nothing; `named` starts
+/// the error (bad input, exit 2) with where the path came from, e.g. `--output out`.
+pub fn check_writable(dir: &Path, named: &str) -> Result<(), EngineError> {
+    let bad = |reason: String| EngineError::Input(format!("{named}: cannot write there: {reason}"));
+    if dir.as_os_str().is_empty() {
+        return Err(bad("an empty path; name a folder".into()));
+    }
+    let mut existing = dir;
+    while !existing.exists() {
+        match existing.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => existing = parent,
+            _ => {
+                existing = Path::new(".");
+                break;
+            }
+        }
+    }
+    if !existing.is_dir() {
+        return Err(bad(format!(
+            "{} is a file, not a folder",
+            existing.display()
+        )));
+    }
+    let probe = existing.join(format!(".sdg_probe_{}", std::process::id()));
+    std::fs::File::create(&probe)
+        .map(drop)
+        .map_err(|e| bad(format!("{}: {e}", existing.display())))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// The error of a failed write of `path` through the temporary file `tmp`, which is removed so
+/// that it holds no space (a full disk is the usual cause).
+pub(crate) fn discard(path: &Path, tmp: &Path, e: std::io::Error) -> EngineError {
     let _ = std::fs::remove_file(tmp);
-    EngineError::io(tmp, e)
+    EngineError::io(path, e)
 }
 
 /// VTK cell types used here.
@@ -301,7 +333,32 @@ mod tests {
         // A folder that is not empty where the file should go: the rename fails.
         std::fs::create_dir_all(dir.path().join("a.json").join("inside")).unwrap();
         let err = write_atomic(dir.path(), "a.json", b"1").unwrap_err();
-        assert!(err.to_string().contains("a.json"), "{err}");
+        let text = err.to_string();
+        assert!(
+            text.contains("a.json") && !text.contains(".a.json.tmp"),
+            "{text}"
+        );
         assert!(!dir.path().join(".a.json.tmp").exists());
+    }
+
+    #[test]
+    fn a_folder_under_a_file_or_an_empty_path_is_refused_and_nothing_is_created() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("afile"), b"").unwrap();
+        let under = dir.path().join("afile").join("sub");
+        let err = check_writable(&under, "checkpoint.dir x").unwrap_err();
+        assert!(matches!(err, EngineError::Input(_)), "{err}");
+        let text = err.to_string();
+        assert!(
+            text.starts_with("checkpoint.dir ") && text.contains("is a file"),
+            "{text}"
+        );
+        let err = check_writable(Path::new(""), "--trace").unwrap_err();
+        assert!(err.to_string().contains("empty path"), "{err}");
+        let fresh = dir.path().join("a").join("b");
+        check_writable(&fresh, "--output a/b").unwrap();
+        assert!(!dir.path().join("a").exists());
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(left.len(), 1, "the probe file is removed");
     }
 }

@@ -69,8 +69,27 @@ impl RunOptions {
             return Err(bad("it is a file, not a folder".into()));
         }
         std::fs::create_dir_all(&dir).map_err(|e| bad(e.to_string()))?;
+        crate::output::check_writable(&dir, &format!("{from} {}", dir.display()))?;
         Ok(dir)
     }
+}
+
+/// Refuses (bad input, exit 2) to write `sdg mesh`'s summary into `dir` when it holds the
+/// `summary.json` of `sdg run`: that run's results would lose their summary.
+fn refuse_run_folder(dir: &std::path::Path) -> Result<(), EngineError> {
+    let path = dir.join("summary.json");
+    let command = std::fs::read_to_string(&path)
+        .ok()
+        .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok())
+        .and_then(|json| json.get("command")?.as_str().map(str::to_owned));
+    if command.as_deref() == Some("run") {
+        return Err(EngineError::Input(format!(
+            "{}: the summary of `sdg run`; `sdg mesh` would replace it. Write elsewhere \
+             (`--output`)",
+            path.display()
+        )));
+    }
+    Ok(())
 }
 
 /// A scheduler failure as an engine error.
@@ -215,6 +234,7 @@ pub fn mesh_job(
         estimate.check(problem)?;
     }
     let dir = options.output_dir(problem)?;
+    refuse_run_folder(&dir)?;
 
     let front = Front::flat(mesh.vertices().len(), 0.0);
     let work = MeshWork {

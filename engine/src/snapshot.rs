@@ -159,26 +159,37 @@ pub struct Snapshots {
 type Job = Box<dyn FnOnce() -> Result<(), EngineError> + Send>;
 
 /// A thread that runs [`Job`]s in the order they come, so that no worker waits for the disk
-/// or for a picture being drawn; it keeps the first error.
+/// or for a picture being drawn. After the first error it runs no more jobs (a collection must
+/// not list a file that failed) and keeps that error.
 struct Writer {
     jobs: std::sync::mpsc::Sender<Job>,
     thread: std::thread::JoinHandle<Result<(), EngineError>>,
+    failed: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
 
 impl Writer {
     fn start() -> Self {
         let (jobs, queue) = std::sync::mpsc::channel::<Job>();
+        let failed = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let flag = failed.clone();
         let thread = std::thread::spawn(move || {
-            let mut result = Ok(());
             for job in queue {
-                let done = job();
-                if result.is_ok() {
-                    result = done;
+                if let Err(e) = job() {
+                    flag.store(true, std::sync::atomic::Ordering::Release);
+                    return Err(e);
                 }
             }
-            result
+            Ok(())
         });
-        Self { jobs, thread }
+        Self {
+            jobs,
+            thread,
+            failed,
+        }
+    }
+
+    fn has_failed(&self) -> bool {
+        self.failed.load(std::sync::atomic::Ordering::Acquire)
     }
 }
 
@@ -424,14 +435,17 @@ impl Snapshots {
         });
         for name in files {
             let (from, to) = (earlier.join(&name), dir.join(&name));
-            if to.exists() {
-                continue;
-            }
             if from.is_file() {
+                // Over a same-named file of another run: the collection lists this run's.
                 std::fs::copy(&from, &to).map_err(|e| EngineError::io(&to, e))?;
             } else if name.ends_with(".vtu") {
+                let kept = if to.exists() {
+                    "the file of that name there is kept and may be another run's"
+                } else {
+                    "snapshots.pvd lists it"
+                };
                 tracing::warn!(
-                    "{}: not found, so not copied to {}; snapshots.pvd lists it",
+                    "{}: not found, so not copied to {}; {kept}",
                     from.display(),
                     dir.display()
                 );
@@ -452,7 +466,7 @@ impl Snapshots {
     /// Waits until every file handed to the writer thread is written; returns the first error
     /// of a write. Files are complete on disk after it (before a checkpoint, at the end).
     pub fn finish(&mut self) -> Result<(), EngineError> {
-        let Some(Writer { jobs, thread }) = self.writer.take() else {
+        let Some(Writer { jobs, thread, .. }) = self.writer.take() else {
             return Ok(());
         };
         drop(jobs);
@@ -464,8 +478,12 @@ impl Snapshots {
     /// Writes every pending snapshot whose time is `<= front_min_time` (s), except that the
     /// start-time snapshot waits for `front_min_time > t_s` (see the module docs), frees its
     /// triangles and rewrites `snapshots.pvd`. Returns how many are written: on a thread of
-    /// their own, complete after [`Snapshots::finish`], which reports a failed write.
+    /// their own, complete after [`Snapshots::finish`], which reports a failed write; a write
+    /// that has failed already is reported here.
     pub fn flush(&mut self, front_min_time: f64) -> Result<usize, EngineError> {
+        if self.writer.as_ref().is_some_and(Writer::has_failed) {
+            self.finish()?;
+        }
         let mut count = 0;
         while let Some(snap) = self.snapshots.get_mut(self.next) {
             let tol = 4.0 * f64::EPSILON * snap.time.abs();
@@ -1063,6 +1081,27 @@ mod tests {
         let e = snaps.finish().unwrap_err();
         assert!(e.to_string().contains("out"), "{e}");
         assert!(snaps.finish().is_ok(), "reported once");
+    }
+
+    #[test]
+    fn a_failed_snapshot_is_not_listed_and_the_next_flush_reports_it() {
+        let dir = tempfile::tempdir().unwrap();
+        // A folder that is not empty where the file should go: its rename fails.
+        std::fs::create_dir_all(dir.path().join("snapshot_0000.vtu").join("x")).unwrap();
+        let mut snaps = Snapshots::new(&[0.3, 0.6], 1.0, dir.path().to_path_buf());
+        for e in tets(&[[0.0; 4], [1.0; 4]]) {
+            snaps.add_element(&e, linear);
+        }
+        assert_eq!(snaps.flush(0.4).unwrap(), 1);
+        let waited = std::time::Instant::now();
+        while !snaps.writer.as_ref().is_some_and(Writer::has_failed) {
+            assert!(waited.elapsed().as_secs() < 30, "the write never failed");
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        let e = snaps.flush(1.0).unwrap_err();
+        assert!(e.to_string().contains("snapshot_0000.vtu"), "{e}");
+        assert!(!dir.path().join("snapshots.pvd").exists());
+        assert!(!dir.path().join("snapshot_0001.vtu").exists());
     }
 
     #[test]

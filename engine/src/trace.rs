@@ -319,12 +319,32 @@ impl Tracer {
                 deps.join(";")
             );
         }
-        let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
-        let name = path.file_name().and_then(|n| n.to_str()).ok_or_else(|| {
-            EngineError::Input(format!("--trace {}: no file name", path.display()))
-        })?;
-        write_atomic(dir.unwrap_or(Path::new(".")), name, text.as_bytes()).map(drop)
+        let (dir, name) = split(path)?;
+        write_atomic(dir, name, text.as_bytes()).map(drop)
     }
+}
+
+/// The folder and file name of a `--trace` path.
+fn split(path: &Path) -> Result<(&Path, &str), EngineError> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .ok_or_else(|| EngineError::Input(format!("--trace {}: no file name", path.display())))?;
+    Ok((dir.unwrap_or(Path::new(".")), name))
+}
+
+/// Checks before the run that the trace can be written to `path` (bad input, exit 2): a file
+/// name, not a folder, in a folder that can be made and written into.
+pub(crate) fn check_path(path: &Path) -> Result<(), EngineError> {
+    let (dir, _) = split(path)?;
+    if path.is_dir() {
+        return Err(EngineError::Input(format!(
+            "--trace {}: is a folder; name a file",
+            path.display()
+        )));
+    }
+    crate::output::check_writable(dir, &format!("--trace {}", path.display()))
 }
 
 /// Reads a trace written by `sdg run --trace`.

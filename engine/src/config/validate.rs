@@ -2,6 +2,12 @@
 
 use super::{BoundaryKind, Config, MeshKind, PlaneName, WaveName, rectangle_key};
 
+/// Shortest wall time between checkpoints, s (`checkpoint.every_wall_s`).
+const MIN_WALL_CHECKPOINT_S: f64 = 1.0;
+
+/// Most checkpoints that `checkpoint.every_sim_s` may ask for over a run.
+const MAX_SIM_CHECKPOINTS: f64 = 1e5;
+
 impl Config {
     /// Checks values that the schema's types cannot: returns `(key, reason)`.
     pub(super) fn validate(&self) -> Result<(), (String, String)> {
@@ -35,21 +41,49 @@ impl Config {
                 return fail(key, format!("must be a positive number, got {value}"));
             }
         }
+        if self.output.dir.as_os_str().is_empty() {
+            return fail(
+                "output.dir",
+                "is empty: name a folder (default `out`)".into(),
+            );
+        }
         let c = &self.checkpoint;
-        if c.every_wall_s.is_nan() || c.every_wall_s <= 0.0 {
+        if c.dir.as_ref().is_some_and(|d| d.as_os_str().is_empty()) {
+            return fail(
+                "checkpoint.dir",
+                "is empty: name a folder, or leave the key out for `checkpoints` in the output \
+                 folder"
+                    .into(),
+            );
+        }
+        if c.every_wall_s.is_nan() || c.every_wall_s < MIN_WALL_CHECKPOINT_S {
             return fail(
                 "checkpoint.every_wall_s",
                 format!(
-                    "must be a positive time in s (inf for none), got {}",
+                    "must be a time of at least {MIN_WALL_CHECKPOINT_S} s (inf for none): a \
+                     checkpoint pauses every worker to write the whole state, got {}",
                     c.every_wall_s
                 ),
             );
         }
-        if let Some(every) = c.every_sim_s.filter(|&v| !(v.is_finite() && v > 0.0)) {
-            return fail(
-                "checkpoint.every_sim_s",
-                format!("must be a positive time in s, got {every}"),
-            );
+        if let Some(every) = c.every_sim_s {
+            if !(every.is_finite() && every > 0.0) {
+                return fail(
+                    "checkpoint.every_sim_s",
+                    format!("must be a positive time in s, got {every}"),
+                );
+            }
+            let count = self.time.span() / every;
+            if count > MAX_SIM_CHECKPOINTS {
+                return fail(
+                    "checkpoint.every_sim_s",
+                    format!(
+                        "{every:e} s makes {count:.3e} checkpoints over the run's {:e} s; at \
+                         most {MAX_SIM_CHECKPOINTS:e}",
+                        self.time.span()
+                    ),
+                );
+            }
         }
         if c.keep == Some(0) {
             return fail(
@@ -486,6 +520,10 @@ mod tests {
             "checkpoint.every_wall_s=nan",
             "checkpoint.every_sim_s=-1e-6",
             "checkpoint.every_sim_s=inf",
+            "checkpoint.every_wall_s=1e-4",
+            "checkpoint.every_sim_s=1e-15",
+            "checkpoint.dir=''",
+            "output.dir=''",
             "checkpoint.keep=0",
         ] {
             let key = set.split('=').next();

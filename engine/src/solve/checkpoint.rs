@@ -265,7 +265,7 @@ fn write_synced(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineE
     std::fs::File::create(&tmp)
         .and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()))
         .and_then(|()| std::fs::rename(&tmp, &path))
-        .map_err(|e| crate::output::discard(&tmp, e))?;
+        .map_err(|e| crate::output::discard(&path, &tmp, e))?;
     if let Ok(folder) = std::fs::File::open(dir) {
         // Not every file system syncs folders; the rename itself is atomic either way.
         let _ = folder.sync_all();
@@ -280,9 +280,10 @@ fn list(dir: &Path) -> Vec<PathBuf> {
         .flatten()
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with("checkpoint_") && n.ends_with(".sdgc"))
+            p.is_file()
+                && p.file_name()
+                    .and_then(|n| n.to_str())
+                    .is_some_and(|n| n.starts_with("checkpoint_") && n.ends_with(".sdgc"))
         })
         .collect();
     files.sort();

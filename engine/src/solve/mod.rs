@@ -331,24 +331,35 @@ fn deadline(limit_s: f64, max_wall_time_s: Option<f64>) -> Option<(Instant, Stri
 impl Solve<'_> {
     /// Writes what a run that stops before the end has produced so far: the history up to now
     /// (a row for the front as it is), the probes, the crack tips crossed so far and the
-    /// fracture outputs of the front as it is; complete snapshots are already written.
-    fn write_partial_outputs(&self, state: &Frontier, dir: &Path) -> Result<(), EngineError> {
+    /// fracture outputs of the front as it is; complete snapshots are already written. Each
+    /// is tried whatever became of the others (the run is failing or stopping already: a
+    /// full disk may still take the small files); failures are logged.
+    fn write_partial_outputs(&self, state: &Frontier, dir: &Path) {
         let config = &self.problem.loaded.config;
         let mut book = self.book.lock();
         book.progress.finish();
-        if let Err(e) = book.snapshots.finish() {
-            tracing::warn!("a snapshot could not be written: {e}");
-        }
+        let warn = |what: &str, result: Result<(), EngineError>| {
+            if let Err(e) = result {
+                tracing::error!("{what} of the stopped run not written: {e}");
+            }
+        };
+        warn("a snapshot", book.snapshots.finish());
         self.history_row(state, &mut book);
-        write_atomic(dir, "history.csv", book.history.as_bytes())?;
+        warn(
+            "history.csv",
+            write_atomic(dir, "history.csv", book.history.as_bytes()).map(drop),
+        );
         if config.output.png {
             plot::write_history_png(dir, &book.history);
         }
         if let Some((csv, _)) = self.crack_tips(&state.mesh, &book) {
-            self.write_crack_tips(dir, &csv)?;
+            warn("crack_tips.csv", self.write_crack_tips(dir, &csv));
         }
-        self.write_fracture(state, &book.fracture_events, dir)?;
-        self.write_probes(dir, &mut book)
+        warn(
+            "the crack files",
+            self.write_fracture(state, &book.fracture_events, dir),
+        );
+        warn("interface.csv", self.write_probes(dir, &mut book));
     }
 
     /// With `[fracture]`: `events.csv` (`events`), `cracks.csv` and, with `output.png`,
@@ -966,6 +977,15 @@ fn run_job(
         max_star,
     } = Start::new(problem)?;
     let estimate = state.estimate(problem, max_star, scheduler.threads, adapt.is_some());
+    let restored = match &options.restart {
+        Some(path) => Some(checkpoint::restore(path, config)?),
+        None => None,
+    };
+    // A restarted run has only the rest of the way before it.
+    let estimate = match &restored {
+        Some((_, r)) => estimate.remaining(&r.frontier.front.snapshot(), t_end),
+        None => estimate,
+    };
     tracing::info!(
         tents = estimate.tents,
         lower_bound = estimate.lower_bound,
@@ -981,11 +1001,22 @@ fn run_job(
     }
     let dir = options.output_dir(problem)?;
     let folder = checkpoint::Folder::new(config, &dir);
-    let restored = match &options.restart {
-        Some(path) => Some(checkpoint::restore(path, config)?),
-        None => None,
-    };
+    if config.checkpoint.dir.is_some() {
+        let named = format!("checkpoint.dir {}", folder.dir.display());
+        crate::output::check_writable(&folder.dir, &named)?;
+    }
+    if let Some(trace) = &options.trace {
+        crate::trace::check_path(trace)?;
+    }
     folder.check_unmixed(options.restart.as_deref())?;
+    // `summary.json` is written when a run finishes: an earlier run's must not stand for this
+    // one should it fail or stop.
+    match std::fs::remove_file(dir.join("summary.json")) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(EngineError::io(dir.join("summary.json"), e));
+        }
+        _ => {}
+    }
     if restored.is_none() {
         let removed = crate::snapshot::remove_earlier(&dir)?;
         if removed > 0 {
@@ -1051,7 +1082,8 @@ fn run_job(
                 &config.output.snapshot_times,
                 config.time.start,
                 c_max,
-                dir.clone(),
+                // Absolute, so that a restart from another working directory finds the files.
+                std::path::absolute(&dir).unwrap_or_else(|_| dir.clone()),
             )
             .with_png(config.output.png)
             .with_vtu(config.output.vtu),
@@ -1141,7 +1173,7 @@ fn run_job(
         let stats = match result {
             Ok(stats) => stats,
             Err(e) => {
-                solve.write_partial_outputs(&state, &dir)?;
+                solve.write_partial_outputs(&state, &dir);
                 return Err(scheduler_error(e));
             }
         };
@@ -1155,16 +1187,28 @@ fn run_job(
         }
         // Quiescent: no tent in flight, no event queued.
         let request = solve.control.take();
-        let path = solve.checkpoint(&folder, &state, &mut counts, &mut checkpoints)?;
+        let path = match solve.checkpoint(&folder, &state, &mut counts, &mut checkpoints) {
+            Ok(path) => path,
+            Err(e) => {
+                solve.write_partial_outputs(&state, &dir);
+                return Err(match request.failure {
+                    Some(failure) => EngineError::Runtime(format!(
+                        "{failure}; and the checkpoint of the front before this patch failed: \
+                         {e}"
+                    )),
+                    None => e,
+                });
+            }
+        };
         if let Some(failure) = request.failure {
-            solve.write_partial_outputs(&state, &dir)?;
+            solve.write_partial_outputs(&state, &dir);
             return Err(EngineError::Runtime(format!(
                 "{failure}; the front before this patch is in checkpoint {}",
                 path.display()
             )));
         }
         if let Some(reason) = request.stop {
-            solve.write_partial_outputs(&state, &dir)?;
+            solve.write_partial_outputs(&state, &dir);
             return Err(EngineError::Checkpointed {
                 reason,
                 time: config.time.clock(state.front.min_time()),
@@ -1172,8 +1216,11 @@ fn run_job(
             });
         }
     }
-    if config.checkpoint.at_end {
-        solve.checkpoint(&folder, &state, &mut counts, &mut checkpoints)?;
+    if config.checkpoint.at_end
+        && let Err(e) = solve.checkpoint(&folder, &state, &mut counts, &mut checkpoints)
+    {
+        solve.write_partial_outputs(&state, &dir);
+        return Err(e);
     }
     let wall_time_s = counts.wall_time_s;
     let stats = counts;
@@ -1181,8 +1228,12 @@ fn run_job(
     let mut book = solve.book.lock();
     book.progress.finish();
     solve.history_row(&state, &mut book);
-    book.snapshots.flush(t_end)?;
-    book.snapshots.finish()?;
+    // A snapshot that cannot be written fails the run (exit 1, no summary.json) after every
+    // other output is written.
+    let snapshots = book
+        .snapshots
+        .flush(t_end)
+        .and_then(|_| book.snapshots.finish());
     tracing::info!(patches = stats.tents, wall_time_s, "solve finished");
     if book.unresolved as f64 > 0.01 * book.patches as f64 {
         tracing::warn!(
@@ -1299,16 +1350,26 @@ fn run_job(
         min_edge,
         max_edge,
     };
-    write_atomic(&dir, "history.csv", book.history.as_bytes())?;
+    let mut written = vec![
+        snapshots,
+        write_atomic(&dir, "history.csv", book.history.as_bytes()).map(drop),
+    ];
     if config.output.png {
         plot::write_history_png(&dir, &book.history);
     }
-    solve.write_probes(&dir, &mut book)?;
+    written.push(solve.write_probes(&dir, &mut book));
     if let Some(csv) = crack_csv {
-        solve.write_crack_tips(&dir, &csv)?;
+        written.push(solve.write_crack_tips(&dir, &csv));
     }
-    solve.write_fracture(&state, &book.fracture_events, &dir)?;
-    solve.write_trace(options)?;
+    written.push(solve.write_fracture(&state, &book.fracture_events, &dir));
+    written.push(solve.write_trace(options));
+    let mut failures = written.into_iter().filter_map(Result::err);
+    if let Some(first) = failures.next() {
+        for e in failures {
+            tracing::error!("not written either: {e}");
+        }
+        return Err(first);
+    }
     summary.timings.output_s += finishing.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
     write_atomic(&dir, "summary.json", json.as_bytes())?;
