@@ -584,6 +584,15 @@ fn an_output_folder_that_cannot_be_created_is_bad_input() {
     assert!(!dir.path().join("out").join("history.csv").exists());
 }
 
+/// `sdg run configs/crack_growth.toml --quiet` into `out_dir` with `args`.
+fn crack_growth_into(out_dir: &Path, args: &[&str]) -> std::process::Output {
+    let config = repo("configs/crack_growth.toml");
+    let mut all = vec!["run", config.to_str().unwrap(), "--output"];
+    all.extend([out_dir.to_str().unwrap(), "--quiet"]);
+    all.extend(args);
+    sdg(&all)
+}
+
 /// A run whose checkpoint cannot be written fails (exit 1) naming the file, and leaves the
 /// outputs so far; an earlier run's `summary.json` in its folder does not survive it, so that
 /// a job script never reads it as this run's.
@@ -594,17 +603,10 @@ fn a_failed_checkpoint_write_leaves_the_outputs_so_far_and_no_summary() {
     // A folder that is not empty where the checkpoint should go: its rename fails.
     std::fs::create_dir_all(out_dir.join("checkpoints/checkpoint_000000.sdgc/x")).unwrap();
     std::fs::write(out_dir.join("summary.json"), "{}").unwrap();
-    let out = sdg(&[
-        "run",
-        repo("configs/crack_growth.toml").to_str().unwrap(),
-        "--output",
-        out_dir.to_str().unwrap(),
-        "--set",
-        "time.end=2e-7",
-        "--set",
-        "checkpoint.at_end=true",
-        "--quiet",
-    ]);
+    let out = crack_growth_into(
+        &out_dir,
+        &["--set", "time.end=2e-7", "--set", "checkpoint.at_end=true"],
+    );
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
@@ -738,16 +740,10 @@ fn a_run_stops_when_its_wall_time_is_up() {
 fn a_stopped_crack_run_leaves_its_crack_outputs() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("out");
-    let out = sdg(&[
-        "run",
-        repo("configs/crack_growth.toml").to_str().unwrap(),
-        "--output",
-        out_dir.to_str().unwrap(),
-        "--set",
-        "limits.max_wall_time_s=1e-9",
-        "--force",
-        "--quiet",
-    ]);
+    let out = crack_growth_into(
+        &out_dir,
+        &["--set", "limits.max_wall_time_s=1e-9", "--force"],
+    );
     assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
     for name in [
         "events.csv",
