@@ -523,6 +523,45 @@ fn run_solves_and_reports() {
     assert!(out_dir.join("history.csv").exists());
 }
 
+/// A history row each time the front passes a hundredth of the span, taken then, also in the
+/// asynchronous mode: until 2026-11-28 its rows waited for a batch of 32 events, which gave
+/// runs of identical rows late; and the end's row is written once.
+#[test]
+fn asynchronous_history_rows_are_taken_when_the_front_passes_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("out");
+    let config = repo("configs/plane_wave.toml");
+    let out = sdg(&[
+        "run",
+        config.to_str().unwrap(),
+        "--output",
+        out_dir.to_str().unwrap(),
+        "--threads",
+        "2",
+        "--set",
+        "time.end=5e-7",
+        "--set",
+        "output.snapshot_times=[]",
+        "--set",
+        "mesh.nx=48",
+        "--set",
+        "mesh.ny=48",
+        "--set",
+        "scheduler.deterministic=false",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let history = std::fs::read_to_string(out_dir.join("history.csv")).unwrap();
+    let times: Vec<f64> = (history.lines().skip(1))
+        .map(|row| row.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    // The front's least time moves by a tent's height, about 6.3e-8 s here, and the end's
+    // milestone and the final row are one row.
+    assert!(times.len() >= 8, "{history}");
+    assert!(times.windows(2).all(|w| w[0] < w[1]), "{history}");
+    assert_eq!(times.last(), Some(&5e-7));
+}
+
 /// A new run into a folder of an earlier run removes that run's snapshot files, which its own
 /// collection would not list, and keeps everything else.
 #[test]

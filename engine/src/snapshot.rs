@@ -153,6 +153,10 @@ pub struct Snapshots {
     /// The thread that writes the files, while it has work or until [`Snapshots::finish`].
     #[serde(skip)]
     writer: Option<Writer>,
+    /// A write has failed (and was reported): nothing more is written, so that the collection
+    /// on disk never lists the missing file.
+    #[serde(skip)]
+    failed: bool,
 }
 
 /// Writing one snapshot's files.
@@ -253,6 +257,7 @@ impl Snapshots {
             png: false,
             vtu: VtuFormat::default(),
             writer: None,
+            failed: false,
         }
     }
 
@@ -470,19 +475,25 @@ impl Snapshots {
             return Ok(());
         };
         drop(jobs);
-        thread
+        let result = thread
             .join()
-            .map_err(|_| EngineError::Runtime("the snapshot writer panicked".into()))?
+            .map_err(|_| EngineError::Runtime("the snapshot writer panicked".into()))
+            .and_then(|written| written);
+        self.failed |= result.is_err();
+        result
     }
 
     /// Writes every pending snapshot whose time is `<= front_min_time` (s), except that the
     /// start-time snapshot waits for `front_min_time > t_s` (see the module docs), frees its
     /// triangles and rewrites `snapshots.pvd`. Returns how many are written: on a thread of
     /// their own, complete after [`Snapshots::finish`], which reports a failed write; a write
-    /// that has failed already is reported here.
+    /// that has failed already is reported here, once; after it nothing more is written.
     pub fn flush(&mut self, front_min_time: f64) -> Result<usize, EngineError> {
         if self.writer.as_ref().is_some_and(Writer::has_failed) {
             self.finish()?;
+        }
+        if self.failed {
+            return Ok(0);
         }
         let mut count = 0;
         while let Some(snap) = self.snapshots.get_mut(self.next) {
@@ -1100,6 +1111,12 @@ mod tests {
         }
         let e = snaps.flush(1.0).unwrap_err();
         assert!(e.to_string().contains("snapshot_0000.vtu"), "{e}");
+        assert_eq!(
+            snaps.flush(1.0).unwrap(),
+            0,
+            "reported once, then nothing written"
+        );
+        snaps.finish().unwrap();
         assert!(!dir.path().join("snapshots.pvd").exists());
         assert!(!dir.path().join("snapshot_0001.vtu").exists());
     }

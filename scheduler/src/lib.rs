@@ -23,7 +23,7 @@ mod rounds;
 mod serial;
 mod sync;
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
 
 use parking_lot::Mutex;
@@ -143,6 +143,8 @@ pub struct Events<'a, S> {
     queue: Mutex<Vec<Action<'a, S>>>,
     /// Events pushed and not yet run.
     pending: AtomicUsize,
+    /// An event pushed with [`Events::push_now`] is queued.
+    urgent: AtomicBool,
 }
 
 impl<S> Default for Events<'_, S> {
@@ -150,6 +152,7 @@ impl<S> Default for Events<'_, S> {
         Self {
             queue: Mutex::new(Vec::new()),
             pending: AtomicUsize::new(0),
+            urgent: AtomicBool::new(false),
         }
     }
 }
@@ -169,9 +172,27 @@ impl<'a, S> Events<'a, S> {
         self.pending.fetch_add(1, Ordering::AcqRel);
     }
 
+    /// Queues `action` to run before the next tent any worker starts, where the asynchronous
+    /// mode would otherwise let events gather into a batch: for events whose result depends
+    /// on when they run, such as a record of the whole front at a milestone time.
+    /// Deterministic mode runs every event after its round either way.
+    pub fn push_now(&self, action: Action<'a, S>) {
+        let mut queue = self.queue.lock();
+        queue.push(action);
+        self.pending.fetch_add(1, Ordering::AcqRel);
+        self.urgent.store(true, Ordering::Release);
+    }
+
+    /// True when an event pushed with [`Events::push_now`] waits.
+    fn is_urgent(&self) -> bool {
+        self.urgent.load(Ordering::Acquire)
+    }
+
     /// Takes every queued event, in push order.
     fn take(&self) -> Vec<Action<'a, S>> {
-        std::mem::take(&mut *self.queue.lock())
+        let mut queue = self.queue.lock();
+        self.urgent.store(false, Ordering::Release);
+        std::mem::take(&mut *queue)
     }
 }
 

@@ -171,7 +171,8 @@ fn worker<'a, W: Work<'a>>(
             wake_all(shared);
             return;
         }
-        if shared.events.pending.load(Ordering::Acquire) >= EVENT_BATCH {
+        if shared.events.is_urgent() || shared.events.pending.load(Ordering::Acquire) >= EVENT_BATCH
+        {
             run_events(shared, local);
         }
         match find(shared, id, local) {

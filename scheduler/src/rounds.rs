@@ -162,12 +162,26 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 let mut r = round.write();
                 let chosen = std::mem::take(&mut r.chosen);
                 {
+                    // Every tent of the round has run: all are recorded, in order, even after
+                    // a failure, so that what the work books matches the state; the first
+                    // failure is returned.
                     let guard = state.read();
+                    let mut failure = None;
                     for (i, &v) in chosen.iter().enumerate() {
                         let result = r.results[i].lock().take().expect("every chosen tent ran");
-                        let outcome = result.map_err(RunError::Panic)?.map_err(RunError::Work)?;
-                        work.record(&**guard, v, outcome, &events)
-                            .map_err(RunError::Work)?;
+                        let recorded = result
+                            .map_err(RunError::Panic)
+                            .and_then(|tent| tent.map_err(RunError::Work))
+                            .and_then(|outcome| {
+                                work.record(&**guard, v, outcome, &events)
+                                    .map_err(RunError::Work)
+                            });
+                        if let Err(e) = recorded {
+                            failure.get_or_insert(e);
+                        }
+                    }
+                    if let Some(e) = failure {
+                        return Err(e);
                     }
                 }
                 stats.tents += chosen.len() as u64;

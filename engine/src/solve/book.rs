@@ -263,8 +263,22 @@ impl Solve<'_> {
         }
     }
 
-    /// Appends a `history.csv` row for the current front: it must not move meanwhile.
+    /// Appends a `history.csv` row for the current front, unless the last row is of the same
+    /// front time and patch count: the front must not move meanwhile.
     pub(super) fn history_row(&self, state: &Frontier, book: &mut Book) {
+        let time = self
+            .problem
+            .loaded
+            .config
+            .time
+            .clock(state.front.min_time());
+        // The same front and books as the last row (the end's milestone and the final row):
+        // the row would repeat it.
+        let key = format!("{time:e},{},", book.patches);
+        let last = book.history.trim_end().lines().next_back().unwrap_or("");
+        if last.starts_with(&key) {
+            return;
+        }
         let system = &self.problem.system;
         let rho = self.problem.material.density();
         let e = front_energy(
@@ -281,12 +295,6 @@ impl Solve<'_> {
             - e.total
             - totals.dissipation
             - totals.interface_work;
-        let time = self
-            .problem
-            .loaded
-            .config
-            .time
-            .clock(state.front.min_time());
         let _ = writeln!(
             book.history,
             "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",

@@ -702,7 +702,7 @@ impl<'a> Work<'a> for Solve<'a> {
         book.timings.output_s += started.elapsed().as_secs_f64();
         // One row for however many history milestones passed at once.
         if passed.iter().any(|p| p.1 == Milestone::History) {
-            events.push(Box::new(move |state: &mut Frontier| {
+            events.push_now(Box::new(move |state: &mut Frontier| {
                 self.traced(|| self.history_row(state, &mut self.book.lock()));
                 Changed::default()
             }));
@@ -711,7 +711,7 @@ impl<'a> Work<'a> for Solve<'a> {
             self.control.checkpoint();
         }
         if passed.iter().any(|p| p.1 == Milestone::Intervention) {
-            events.push(Box::new(move |state: &mut Frontier| {
+            events.push_now(Box::new(move |state: &mut Frontier| {
                 self.traced(|| self.intervene(state))
             }));
         }
