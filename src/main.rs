@@ -286,10 +286,10 @@ fn validate(args: &ValidateArgs) -> Result<(), EngineError> {
              wave speeds: c_d = {:.6e} m/s, c_s = {:.6e} m/s, c_R = {:.6e} m/s\n\
              estimate: {}",
             args.config.config.display(),
-            if check.is_ok() {
-                "valid"
-            } else {
-                "valid input, over its [limits]"
+            match &check {
+                Ok(()) => "valid",
+                Err(e) if e.key.is_some() => "valid input, over its [limits]",
+                Err(_) => "valid input, beyond this machine's memory on these threads",
             },
             problem.mesh.vertices().len(),
             problem.mesh.triangles().len(),

@@ -976,8 +976,8 @@ fn output_folders_overrides_and_snapshot_times_are_blamed_on_their_source() {
     );
 }
 
-/// `validate` on a config over its limits says so before the error, which tells how `sdg run`
-/// would accept it.
+/// `validate` on a config over its limits, or beyond the machine's memory, says so before the
+/// error, which tells how `sdg run` would accept it.
 #[test]
 fn validate_over_the_limits_says_so() {
     let (_dir, config) = config_file(CONFIG);
@@ -986,4 +986,18 @@ fn validate_over_the_limits_says_so() {
     let text = String::from_utf8(out.stdout.clone()).unwrap();
     assert!(text.contains(": valid input, over its [limits]"), "{text}");
     assert!(stderr(&out).contains("pass --force to `sdg run`"));
+    // More workers than the machine's memory holds: refused before any work, naming
+    // `--threads` (until 2026-11-28 the kernel killed the run, exit 137).
+    let out = sdg(&["validate", &config, "--threads", "1000000"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    assert!(
+        text.contains(": valid input, beyond this machine's memory"),
+        "{text}"
+    );
+    let err = stderr(&out);
+    assert!(
+        err.contains("--threads 1000000: ") && err.contains("GiB"),
+        "{err}"
+    );
 }

@@ -101,7 +101,7 @@ impl Estimate {
                 key: None,
                 reason: format!(
                     "the run needs about {:.1} GiB of memory with {} worker thread(s), more \
-                     than this machine's {:.1} GiB: use fewer threads, or pass --force",
+                     than this machine's {:.1} GiB: use fewer threads, or pass --force to `sdg run`",
                     gib(self.memory_bytes),
                     self.threads,
                     gib(total)
