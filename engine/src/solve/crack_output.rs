@@ -31,6 +31,8 @@ use serde::Serialize;
 
 use sdg_solver::crack::{Crossing, Level};
 
+use crate::config::TimeConfig;
+
 /// Edge lengths on each side of a tip state that its speed is fitted over.
 pub const SPEED_EDGES: f64 = 2.0;
 
@@ -156,9 +158,13 @@ fn slope(points: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
 }
 
 /// `crack_tips.csv` and the summary from the crossings of every cracking interface, with the
-/// tag name of each crossing; `c_r` is the Rayleigh speed, m/s; `start` (s, `time.start`) is
-/// added to the times written.
-pub fn write(crossings: &[(String, Crossing)], c_r: f64, start: f64) -> (String, CrackSummary) {
+/// tag name of each crossing; `c_r` is the Rayleigh speed, m/s; times are written on the
+/// clock of `time`.
+pub fn write(
+    crossings: &[(String, Crossing)],
+    c_r: f64,
+    time: &TimeConfig,
+) -> (String, CrackSummary) {
     let mut by_tag: BTreeMap<&str, Vec<Crossing>> = BTreeMap::new();
     for (tag, c) in crossings {
         by_tag.entry(tag.as_str()).or_default().push(*c);
@@ -169,18 +175,18 @@ pub fn write(crossings: &[(String, Crossing)], c_r: f64, start: f64) -> (String,
             .into_iter()
             .map(|(tag, list)| (tag, tip_states(&list))),
         c_r,
-        start,
+        time,
     )
 }
 
 /// `crack_tips.csv` (one row per tip state, keyed by its crack in the column `key`) and its
-/// totals; `c_r` is the Rayleigh speed, m/s; each state's time is written as `start` (s,
-/// `time.start`) plus its time on the run's clock.
+/// totals; `c_r` is the Rayleigh speed, m/s; each state's time is written on the clock of
+/// `time`.
 pub(super) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
     key: &str,
     cracks: impl IntoIterator<Item = (K, S)>,
     c_r: f64,
-    start: f64,
+    time: &TimeConfig,
 ) -> (String, CrackSummary) {
     let mut csv = format!("t_s,{key},x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n");
     let mut summary = CrackSummary::default();
@@ -190,7 +196,7 @@ pub(super) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
             let _ = writeln!(
                 csv,
                 "{:e},{crack},{:e},{:e},{:e},{:e},{:e}",
-                start + s.time,
+                time.clock(s.time),
                 s.point[0],
                 s.point[1],
                 s.extension,
@@ -251,7 +257,10 @@ mod tests {
                 .map(|c| ("crack".to_string(), *c))
                 .collect::<Vec<_>>(),
             600.0,
-            -1e-6,
+            &TimeConfig {
+                start: -1e-6,
+                end: 1e-5,
+            },
         );
         assert_eq!(csv.lines().count(), 41);
         // The times written count from `time.start` = -1 us: the first tip at 1 us is at 0.
@@ -270,7 +279,11 @@ mod tests {
         assert_eq!(summary.states_over_c_r, 0);
         // At a Rayleigh speed below the crack's, every state is above it.
         let crossings: Vec<_> = list.iter().map(|c| ("crack".to_string(), *c)).collect();
-        assert_eq!(write(&crossings, 299.0, 0.0).1.states_over_c_r, 40);
+        let time = TimeConfig {
+            start: 0.0,
+            end: 1e-5,
+        };
+        assert_eq!(write(&crossings, 299.0, &time).1.states_over_c_r, 40);
     }
 
     #[test]

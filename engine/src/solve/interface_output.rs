@@ -12,6 +12,7 @@ use sdg_mesh::Mesh;
 use sdg_solver::interface::Mode;
 use sdg_solver::patch::{InterfaceSample, PatchSolver};
 
+use crate::config::TimeConfig;
 use crate::problem::Probe;
 use crate::snapshot::{InterfaceValues, cut_face};
 
@@ -94,12 +95,12 @@ fn on_segment(x: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
     (-1e-9..=1.0 + 1e-9).contains(&along) && across <= 1e-9 * length2.sqrt()
 }
 
-/// `interface.csv`: one row per sample, sorted by probe and time, at `start` (s, `time.start`)
-/// plus its time on the run's clock.
+/// `interface.csv`: one row per sample, sorted by probe and time, at its time on the clock of
+/// `time`.
 pub(super) fn csv(
     probes: &[Probe],
     samples: &mut [(usize, InterfaceSample)],
-    start: f64,
+    time: &TimeConfig,
 ) -> String {
     samples.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.time.total_cmp(&b.1.time)));
     let mut out = String::from(
@@ -111,7 +112,7 @@ pub(super) fn csv(
         let _ = writeln!(
             out,
             "{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{}",
-            start + s.time,
+            time.clock(s.time),
             probe.at[0],
             probe.at[1],
             probe.tag,

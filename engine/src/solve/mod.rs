@@ -377,7 +377,7 @@ impl Solve<'_> {
         write_atomic(
             dir,
             "events.csv",
-            propagation::events_csv(events, config.time.start).as_bytes(),
+            propagation::events_csv(events, &config.time).as_bytes(),
         )?;
         let order = config.solver.order;
         let cracks = propagation::crack_edges(
@@ -417,11 +417,11 @@ impl Solve<'_> {
     /// else per cohesive or damage interface tag; `None` when the run tracks no crack tips.
     fn crack_tips(&self, mesh: &Mesh, book: &Book) -> Option<(String, CrackSummary)> {
         let c_r = self.problem.material.c_r();
-        let start = self.problem.loaded.config.time.start;
+        let time = &self.problem.loaded.config.time;
         if self.problem.fracture.is_some() {
             let crossings: Vec<Crossing> = book.crossings.iter().map(|&(_, c)| c).collect();
             let branches = propagation::branch_tips(&book.fracture_events, &crossings);
-            Some(crack_output::tips_csv("branch", &branches, c_r, start))
+            Some(crack_output::tips_csv("branch", &branches, c_r, time))
         } else if self.problem.interfaces.any_cohesive() {
             let names = mesh.tag_names();
             let crossings: Vec<_> = book
@@ -432,7 +432,7 @@ impl Solve<'_> {
                     (name.to_string(), *c)
                 })
                 .collect();
-            Some(crack_output::write(&crossings, c_r, start))
+            Some(crack_output::write(&crossings, c_r, time))
         } else {
             None
         }
@@ -471,8 +471,8 @@ impl Solve<'_> {
     fn write_probes(&self, dir: &std::path::Path, book: &mut Book) -> Result<(), EngineError> {
         let probes = &self.problem.probes;
         if !probes.is_empty() {
-            let start = self.problem.loaded.config.time.start;
-            let text = interface_output::csv(probes, &mut book.samples, start);
+            let time = &self.problem.loaded.config.time;
+            let text = interface_output::csv(probes, &mut book.samples, time);
             write_atomic(dir, "interface.csv", text.as_bytes())?;
         }
         Ok(())
@@ -1329,7 +1329,7 @@ fn run_job(
                 &state,
                 fracture,
                 (&initial_tips, macro_length),
-                config.time.start,
+                &config.time,
             )
         }),
         error,

@@ -32,6 +32,7 @@ use serde::Serialize;
 use super::Solve;
 use super::crack_output::{self, TipState};
 use super::network::{self, CrackLink, MacroFork};
+use crate::config::TimeConfig;
 use crate::fracture::{self, Fracture, Pending, Tip};
 use crate::frontier::Frontier;
 use crate::plot::{FieldPlot, Values};
@@ -411,15 +412,15 @@ fn element_stress(
     [values[2], values[3], values[4]].map(|s| z * s)
 }
 
-/// `events.csv`: one line per fracture event in the order they happened, at `start` (s,
-/// `time.start`) plus its time on the run's clock.
-pub(super) fn events_csv(events: &[FractureEvent], start: f64) -> String {
+/// `events.csv`: one line per fracture event in the order they happened, at its time on the
+/// clock of `time`.
+pub(super) fn events_csv(events: &[FractureEvent], time: &TimeConfig) -> String {
     let mut csv = String::from("time_s,event,branch,x_m,y_m,to_x_m,to_y_m\n");
     for e in events {
         let _ = writeln!(
             csv,
             "{:e},{},{},{:e},{:e},{:e},{:e}",
-            start + e.time,
+            time.clock(e.time),
             e.kind,
             e.branch.map_or(String::new(), |b| b.to_string()),
             e.from[0],
@@ -637,20 +638,20 @@ const CRACK_PATH_PNG_SIZE: (u32, u32) = (1200, 900);
 
 /// The summary of the fracture events of a run on the final `state`; `initial_tips` are the
 /// positions of the initial cracks' tips, m; `macro_length` the arms' reach of a macro fork, m;
-/// its times are `start` (s, `time.start`) plus those on the run's clock.
+/// its times are on the clock of `time`.
 pub(super) fn summary(
     events: &[FractureEvent],
     state: &Frontier,
     fracture: &Fracture,
     (initial_tips, macro_length): (&[[f64; 2]], Option<f64>),
-    start: f64,
+    time: &TimeConfig,
 ) -> FractureSummary {
     let count = |kind: &str| events.iter().filter(|e| e.kind == kind).count() as u64;
     let (first_branching_time, first_branching_distance) = first_branching(events, initial_tips);
     let macro_branching = macro_length
         .and_then(|length| macro_fork(&state.mesh, fracture, events, length, initial_tips))
         .map(|fork| MacroFork {
-            time: start + fork.time,
+            time: time.clock(fork.time),
             ..fork
         });
     FractureSummary {
@@ -667,7 +668,7 @@ pub(super) fn summary(
             .filter(|e| e.kind == "extension")
             .map(|e| (e.to[0] - e.from[0]).hypot(e.to[1] - e.from[1]))
             .fold(0.0, |a, b| a + b),
-        first_branching_time: first_branching_time.map(|t| start + t),
+        first_branching_time: first_branching_time.map(|t| time.clock(t)),
         first_branching_distance,
         macro_branching,
     }
@@ -796,6 +797,12 @@ mod tests {
     use super::*;
     use sdg_solver::crack::Level;
 
+    /// Times written as they are on the run's clock.
+    const UNIT_TIME: TimeConfig = TimeConfig {
+        start: 0.0,
+        end: 1.0,
+    };
+
     /// The least damage of an edge is the smallest of its face's corners (D = 0.9 + 0.1 xi on
     /// the reference face: 0.9, 1, 0.9), or the initial damage where no face was solved.
     #[test]
@@ -845,6 +852,27 @@ mod tests {
         }
     }
 
+    /// The branching plate's clock: the span, `3.6e-6 + 2.392e-6`, plus the start is one
+    /// rounding below `3.6e-6`; an event at the end is written at `time.end` itself.
+    #[test]
+    fn an_event_at_the_end_time_is_written_at_time_end() {
+        let time = TimeConfig {
+            start: -2.392e-6,
+            end: 3.6e-6,
+        };
+        assert_ne!(time.span() + time.start, time.end);
+        let events = [extension(0.0, 1, [0.0; 2], [1e-5, 0.0]), {
+            let mut arrest = extension(time.span(), 1, [1e-5, 0.0], [1e-5, 0.0]);
+            arrest.kind = "arrest".into();
+            arrest
+        }];
+        let csv = events_csv(&events, &time);
+        let times: Vec<f64> = (csv.lines().skip(1))
+            .map(|line| line.split(',').next().unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(times, [-2.392e-6, 3.6e-6]);
+    }
+
     /// A defect nucleates at the origin and makes two 10 um edges at once, branches 2 (along
     /// +x) and 3 (along -x), whose four points each reach D = 1 within 0.4 ns (25 km/s if read
     /// as a tip); branch 2 then runs on at 400 m/s over ten more edges, branch 3 stops.
@@ -887,7 +915,7 @@ mod tests {
         let tips = branch_tips(&events, &crossings);
         assert_eq!(tips.keys().copied().collect::<Vec<_>>(), [2]);
         assert_eq!(tips[&2].len(), 40);
-        let (_, summary) = crack_output::tips_csv("branch", &tips, 1000.0, 0.0);
+        let (_, summary) = crack_output::tips_csv("branch", &tips, 1000.0, &UNIT_TIME);
         assert!(
             (summary.max_speed_over_c_r - 0.4).abs() < 0.004,
             "{summary:?}"
@@ -930,7 +958,7 @@ mod tests {
             let tips = branch_tips(events, &crossings);
             (
                 tips[&0].len(),
-                crack_output::tips_csv("branch", &tips, 1000.0, 0.0).1,
+                crack_output::tips_csv("branch", &tips, 1000.0, &UNIT_TIME).1,
             )
         };
         let (states, summary) = tips(&events);
@@ -998,7 +1026,7 @@ mod tests {
                 );
             }
         }
-        let (csv, summary) = crack_output::tips_csv("branch", &tips, 1000.0, 0.0);
+        let (csv, summary) = crack_output::tips_csv("branch", &tips, 1000.0, &UNIT_TIME);
         assert_eq!(csv.lines().count(), 185);
         assert!(csv.starts_with("t_s,branch,x_m,"));
         assert!(
