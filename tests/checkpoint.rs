@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{outputs, stderr};
+use common::{assert_same_outputs, outputs, stderr};
 
 /// The most a run may take from SIGTERM to its exit with a checkpoint (documented in the
 /// README's "Long runs" section), s.
@@ -83,15 +83,9 @@ fn signal(child: &Child, name: &str) {
 
 /// Asserts that `got` holds the same output files as `expected`, byte for byte (`summary.json`
 /// without its measured fields).
-fn assert_same_outputs(expected: &Path, got: &Path, context: &str) {
-    let (expected, got) = (outputs(expected), outputs(got));
-    assert_eq!(
-        expected.iter().map(|f| &f.0).collect::<Vec<_>>(),
-        got.iter().map(|f| &f.0).collect::<Vec<_>>()
-    );
-    for ((name, a), (_, b)) in expected.iter().zip(&got) {
-        assert!(a == b, "{context}: {name} differs after the restart");
-    }
+fn assert_same_folders(expected: &Path, got: &Path, context: &str) {
+    let context = format!("{context}, after the restart");
+    assert_same_outputs(&outputs(expected), &outputs(got), &context);
 }
 
 /// Kills a run with `before` threads after its first checkpoint, restarts it from the folder on
@@ -131,7 +125,7 @@ fn killed_and_restarted(
         time > start,
         "the restart went on from the checkpoint's front"
     );
-    assert_same_outputs(reference.path(), dir.path(), config);
+    assert_same_folders(reference.path(), dir.path(), config);
     summary
 }
 
@@ -344,7 +338,7 @@ fn a_restart_into_another_folder_takes_the_earlier_snapshots_along() {
     let restarted = summary(&second);
     assert!(restarted["checkpoint"]["restart_time"].as_f64().unwrap() > 0.0);
     assert!(second.join("snapshot_0000.vtu").is_file());
-    assert_same_outputs(&first, &second, "plane_wave into another folder");
+    assert_same_folders(&first, &second, "plane_wave into another folder");
 }
 
 /// A run with `checkpoint.at_end` goes on to a later `time.end` from its last checkpoint, with

@@ -319,12 +319,11 @@ fn cracks_nucleate_across_the_tension_the_same_way_for_any_thread_count() {
             .map(|(r, _)| r)
             .filter(|r| r[1] == site[1] && r[2] == site[2])
             .collect();
+        assert_eq!(halves.len(), 2, "the extensions from the site {site:?}");
         for h in &halves {
             assert_eq!(h[4], site[2], "{h:?}");
         }
-        if halves.len() == 2 {
-            assert!((halves[0][3] - site[1]) * (halves[1][3] - site[1]) < 0.0);
-        }
+        assert!((halves[0][3] - site[1]) * (halves[1][3] - site[1]) < 0.0);
     }
     assert_eq!(sites, fracture.nucleations);
     assert!(one.energy.balance_residual_rel.abs() < 1e-10);

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{outputs, solve};
+use common::{assert_same_outputs, outputs, solve};
 use sdg_engine::Problem;
 
 fn plane_wave(overrides: &[&str]) -> Problem {
@@ -32,11 +32,8 @@ fn deterministic_mode_is_bitwise_identical_for_1_2_4_and_8_threads() {
             summary.state_hash, reference.state_hash,
             "{threads} threads"
         );
-        let got = outputs(dir.path());
-        for ((name, a), (other, b)) in expected.iter().zip(&got) {
-            assert_eq!(name, other);
-            assert!(a == b, "{name} differs with {threads} threads");
-        }
+        let context = format!("{threads} threads");
+        assert_same_outputs(&expected, &outputs(dir.path()), &context);
     }
 }
 
@@ -124,10 +121,8 @@ fn deterministic_mode_is_bitwise_identical_with_contact_and_adaptivity() {
             summary.state_hash, reference.state_hash,
             "{threads} threads"
         );
-        for ((name, a), (other, b)) in expected.iter().zip(&outputs(dir.path())) {
-            assert_eq!(name, other);
-            assert!(a == b, "{name} differs with {threads} threads");
-        }
+        let context = format!("{threads} threads");
+        assert_same_outputs(&expected, &outputs(dir.path()), &context);
     }
 }
 

@@ -282,22 +282,40 @@ mod tests {
 
     #[test]
     fn wave_speeds_are_the_generalized_eigenvalues() {
-        // det(Ax - lambda A0) = 0 at lambda = +-c/c_ref for each wave: check the P and S modes
-        // by applying (Ax - lambda A0) to the known eigenvectors of a wave along x.
-        let m = Material::new(3.24e9, 0.35, 1190.0, Plane::Strain).unwrap();
-        let s = System::new(&m);
-        let ax = s.a_n([1.0, 0.0, 0.0]);
-        let (c, z) = (m.c_d() / s.c_ref(), m.c_d() / s.c_ref());
-        // P wave along +x: v1 = 1, s11 = -z, s22 = -z lambda / (lambda + 2 mu).
-        let ratio = m.lambda() / (m.lambda() + 2.0 * m.mu());
-        let r = [1.0, 0.0, -z, -z * ratio, 0.0];
-        let lhs = s.apply(&ax, &r);
-        let rhs = s.apply(&s.a_n([0.0, 0.0, 1.0]), &r);
-        for i in 0..5 {
-            assert!(
-                (lhs[i] - c * rhs[i]).abs() < 1e-12,
-                "{i}: {lhs:?} vs {rhs:?}"
-            );
+        // det(Ax - lambda A0) = 0 at lambda = c/c_ref for each wave: apply (Ax - lambda A0) to
+        // the known eigenvector of each wave running along +x, in every plane mode (stresses
+        // scaled by rho c_ref, so the impedance of a wave of speed c reads c / c_ref).
+        for plane in [Plane::Strain, Plane::Stress, Plane::Antiplane] {
+            let m = Material::new(3.24e9, 0.35, 1190.0, plane).unwrap();
+            let s = System::new(&m);
+            let (p, sh) = (m.c_d() / s.c_ref(), m.c_s() / s.c_ref());
+            let ratio = m.lambda() / (m.lambda() + 2.0 * m.mu());
+            let state = |values: &[f64]| {
+                let mut q = [0.0; MAX_FIELDS];
+                q[..values.len()].copy_from_slice(values);
+                q
+            };
+            let modes = if plane == Plane::Antiplane {
+                // S wave: v3 = 1, s13 = -z_s.
+                vec![(sh, state(&[1.0, -sh, 0.0]))]
+            } else {
+                vec![
+                    // P wave: v1 = 1, s11 = -z_d, s22 = -z_d lambda / (lambda + 2 mu).
+                    (p, state(&[1.0, 0.0, -p, -p * ratio, 0.0])),
+                    // S wave: v2 = 1, s12 = -z_s.
+                    (sh, state(&[0.0, 1.0, 0.0, 0.0, -sh])),
+                ]
+            };
+            for (c, r) in modes {
+                let lhs = s.apply(&s.a_n([1.0, 0.0, 0.0]), &r);
+                let rhs = s.apply(&s.a_n([0.0, 0.0, 1.0]), &r);
+                for i in 0..s.fields() {
+                    assert!(
+                        (lhs[i] - c * rhs[i]).abs() < 1e-12,
+                        "{plane:?}, speed {c}, {i}: {lhs:?} vs {rhs:?}"
+                    );
+                }
+            }
         }
     }
 

@@ -85,6 +85,23 @@ pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
     files
 }
 
+/// Asserts that `got` holds the same files as `expected` (both from [`outputs`]), by name and
+/// byte for byte; `context` says which run differs.
+pub fn assert_same_outputs(
+    expected: &[(String, Vec<u8>)],
+    got: &[(String, Vec<u8>)],
+    context: &str,
+) {
+    assert_eq!(
+        expected.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        got.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        "{context}: other files"
+    );
+    for ((name, a), (_, b)) in expected.iter().zip(got) {
+        assert!(a == b, "{context}: {name} differs");
+    }
+}
+
 /// `stick_slip.toml` made small and adaptive: refinement, coarsening, Newton contact patches,
 /// two snapshots and a probe in about 10 s (the runs that must stay bitwise identical).
 pub const STICK_SLIP_ADAPTIVE: [&str; 9] = [
