@@ -351,8 +351,9 @@ fn mode1_crack_starts_when_lefm_says() {
     for a in [5e-6, 10e-6, 20e-6] {
         let (t, t_ref) = (time_to(&rows, a, (tau, t0)), lefm_time_to(a, tau * c_r));
         eprintln!("extension {a:e} m at t' = {t:.3}, LEFM {t_ref:.3}");
-        // Measured: within 0.05 (1.60, 1.67, 1.77 against 1.64, 1.70, 1.79).
-        assert!((t - t_ref).abs() < 0.15, "{a}: {t} vs {t_ref}");
+        // Measured: within 0.05 (1.60, 1.67, 1.77 against 1.64, 1.70, 1.79); asserted within
+        // 0.1, twice that, a sixth of the 0.6 the crack takes from its start to 20 um.
+        assert!((t - t_ref).abs() < 0.1, "{a}: {t} vs {t_ref}");
     }
     assert!(summary.energy.balance_residual_rel.abs() < 1e-6);
     assert!(summary.coarsenings > 0);
@@ -442,7 +443,9 @@ fn mode1_crack_at_high_load_starts_at_once() {
     // and 1.36 over eleven runs, and once just before t' = 1 (2026-11-25/26, this machine).
     // Measured (deterministic): t' = 1.055 (LEFM: 1.5) at x = 0.5004 mm; 0.71 c_R a quarter of
     // the way; at most 0.83 c_R by t' = 6 (23 um of extension).
-    assert!((1.0..1.5).contains(&start), "{start}");
+    // "At once": after the load's ramp (t' = 1) and well before LEFM's 1.5, as the seed's
+    // cohesive cracks start near t' = 1 at high loads (2.5.3).
+    assert!((1.0..1.2).contains(&start), "{start}");
     assert!(early > 0.5, "{early}");
     assert!(fastest < 1.0, "{fastest}");
     assert!(summary.energy.balance_residual_rel.abs() < 1e-6);

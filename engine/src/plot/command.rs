@@ -329,8 +329,21 @@ mod tests {
     fn history_columns() {
         let csv = "time_s,patches,front_energy_j,kinetic_j,strain_j,boundary_work_j,dissipation_j,\
                    interface_work_j\n0e0,0,1e0,5e-1,5e-1,0e0,0e0,0e0\n1e-6,10,1e0,4e-1,6e-1,0e0,1e-9,0e0\n";
-        let chart = history_chart(csv).unwrap();
-        chart.render((800, 500)).unwrap();
+        let image = history_chart(csv).unwrap().render((800, 500)).unwrap();
+        let count = |rgb: [u8; 3]| image.rgb.chunks(3).filter(|p| *p == rgb).count();
+        // Five series in the first five colours (Tableau 10); the interface work, zero
+        // throughout, is left out, so the sixth colour is not drawn.
+        let colours = [
+            [31, 119, 180],
+            [255, 127, 14],
+            [44, 160, 44],
+            [214, 39, 40],
+            [148, 103, 189],
+        ];
+        for rgb in colours {
+            assert!(count(rgb) > 0, "{rgb:?}");
+        }
+        assert_eq!(count([140, 86, 75]), 0);
         assert!(history_chart("time_s,x\n").is_err());
     }
 }

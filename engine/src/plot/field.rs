@@ -681,15 +681,32 @@ mod tests {
         let (points, triangles) = grid(2, 1.0);
         let mut cells: Vec<f64> = (0..triangles.len()).map(|k| k as f64).collect();
         cells[0] = f64::NAN;
-        let image = FieldPlot::new(&points, &triangles, Values::Cells(&cells))
-            .render((400, 300))
-            .unwrap();
+        let plot = FieldPlot::new(&points, &triangles, Values::Cells(&cells));
+        let image = plot.render((400, 300)).unwrap();
         assert_eq!((image.width, image.height), (400, 300));
+        // The share of the field left white (unfilled), inside its frame.
+        let [x0, y0, x1, y1] = plot.layout((400, 300)).unwrap().field;
+        let white = |image: &Image| {
+            let inside = (y0 + 2..y1 - 2).flat_map(|y| (x0 + 2..x1 - 2).map(move |x| (x, y)));
+            let (mut all, mut blank) = (0, 0);
+            for (x, y) in inside {
+                all += 1;
+                blank += usize::from(image.pixel(x, y) == [255, 255, 255]);
+            }
+            blank as f64 / all as f64
+        };
+        // The NaN cell is one of eight equal triangles: it alone stays white.
+        let share = white(&image);
+        assert!((0.10..0.15).contains(&share), "{share}");
+        // All values non-finite: nothing filled, axes still drawn.
         let nan = vec![f64::NAN; points.len()];
-        // All values non-finite: axes still drawn, nothing filled.
-        FieldPlot::new(&points, &triangles, Values::Points(&nan))
+        let blank = FieldPlot::new(&points, &triangles, Values::Points(&nan))
             .render((400, 300))
             .unwrap();
+        assert_eq!(white(&blank), 1.0);
+        let left_axis =
+            (x0.saturating_sub(2)..=x0).any(|x| luminance(blank.pixel(x, (y0 + y1) / 2)) < 60.0);
+        assert!(left_axis, "the left axis");
     }
 
     #[test]
