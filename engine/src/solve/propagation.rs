@@ -944,7 +944,7 @@ mod tests {
                 let point = [x + h * (j as f64 + 0.5) / 4.0, 0.0];
                 let at = if k < n { point[0] / speed } else { time };
                 crossings.push(Crossing {
-                    edge: 0,
+                    edge: k as EdgeId,
                     point,
                     time: at,
                     level: Level::Tip,
@@ -990,7 +990,7 @@ mod tests {
                 for j in 0..4 {
                     let r = r + h * (j as f64 + 0.5) / 4.0;
                     crossings.push(Crossing {
-                        edge: 0,
+                        edge: 100 * id + k as EdgeId + if angle > 0.0 { 50 } else { 0 },
                         point: at(r),
                         time: t0 + r / speed,
                         level: Level::Tip,
