@@ -7,7 +7,7 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 use sdg_mesh::{Diagonal, Front, Pitcher, Rectangle};
-use sdg_scheduler::{Events, Fixed, Options, VertexId, Work};
+use sdg_scheduler::{Events, Fixed, Lease, Options, VertexId, Work};
 
 struct PitchOnly<'a> {
     pitcher: &'a Pitcher,
@@ -21,11 +21,12 @@ impl<'a> Work<'a> for PitchOnly<'a> {
 
     fn tent(
         &self,
-        state: &Fixed<'a>,
+        lease: &mut Lease<'_, Fixed<'a>>,
         _: &mut (),
         v: VertexId,
         _: &Events<'a, Fixed<'a>>,
     ) -> Result<(f64, ()), ()> {
+        let state = *lease.state();
         let tent = self.pitcher.pitch(state.mesh, state.front, v).ok_or(())?;
         Ok((tent.t_new, ()))
     }

@@ -22,6 +22,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use sdg_mesh::{
     AllowSplit, Front, Merge, Mesh, Pitcher, Point, Split, SplitError, TriangleId, VertexId,
 };
+use sdg_scheduler::Region;
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::face::FaceState;
 
@@ -197,18 +198,21 @@ impl Frontier {
 
     /// Bisects triangle `t` (and whatever the closure needs) as long as every split keeps the
     /// front causal, halves no edge shorter than `2 min_edge` (m) and leaves every vertex star
-    /// at most `max_star` triangles. Adds what changed to `refined`; `t` itself may be left
-    /// whole when a split was refused. `initial_energy(corners)` is the discrete energy of the
+    /// at most `max_star` triangles, and splits no triangle with a corner that `region` says a
+    /// tent in flight holds. Adds what changed to `refined`; `t` itself may be left whole when a
+    /// split was refused. `initial_energy(corners)` is the discrete energy of the
     /// initial data on a triangle (scaled units).
     pub(crate) fn refine(
         &mut self,
         t: TriangleId,
+        region: &Region<'_>,
         min_edge: f64,
         max_star: usize,
         initial_energy: &dyn Fn([Point; 3]) -> f64,
         refined: &mut Refined,
     ) {
         self.apply_splits(
+            region,
             min_edge,
             max_star,
             initial_energy,
@@ -231,11 +235,13 @@ impl Frontier {
         t: TriangleId,
         corner: Option<usize>,
         fraction: f64,
+        region: &Region<'_>,
         limits: Limits,
         initial_energy: &dyn Fn([Point; 3]) -> f64,
         refined: &mut Refined,
     ) -> Result<bool, SplitError> {
         self.apply_splits(
+            region,
             limits.min_edge,
             limits.max_star,
             initial_energy,
@@ -253,6 +259,7 @@ impl Frontier {
     /// ([`Split::interpolate`]), a child keeps its parent's element and an edge half its face.
     fn apply_splits<R>(
         &mut self,
+        region: &Region<'_>,
         min_edge: f64,
         max_star: usize,
         initial_energy: &dyn Fn([Point; 3]) -> f64,
@@ -288,6 +295,7 @@ impl Frontier {
             fraction.min(1.0 - fraction) * refinement_edge_length(mesh, t) >= min_edge
                 && mesh.vertex_triangles(corners[r]).len() < max_star
                 && causal
+                && corners.iter().all(|&c| region.is_free(c))
         };
         let result = split(mesh, &mut allow, &mut splits);
         // A step was done when its index is below the number of splits.

@@ -8,7 +8,7 @@ use parking_lot::Mutex;
 use serde::Serialize;
 
 use sdg_mesh::{Front, Mesh, Pitcher, Tent};
-use sdg_scheduler::{Events, Fixed, Options, VertexId, Work};
+use sdg_scheduler::{Events, Fixed, Lease, Options, VertexId, Work};
 
 use crate::error::EngineError;
 use crate::estimate::{self, Estimate};
@@ -140,11 +140,12 @@ impl<'a> Work<'a> for MeshWork<'a> {
 
     fn tent(
         &self,
-        state: &Fixed<'a>,
+        lease: &mut Lease<'_, Fixed<'a>>,
         _: &mut (),
         v: VertexId,
         _: &Events<'a, Fixed<'a>>,
     ) -> Result<(f64, Tent), EngineError> {
+        let state = *lease.state();
         let tent = self
             .pitcher
             .pitch(state.mesh, state.front, v)

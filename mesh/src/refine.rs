@@ -198,6 +198,33 @@ impl Mesh {
         result
     }
 
+    /// The triangles a bisection of `t` would split as the mesh is now: the chain across
+    /// refinement edges that the closure of [`Mesh::bisect`] follows from `t`, and the triangle
+    /// across the last one's refinement edge (the closure then also splits children of these,
+    /// whose corners are theirs or new vertices). At most `limit` triangles: a longer chain is
+    /// cut there.
+    pub fn bisection_chain(&self, t: TriangleId, limit: usize) -> Vec<TriangleId> {
+        let mut chain = vec![t];
+        let mut s = t;
+        while chain.len() < limit {
+            let e = self.refinement_edge_id(s);
+            let Some(u) = self.edges[e as usize]
+                .triangles
+                .into_iter()
+                .flatten()
+                .find(|&u| u != s)
+            else {
+                break;
+            };
+            chain.push(u);
+            if self.refinement_edge_id(u) == e {
+                break;
+            }
+            s = u;
+        }
+        chain
+    }
+
     /// True when the chain the closure of a split of `t`'s refinement edge follows (the
     /// triangle across an edge that is not its refinement edge, then across that one, ...)
     /// comes back to `t` or does not end.

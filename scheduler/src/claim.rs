@@ -76,9 +76,12 @@ impl ClaimTable {
         owned.iter().for_each(|&v| self.release_exclusive(v));
     }
 
-    /// True when nobody holds `v` in any way.
+    /// True when nobody holds `v` in any way (a vertex appended since the table last grew
+    /// is free).
     pub fn is_free(&self, v: VertexId) -> bool {
-        self.words[v as usize].load(Ordering::Acquire) == 0
+        self.words
+            .get(v as usize)
+            .is_none_or(|word| word.load(Ordering::Acquire) == 0)
     }
 }
 

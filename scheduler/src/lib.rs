@@ -89,9 +89,12 @@ pub trait Work<'a>: Sync {
     /// (otherwise it would be retried forever); in asynchronous mode its claim is held until
     /// that event has run, so the event sees `v`'s star as the tent left it. May queue events,
     /// but only events queued by [`Work::record`] run in a fixed order in deterministic mode.
+    ///
+    /// The tent reads the state through `lease`; it may let go of it while it solves
+    /// ([`Lease::unlocked`]), and events may then change the state away from its claim.
     fn tent(
         &self,
-        state: &Self::State,
+        lease: &mut Lease<'_, Self::State>,
         scratch: &mut Self::Scratch,
         v: VertexId,
         events: &Events<'a, Self::State>,
@@ -128,6 +131,121 @@ pub trait Work<'a>: Sync {
 /// changed.
 pub type Action<'a, S> = Box<dyn FnOnce(&mut S) -> Changed + Send + 'a>;
 
+/// A regional event: runs with the state held exclusively while tents in flight elsewhere go on
+/// solving ([`Lease::unlocked`]), and must leave their claims alone: it changes the star of no
+/// vertex that `region` says is held ([`Region::is_free`]), nor its time, nor its id.
+pub type RegionalAction<'a, S> = Box<dyn FnOnce(&mut S, &Region<'_>) -> Changed + Send + 'a>;
+
+/// What a regional event will change, asked with the state held exclusively just before it
+/// would run: the vertices whose stars, times or ids it changes. The event runs only when all of
+/// them are free, so that it runs whole or waits; it must still check [`Region::is_free`] for
+/// anything the list may have missed.
+pub type Probe<'a, S> = Box<dyn Fn(&S) -> Vec<VertexId> + Send + 'a>;
+
+/// Which vertices tents in flight hold, for a regional event.
+#[derive(Clone, Copy, Debug)]
+pub struct Region<'r> {
+    claims: Option<&'r ClaimTable>,
+}
+
+impl Region<'_> {
+    /// No tent is in flight: every vertex is free.
+    pub fn everything() -> Region<'static> {
+        Region { claims: None }
+    }
+
+    /// True when no tent in flight holds `v`: a regional event may change its star, its time
+    /// and its id.
+    pub fn is_free(&self, v: VertexId) -> bool {
+        self.claims.is_none_or(|claims| claims.is_free(v))
+    }
+}
+
+/// A queued event.
+enum Queued<'a, S> {
+    /// Runs with no tent in flight.
+    Exclusive(Action<'a, S>),
+    /// Runs beside tents in flight when its probe's vertices are free.
+    Regional(Probe<'a, S>, RegionalAction<'a, S>),
+}
+
+impl<S> Queued<'_, S> {
+    /// Runs the event with no tent in flight, and counts it run in `events`.
+    fn run_alone(self, state: &mut S, events: &Events<'_, S>) -> Changed {
+        let (changed, exclusive) = match self {
+            Queued::Exclusive(action) => (action(state), true),
+            Queued::Regional(_, action) => (action(state, &Region::everything()), false),
+        };
+        events.ran(exclusive);
+        changed
+    }
+}
+
+/// A tent's hold on the state: shared with other tents, exclusive of events. In asynchronous
+/// mode a tent may let go of it while it solves, so that events can run elsewhere meanwhile;
+/// in deterministic mode it is kept for the whole round.
+pub struct Lease<'l, S> {
+    hold: Hold<'l, S>,
+}
+
+impl<S> std::fmt::Debug for Lease<'_, S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let kind = match self.hold {
+            Hold::Kept(_) => "kept",
+            Hold::Lock(_) => "lock",
+        };
+        f.debug_struct("Lease").field("hold", &kind).finish()
+    }
+}
+
+enum Hold<'l, S> {
+    Kept(&'l S),
+    Lock(&'l mut dyn Relock<S>),
+}
+
+/// A read lock on the state that can be let go of for a while.
+trait Relock<S> {
+    fn state(&self) -> &S;
+    fn unlocked(&mut self, f: &mut dyn FnMut());
+}
+
+impl<'l, S> Lease<'l, S> {
+    /// A lease that holds `state` throughout: [`Lease::unlocked`] just runs its closure.
+    pub fn kept(state: &'l S) -> Self {
+        Self {
+            hold: Hold::Kept(state),
+        }
+    }
+
+    fn lock(lock: &'l mut dyn Relock<S>) -> Self {
+        Self {
+            hold: Hold::Lock(lock),
+        }
+    }
+
+    /// The state, shared.
+    pub fn state(&self) -> &S {
+        match &self.hold {
+            Hold::Kept(state) => state,
+            Hold::Lock(lock) => lock.state(),
+        }
+    }
+
+    /// Runs `f` without holding the state (the borrow of `&mut self` keeps every reference into
+    /// it out of `f`); the tent's claim stays held, so the events that may run meanwhile leave
+    /// its vertex's star, its neighbours' times and their ids as they are.
+    pub fn unlocked<T>(&mut self, f: impl FnOnce() -> T) -> T {
+        match &mut self.hold {
+            Hold::Kept(_) => f(),
+            Hold::Lock(lock) => {
+                let (mut f, mut out) = (Some(f), None);
+                lock.unlocked(&mut || out = f.take().map(|f| f()));
+                out.expect("the unlocked closure runs once")
+            }
+        }
+    }
+}
+
 /// What an event changed.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Changed {
@@ -140,9 +258,11 @@ pub struct Changed {
 
 /// The queue of pending events.
 pub struct Events<'a, S> {
-    queue: Mutex<Vec<Action<'a, S>>>,
+    queue: Mutex<Vec<Queued<'a, S>>>,
     /// Events pushed and not yet run.
     pending: AtomicUsize,
+    /// Exclusive events pushed and not yet run: tents stop starting until they have.
+    exclusive: AtomicUsize,
     /// An event pushed with [`Events::push_now`] is queued.
     urgent: AtomicBool,
 }
@@ -152,6 +272,7 @@ impl<S> Default for Events<'_, S> {
         Self {
             queue: Mutex::new(Vec::new()),
             pending: AtomicUsize::new(0),
+            exclusive: AtomicUsize::new(0),
             urgent: AtomicBool::new(false),
         }
     }
@@ -166,21 +287,33 @@ impl<S> std::fmt::Debug for Events<'_, S> {
 }
 
 impl<'a, S> Events<'a, S> {
-    /// Queues `action`. Deterministic mode runs queued events in the order they were pushed.
+    /// Queues `action`, to run with no tent in flight. Deterministic mode runs queued events
+    /// in the order they were pushed.
     pub fn push(&self, action: Action<'a, S>) {
-        self.queue.lock().push(action);
+        self.queue.lock().push(Queued::Exclusive(action));
+        self.exclusive.fetch_add(1, Ordering::AcqRel);
         self.pending.fetch_add(1, Ordering::AcqRel);
     }
 
-    /// Queues `action` to run before the next tent any worker starts, where the asynchronous
-    /// mode would otherwise let events gather into a batch: for events whose result depends
-    /// on when they run, such as a record of the whole front at a milestone time.
-    /// Deterministic mode runs every event after its round either way.
+    /// Queues `action` to run before the next tent any worker starts, with no tent in flight,
+    /// where the asynchronous mode would otherwise let events gather into a batch: for events
+    /// whose result depends on when they run, such as a record of the whole front at a
+    /// milestone time. Deterministic mode runs every event after its round either way.
     pub fn push_now(&self, action: Action<'a, S>) {
         let mut queue = self.queue.lock();
-        queue.push(action);
+        queue.push(Queued::Exclusive(action));
+        self.exclusive.fetch_add(1, Ordering::AcqRel);
         self.pending.fetch_add(1, Ordering::AcqRel);
         self.urgent.store(true, Ordering::Release);
+    }
+
+    /// Queues the regional event `action`, which changes the state only at the vertices
+    /// `probe` lists (see [`Probe`] and [`RegionalAction`]): asynchronous mode runs it beside
+    /// the tents in flight once they hold none of them. Deterministic mode runs it after its
+    /// round, in push order with the others.
+    pub fn push_regional(&self, probe: Probe<'a, S>, action: RegionalAction<'a, S>) {
+        self.queue.lock().push(Queued::Regional(probe, action));
+        self.pending.fetch_add(1, Ordering::AcqRel);
     }
 
     /// True when an event pushed with [`Events::push_now`] waits.
@@ -188,11 +321,35 @@ impl<'a, S> Events<'a, S> {
         self.urgent.load(Ordering::Acquire)
     }
 
+    /// True when an event that needs every tent finished waits.
+    fn has_exclusive(&self) -> bool {
+        self.exclusive.load(Ordering::Acquire) > 0
+    }
+
     /// Takes every queued event, in push order.
-    fn take(&self) -> Vec<Action<'a, S>> {
+    fn take(&self) -> Vec<Queued<'a, S>> {
         let mut queue = self.queue.lock();
         self.urgent.store(false, Ordering::Release);
         std::mem::take(&mut *queue)
+    }
+
+    /// Puts back events taken by [`Events::take`] that could not run yet, ahead of those
+    /// pushed since, in their order.
+    fn put_back(&self, events: Vec<Queued<'a, S>>) {
+        if events.is_empty() {
+            return;
+        }
+        let mut queue = self.queue.lock();
+        let later = std::mem::replace(&mut *queue, events);
+        queue.extend(later);
+    }
+
+    /// Counts one event run.
+    fn ran(&self, exclusive: bool) {
+        if exclusive {
+            self.exclusive.fetch_sub(1, Ordering::AcqRel);
+        }
+        self.pending.fetch_sub(1, Ordering::AcqRel);
     }
 }
 

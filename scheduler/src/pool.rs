@@ -6,20 +6,22 @@
 //! neighbours back as candidates. A candidate that is not ready or cannot be claimed is dropped:
 //! whatever blocks it (an earlier neighbour, or a claim around it) pushes it again when it
 //! changes. Workers with nothing to do sleep on a condition variable. Tents hold the state
-//! shared (a read lock); events run in batches that take it exclusively between tents, and a
-//! tent that leaves its vertex in place keeps its claim until its event has run. See
-//! `scheduler/README.md`.
+//! shared (a read lock) and let go of it while they solve ([`Lease::unlocked`]); events run in
+//! batches that take it exclusively. A regional event runs beside the tents that are solving
+//! once none of them holds a vertex it changes, and waits otherwise; an exclusive one waits until
+//! no tent is in flight, and no tent starts meanwhile. A tent that leaves its vertex in place
+//! keeps its claim until the next batch of events. See `scheduler/README.md`.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 
 use crossbeam_deque::{Injector, Steal, Stealer, Worker};
-use parking_lot::{Condvar, Mutex, RwLock};
+use parking_lot::{Condvar, Mutex, RwLock, RwLockReadGuard};
 
 use crate::claim::ClaimTable;
 use crate::{
-    Clock, Events, RunError, State, Stats, VertexId, Work, below_end, is_first_among_neighbours,
-    panic_message,
+    Clock, Events, Lease, Queued, Region, Relock, RunError, State, Stats, VertexId, Work,
+    below_end, is_first_among_neighbours, panic_message,
 };
 
 /// Queued events that make a worker run them before its next tent; fewer wait until a worker
@@ -32,6 +34,16 @@ const EVENT_BATCH: usize = 32;
 struct Locked<'s, S> {
     state: &'s mut S,
     claims: ClaimTable,
+}
+
+impl<S> Relock<S> for RwLockReadGuard<'_, Locked<'_, S>> {
+    fn state(&self) -> &S {
+        self.state
+    }
+
+    fn unlocked(&mut self, f: &mut dyn FnMut()) {
+        RwLockReadGuard::unlocked(self, f);
+    }
 }
 
 /// State shared by the workers of one run.
@@ -60,6 +72,30 @@ struct Shared<'s, 'a, W: Work<'a>> {
     wait_time: Clock,
     /// Claims of tents that left their vertex in place, held until their events have run.
     held: Mutex<Vec<(VertexId, Vec<VertexId>)>>,
+    /// Tents claimed and not yet released; changed only with the state's lock held, so that
+    /// with it held exclusively this counts the tents solving without it.
+    in_flight: AtomicUsize,
+    /// Tents released so far.
+    releases: AtomicU64,
+    /// Regional events the last batch put back because tents in flight held their vertices,
+    /// and [`Shared::releases`] then: they are worth another try once a tent is released.
+    refused: AtomicUsize,
+    refused_at: AtomicU64,
+}
+
+impl<'a, W: Work<'a>> Shared<'_, 'a, W> {
+    /// True when a batch of events would run something: an event not put back by the last
+    /// batch is queued, or a tent was released since.
+    fn events_runnable(&self) -> bool {
+        self.events.pending.load(Ordering::SeqCst) > self.refused.load(Ordering::SeqCst)
+            || self.releases.load(Ordering::SeqCst) != self.refused_at.load(Ordering::SeqCst)
+    }
+
+    /// Events queued since the last batch.
+    fn fresh_events(&self) -> usize {
+        let pending = self.events.pending.load(Ordering::Acquire);
+        pending.saturating_sub(self.refused.load(Ordering::Acquire))
+    }
 }
 
 pub(crate) fn run<'a, W: Work<'a>>(
@@ -97,6 +133,10 @@ pub(crate) fn run<'a, W: Work<'a>>(
         event_time: Clock::default(),
         wait_time: Clock::default(),
         held: Mutex::new(Vec::new()),
+        in_flight: AtomicUsize::new(0),
+        releases: AtomicU64::new(0),
+        refused: AtomicUsize::new(0),
+        refused_at: AtomicU64::new(0),
     };
     for v in ready {
         shared.queued.fetch_add(1, Ordering::SeqCst);
@@ -127,9 +167,11 @@ pub(crate) fn run<'a, W: Work<'a>>(
     // the end: no tent is in flight any more, so they run here in queue order.
     let locked = shared.locked.into_inner();
     let draining = std::time::Instant::now();
-    for action in shared.events.take() {
-        let changed = catch_unwind(AssertUnwindSafe(|| action(locked.state)))
-            .map_err(|payload| RunError::Panic(panic_message(payload)))?;
+    for event in shared.events.take() {
+        let changed = catch_unwind(AssertUnwindSafe(|| {
+            event.run_alone(locked.state, &shared.events)
+        }))
+        .map_err(|payload| RunError::Panic(panic_message(payload)))?;
         count_remaining(&shared.remaining, changed.below_end);
         shared.events_run.fetch_add(1, Ordering::Relaxed);
     }
@@ -171,8 +213,17 @@ fn worker<'a, W: Work<'a>>(
             wake_all(shared);
             return;
         }
-        if shared.events.is_urgent() || shared.events.pending.load(Ordering::Acquire) >= EVENT_BATCH
-        {
+        if shared.events.has_exclusive() {
+            // No tent starts until the exclusive events have run; the last tent in flight
+            // wakes the workers.
+            if shared.in_flight.load(Ordering::SeqCst) == 0 {
+                run_events(shared, local);
+            } else {
+                drain(shared);
+            }
+            continue;
+        }
+        if shared.events.is_urgent() || shared.fresh_events() >= EVENT_BATCH {
             run_events(shared, local);
         }
         match find(shared, id, local) {
@@ -181,7 +232,7 @@ fn worker<'a, W: Work<'a>>(
                 tent(shared, id, local, &mut scratch, v);
             }
             // Nothing to claim: whatever held claims block is waiting for the queued events.
-            None if shared.events.pending.load(Ordering::Acquire) > 0 => run_events(shared, local),
+            None if shared.events_runnable() => run_events(shared, local),
             None => sleep(shared),
         }
     }
@@ -224,7 +275,7 @@ fn offer<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<VertexId>, 
 fn sleep<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>) {
     let mut sleeping = shared.sleep.lock();
     if shared.queued.load(Ordering::SeqCst) > 0
-        || shared.events.pending.load(Ordering::SeqCst) > 0
+        || shared.events_runnable()
         || shared.stop.load(Ordering::SeqCst)
         || shared.remaining.load(Ordering::SeqCst) == 0
     {
@@ -235,6 +286,32 @@ fn sleep<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>) {
     shared.wake.wait(&mut sleeping);
     shared.wait_time.add_since(asleep);
     *sleeping -= 1;
+}
+
+/// Sleeps until no tent is in flight while an exclusive event waits, or the run ends.
+fn drain<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>) {
+    let mut sleeping = shared.sleep.lock();
+    if !shared.events.has_exclusive()
+        || shared.in_flight.load(Ordering::SeqCst) == 0
+        || shared.stop.load(Ordering::SeqCst)
+        || shared.remaining.load(Ordering::SeqCst) == 0
+    {
+        return;
+    }
+    *sleeping += 1;
+    let asleep = std::time::Instant::now();
+    shared.wake.wait(&mut sleeping);
+    shared.wait_time.add_since(asleep);
+    *sleeping -= 1;
+}
+
+/// Counts a tent released, with the state's lock still held; the last tent in flight wakes the
+/// workers waiting for exclusive events.
+fn finish<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>) {
+    shared.releases.fetch_add(1, Ordering::SeqCst);
+    if shared.in_flight.fetch_sub(1, Ordering::SeqCst) == 1 && shared.events.has_exclusive() {
+        wake_all(shared);
+    }
 }
 
 /// Wakes every worker (the run ends or an event needs attention).
@@ -253,42 +330,45 @@ fn tent<'a, W: Work<'a>>(
     v: VertexId,
 ) {
     let asked = std::time::Instant::now();
-    let locked = shared.locked.read();
+    let mut locked = shared.locked.read();
     shared.wait_time.add_since(asked);
-    let state = &*locked.state;
-    if !is_first_among_neighbours(state, shared.t_end, v) {
-        return;
+    {
+        let state = &*locked.state;
+        if !is_first_among_neighbours(state, shared.t_end, v)
+            || !(locked.claims).try_claim(&[v], state.mesh().vertex_neighbors(v))
+        {
+            return;
+        }
     }
-    let neighbours = state.mesh().vertex_neighbors(v);
-    if !locked.claims.try_claim(&[v], neighbours) {
-        return;
-    }
-    let t_old = state.front().time(v);
-    // Claimed: the times of v and its neighbours cannot change until the release.
-    let result = if is_first_among_neighbours(state, shared.t_end, v) {
+    shared.in_flight.fetch_add(1, Ordering::SeqCst);
+    let t_old = locked.state.front().time(v);
+    // Claimed: the times of v and its neighbours cannot change until the release, nor can any
+    // event change their stars or ids while the tent solves without the lock.
+    let result = if is_first_among_neighbours(&*locked.state, shared.t_end, v) {
+        let mut lease = Lease::lock(&mut locked);
+        let work = shared.work;
         Some(
-            shared
-                .work
-                .tent(state, scratch, v, &shared.events)
+            work.tent(&mut lease, scratch, v, &shared.events)
                 .and_then(|(t, outcome)| {
-                    shared
-                        .work
-                        .record(state, v, outcome, &shared.events)
+                    work.record(lease.state(), v, outcome, &shared.events)
                         .map(|()| t)
                 }),
         )
     } else {
         None
     };
+    let neighbours = locked.state.mesh().vertex_neighbors(v);
     let in_place = matches!(result, Some(Ok(t)) if t <= t_old);
     if in_place && shared.events.pending.load(Ordering::Acquire) > 0 {
-        // Left in place: its event is queued. Keep the star as the tent saw it until the event
-        // has run, and leave `v` out of the candidates meanwhile.
+        // Left in place: its event is queued. Keep the star as the tent saw it until the
+        // events run, and leave `v` out of the candidates meanwhile.
         shared.held.lock().push((v, neighbours.to_vec()));
         shared.tents[id].fetch_add(1, Ordering::Relaxed);
+        finish(shared);
         return;
     }
     locked.claims.release(&[v], neighbours);
+    finish(shared);
     match result {
         Some(Ok(t)) => {
             shared.tents[id].fetch_add(1, Ordering::Relaxed);
@@ -320,10 +400,11 @@ fn count_remaining(remaining: &AtomicUsize, delta: isize) {
     }
 }
 
-/// Runs every queued event with the state held exclusively (waiting for the tents in flight):
-/// first releases the held claims (before any event renumbers vertices), then runs the events
-/// in queue order and offers the held vertices, their neighbours and whatever the events touched
-/// or appended.
+/// Runs queued events with the state held exclusively while the tents in flight solve without
+/// it: first releases the held claims (before any event renumbers vertices), then runs the
+/// events in queue order: an exclusive one only when no tent is in flight, a regional one when
+/// no tent in flight holds a vertex its probe lists. The others are put back, ahead of later
+/// ones. Offers the held vertices, their neighbours and whatever the events touched or appended.
 fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<VertexId>) {
     if shared.events.pending.load(Ordering::Acquire) == 0 {
         return;
@@ -331,26 +412,54 @@ fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<Vertex
     let asked = std::time::Instant::now();
     let mut locked = shared.locked.write();
     shared.wait_time.add_since(asked);
-    let actions = shared.events.take();
-    if actions.is_empty() {
+    let events = shared.events.take();
+    if events.is_empty() {
         return;
     }
     let running = std::time::Instant::now();
+    let Locked { state, claims } = &mut *locked;
     let mut touched = Vec::new();
     for (v, neighbours) in shared.held.lock().drain(..) {
-        locked.claims.release(&[v], &neighbours);
+        claims.release(&[v], &neighbours);
         touched.push(v);
         touched.extend(neighbours);
     }
-    for action in actions {
-        let changed = action(locked.state);
-        let vertices = locked.state.mesh().vertices().len();
-        locked.claims.grow(vertices);
+    // With the lock held exclusively, the tents in flight are solving without it.
+    let alone = shared.in_flight.load(Ordering::SeqCst) == 0;
+    let (mut waiting, mut refused) = (Vec::new(), 0);
+    for event in events {
+        let changed = match event {
+            Queued::Exclusive(action) if alone => {
+                let changed = action(state);
+                shared.events.ran(true);
+                changed
+            }
+            Queued::Regional(probe, action)
+                if alone || probe(&**state).iter().all(|&v| claims.is_free(v)) =>
+            {
+                let changed = action(
+                    state,
+                    &Region {
+                        claims: Some(claims),
+                    },
+                );
+                shared.events.ran(false);
+                changed
+            }
+            event => {
+                refused += usize::from(matches!(event, Queued::Regional(..)));
+                waiting.push(event);
+                continue;
+            }
+        };
+        claims.grow(state.mesh().vertices().len());
         count_remaining(&shared.remaining, changed.below_end);
         touched.extend(changed.offer);
         shared.events_run.fetch_add(1, Ordering::Relaxed);
-        shared.events.pending.fetch_sub(1, Ordering::AcqRel);
     }
+    shared.events.put_back(waiting);
+    shared.refused.store(refused, Ordering::SeqCst);
+    (shared.refused_at).store(shared.releases.load(Ordering::SeqCst), Ordering::SeqCst);
     let end_reached = shared.remaining.load(Ordering::SeqCst) == 0;
     drop(locked);
     shared.event_time.add_since(running);

@@ -15,7 +15,8 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use parking_lot::{Mutex, RwLock};
 
 use crate::{
-    Clock, Events, RunError, State, Stats, VertexId, Work, below_end, is_ready, panic_message,
+    Clock, Events, Lease, RunError, State, Stats, VertexId, Work, below_end, is_ready,
+    panic_message,
 };
 
 /// What a worker's tent gave: its outcome or error, or the message of its panic.
@@ -73,7 +74,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 // A panic is handed to the calling thread, which ends the run; the solving
                 // thread goes on to the barrier so that nobody waits for it.
                 let result = catch_unwind(AssertUnwindSafe(|| {
-                    work.tent(&**state, scratch, v, &events).map(|(_, o)| o)
+                    work.tent(&mut Lease::kept(&**state), scratch, v, &events)
+                        .map(|(_, o)| o)
                 }))
                 .map_err(panic_message);
                 *r.results[i].lock() = Some(result);
@@ -191,9 +193,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 serial += recording.elapsed();
                 let mut guard = state.write();
                 let running = std::time::Instant::now();
-                for action in events.take() {
-                    action(&mut **guard);
-                    events.pending.fetch_sub(1, Ordering::AcqRel);
+                for event in events.take() {
+                    event.run_alone(&mut **guard, &events);
                     stats.events += 1;
                     scan_all = true;
                 }

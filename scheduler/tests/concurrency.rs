@@ -1,5 +1,6 @@
-//! The scheduler under load: no two tents in flight are neighbours, every tent is causal, events
-//! run with no tent in flight, and single-thread runs finish in both modes.
+//! The scheduler under load: no two tents in flight are neighbours, every tent is causal,
+//! exclusive events run with no tent in flight, regional ones beside tents that hold none of their
+//! vertices, and single-thread runs finish in both modes.
 
 #![cfg(not(loom))]
 
@@ -9,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use parking_lot::Mutex;
 use sdg_mesh::{Diagonal, Front, Mesh, Pitcher, Point, Rectangle};
-use sdg_scheduler::{Changed, Events, Fixed, Options, RunError, VertexId, Work};
+use sdg_scheduler::{Changed, Events, Fixed, Lease, Options, Region, RunError, VertexId, Work};
 
 const C: f64 = 1.0;
 const SAFETY: f64 = 0.9;
@@ -30,7 +31,8 @@ fn perturbed(n: u32) -> Mesh {
 }
 
 /// Pitches tents and checks the claim contract from inside each tent; every `event_every`-th
-/// record queues a smoothing event that moves the recorded vertex.
+/// record queues a smoothing event that moves the recorded vertex: exclusive, or with `regional`
+/// a regional event, while tents solve without the state's lock.
 struct Checked<'m> {
     mesh: PhantomData<&'m Mesh>,
     pitcher: Pitcher,
@@ -41,7 +43,10 @@ struct Checked<'m> {
     positions: Vec<Mutex<Point>>,
     records: AtomicUsize,
     event_every: usize,
+    regional: bool,
     events_run: AtomicU64,
+    /// Regional events that ran while some tent was in flight.
+    overlapped: AtomicU64,
     max_slope: Mutex<f64>,
     /// [`Work::pause`] answers true once this many tents are recorded (until the next run).
     pause_after: AtomicUsize,
@@ -58,20 +63,30 @@ impl Checked<'_> {
             positions: mesh.vertices().iter().map(|&p| Mutex::new(p)).collect(),
             records: AtomicUsize::new(0),
             event_every,
+            regional: false,
             events_run: AtomicU64::new(0),
+            overlapped: AtomicU64::new(0),
             max_slope: Mutex::new(0.0),
             pause_after: AtomicUsize::new(usize::MAX),
         }
     }
 
     /// Moves `v` a little towards the mean of its neighbours: the test event. No tent may be in
-    /// flight.
+    /// flight at `v` or a neighbour of it (whose stars it changes), and with an exclusive event
+    /// none at all.
     fn smooth(&self, mesh: &Mesh, v: VertexId) {
+        let star: Vec<VertexId> = [v]
+            .into_iter()
+            .chain(mesh.vertex_neighbors(v).iter().copied())
+            .collect();
         for (u, flag) in self.in_flight.iter().enumerate() {
-            assert!(
-                !flag.load(Ordering::SeqCst),
-                "event at {v} overlaps a tent at {u}"
-            );
+            if flag.load(Ordering::SeqCst) {
+                assert!(
+                    self.regional && !star.contains(&(u as VertexId)),
+                    "event at {v} overlaps a tent at {u}"
+                );
+                self.overlapped.fetch_add(1, Ordering::Relaxed);
+            }
         }
         self.in_event[v as usize].store(true, Ordering::SeqCst);
         let neighbours = mesh.vertex_neighbors(v);
@@ -103,12 +118,12 @@ where
 
     fn tent(
         &self,
-        state: &Fixed<'m>,
+        lease: &mut Lease<'_, Fixed<'m>>,
         _: &mut (),
         v: VertexId,
         _: &Events<'a, Fixed<'m>>,
     ) -> Result<(f64, ()), String> {
-        let Fixed { mesh, front } = *state;
+        let Fixed { mesh, front } = *lease.state();
         if self.in_flight[v as usize].swap(true, Ordering::SeqCst) {
             return Err(format!("vertex {v} claimed twice"));
         }
@@ -121,11 +136,13 @@ where
             }
         }
         // The star's positions must not move while the tent is in flight.
-        let before: Vec<Point> = mesh
-            .vertex_neighbors(v)
-            .iter()
-            .map(|&u| *self.positions[u as usize].lock())
-            .collect();
+        let star = || {
+            [v].iter()
+                .chain(mesh.vertex_neighbors(v))
+                .map(|&u| *self.positions[u as usize].lock())
+                .collect::<Vec<Point>>()
+        };
+        let before = star();
         let tent = self
             .pitcher
             .pitch(mesh, front, v)
@@ -137,13 +154,13 @@ where
         if slope >= SAFETY {
             return Err(format!("tent at {v}: slope ratio {slope}"));
         }
-        std::hint::black_box((0..200).fold(0u64, |a, i| a.wrapping_mul(31).wrapping_add(i)));
-        let after: Vec<Point> = mesh
-            .vertex_neighbors(v)
-            .iter()
-            .map(|&u| *self.positions[u as usize].lock())
-            .collect();
-        if before != after {
+        lease.unlocked(|| {
+            std::hint::black_box((0..200).fold(0u64, |a, i| a.wrapping_mul(31).wrapping_add(i)));
+            if self.regional {
+                std::thread::sleep(Duration::from_micros(20));
+            }
+        });
+        if before != star() {
             return Err(format!("star of {v} moved during its tent"));
         }
         let mut max = self.max_slope.lock();
@@ -161,14 +178,26 @@ where
         events: &Events<'a, Fixed<'m>>,
     ) -> Result<(), String> {
         let k = self.records.fetch_add(1, Ordering::Relaxed);
+        let moved = Changed {
+            offer: vec![v],
+            below_end: 0,
+        };
         if self.event_every > 0 && k.is_multiple_of(self.event_every) {
-            events.push(Box::new(move |state: &mut Fixed<'m>| {
-                self.smooth(state.mesh, v);
-                Changed {
-                    offer: vec![v],
-                    below_end: 0,
-                }
-            }));
+            if self.regional {
+                events.push_regional(
+                    Box::new(move |_: &Fixed<'m>| vec![v]),
+                    Box::new(move |state: &mut Fixed<'m>, region: &Region<'_>| {
+                        assert!(region.is_free(v), "a regional event at {v} ran held");
+                        self.smooth(state.mesh, v);
+                        moved
+                    }),
+                );
+            } else {
+                events.push(Box::new(move |state: &mut Fixed<'m>| {
+                    self.smooth(state.mesh, v);
+                    moved
+                }));
+            }
         }
         Ok(())
     }
@@ -179,9 +208,23 @@ where
 }
 
 fn run(mesh: &Mesh, threads: usize, deterministic: bool, event_every: usize) -> (u64, u64) {
+    let (tents, events, _) = run_with(mesh, threads, deterministic, event_every, false);
+    (tents, events)
+}
+
+/// [`run`], with regional events when `regional`; also returns how many events overlapped a
+/// tent in flight.
+fn run_with(
+    mesh: &Mesh,
+    threads: usize,
+    deterministic: bool,
+    event_every: usize,
+    regional: bool,
+) -> (u64, u64, u64) {
     let t_end = 3.0 / 16.0;
     let front = Front::flat(mesh.vertices().len(), 0.0);
-    let work = Checked::new(mesh, t_end, event_every);
+    let mut work = Checked::new(mesh, t_end, event_every);
+    work.regional = regional;
     let options = Options {
         threads,
         deterministic,
@@ -200,7 +243,11 @@ fn run(mesh: &Mesh, threads: usize, deterministic: bool, event_every: usize) -> 
     assert_eq!(stats.tents_per_thread.len(), threads);
     assert!(*work.max_slope.lock() < SAFETY);
     assert!(work.in_flight.iter().all(|f| !f.load(Ordering::SeqCst)));
-    (stats.tents, work.events_run.load(Ordering::Relaxed))
+    (
+        stats.tents,
+        work.events_run.load(Ordering::Relaxed),
+        work.overlapped.load(Ordering::Relaxed),
+    )
 }
 
 /// Pauses a run after `pause_after` records, checks that it stopped quiescent, and resumes it
@@ -269,6 +316,20 @@ fn events_run_exclusively_and_move_the_mesh() {
 }
 
 #[test]
+fn regional_events_run_beside_tents_that_hold_none_of_their_vertices() {
+    let mesh = perturbed(16);
+    let (tents, events, overlapped) = run_with(&mesh, 4, false, 5, true);
+    assert_eq!(events, tents.div_ceil(5), "every queued event ran");
+    assert!(overlapped > 0, "no event ran beside a tent in flight");
+    let (tents, events, overlapped) = run_with(&mesh, 4, true, 5, true);
+    assert_eq!(events, tents.div_ceil(5), "every queued event ran");
+    assert_eq!(
+        overlapped, 0,
+        "deterministic rounds run events between rounds"
+    );
+}
+
+#[test]
 fn single_thread_runs_finish() {
     for mesh in [perturbed(8), perturbed(20)] {
         for deterministic in [false, true] {
@@ -293,7 +354,7 @@ fn work_errors_stop_the_run() {
         type Error = &'static str;
         fn tent(
             &self,
-            _: &Fixed<'m>,
+            _: &mut Lease<'_, Fixed<'m>>,
             _: &mut (),
             _: VertexId,
             _: &Events<'a, Fixed<'m>>,
@@ -358,11 +419,12 @@ fn panics_end_the_run_with_their_message() {
         type Error = &'static str;
         fn tent(
             &self,
-            state: &Fixed<'m>,
+            lease: &mut Lease<'_, Fixed<'m>>,
             _: &mut (),
             v: VertexId,
             _: &Events<'a, Fixed<'m>>,
         ) -> Result<(f64, ()), &'static str> {
+            let state = *lease.state();
             let call = self.calls.fetch_add(1, Ordering::SeqCst);
             if call == 40 && matches!(self.at, Where::Tent) {
                 panic!("tent {call} panics");
@@ -450,11 +512,12 @@ impl<'a, 'm: 'a> Work<'a> for Listed<'m> {
 
     fn tent(
         &self,
-        state: &Fixed<'m>,
+        lease: &mut Lease<'_, Fixed<'m>>,
         _: &mut (),
         v: VertexId,
         _: &Events<'a, Fixed<'m>>,
     ) -> Result<(f64, ()), String> {
+        let state = *lease.state();
         let tent = self
             .pitcher
             .pitch(state.mesh, state.front, v)
@@ -558,12 +621,12 @@ impl<'a, 'm: 'a> Work<'a> for Deferring<'m> {
 
     fn tent(
         &self,
-        state: &Fixed<'m>,
+        lease: &mut Lease<'_, Fixed<'m>>,
         _: &mut (),
         v: VertexId,
         _: &Events<'a, Fixed<'m>>,
     ) -> Result<(f64, Self::Outcome), String> {
-        let Fixed { mesh, front } = *state;
+        let Fixed { mesh, front } = *lease.state();
         if v.is_multiple_of(5)
             && self.visits[v as usize]
                 .fetch_add(1, Ordering::Relaxed)

@@ -3,8 +3,8 @@
 
 use std::sync::atomic::Ordering;
 
-use sdg_mesh::{SplitError, TriangleId};
-use sdg_scheduler::{Changed, VertexId};
+use sdg_mesh::{Mesh, SplitError, TriangleId};
+use sdg_scheduler::{Changed, Region, VertexId};
 use sdg_solver::interface::Law;
 use sdg_solver::patch::{PatchReport, PatchSolver};
 
@@ -213,6 +213,7 @@ impl Solve<'_> {
     pub(super) fn refine(
         &self,
         state: &mut Frontier,
+        region: &Region<'_>,
         v: VertexId,
         at: [f64; 2],
         star: &[(TriangleId, [VertexId; 3])],
@@ -229,6 +230,7 @@ impl Solve<'_> {
             if unchanged(state, t, corners) {
                 state.refine(
                     t,
+                    region,
                     adapt.min_edge,
                     self.max_star,
                     &|corners| self.initial_energy(corners),
@@ -262,6 +264,7 @@ impl Solve<'_> {
     pub(super) fn split_at(
         &self,
         state: &mut Frontier,
+        region: &Region<'_>,
         t: TriangleId,
         corner: Option<usize>,
         fraction: f64,
@@ -275,6 +278,7 @@ impl Solve<'_> {
             t,
             corner,
             fraction,
+            region,
             limits,
             &|corners| self.initial_energy(corners),
             &mut refined,
@@ -331,7 +335,14 @@ pub(super) fn refine_to_max_edge(
             continue;
         }
         let before = state.mesh.triangles().len();
-        state.refine(t, adapt.min_edge, max_star, &|_| 0.0, &mut refined);
+        state.refine(
+            t,
+            &Region::everything(),
+            adapt.min_edge,
+            max_star,
+            &|_| 0.0,
+            &mut refined,
+        );
         if state.mesh.triangles().len() == before {
             return Err(format!(
                 "adapt.max_edge or adapt.zone: an edge of {limit} m cannot be reached at \
@@ -341,4 +352,68 @@ pub(super) fn refine_to_max_edge(
         }
     }
     Ok(())
+}
+
+/// Longest closure chain a region probe follows ([`Mesh::bisection_chain`]); a refinement
+/// checks every split it makes against the claims, past that too.
+const PROBE_CHAIN: usize = 64;
+
+/// The vertices a refinement of `triangles` changes as the mesh is now
+/// ([`sdg_scheduler::Probe`]): the corners of the triangles the closures of their bisections
+/// split. Ids past the mesh are left out.
+pub(super) fn refinement_region(
+    mesh: &Mesh,
+    triangles: impl IntoIterator<Item = TriangleId>,
+) -> Vec<VertexId> {
+    let count = mesh.triangles().len();
+    let mut region: Vec<VertexId> = triangles
+        .into_iter()
+        .filter(|&t| (t as usize) < count)
+        .flat_map(|t| mesh.bisection_chain(t, PROBE_CHAIN))
+        .flat_map(|t| mesh.triangles()[t as usize])
+        .collect();
+    region.sort_unstable();
+    region.dedup();
+    region
+}
+
+/// The vertices a crack extension from the tip `v` changes: those of refining its star and the
+/// triangles across the edges opposite `v`, where a split toward `v` sends the closure.
+pub(super) fn extension_region(mesh: &Mesh, v: VertexId) -> Vec<VertexId> {
+    if v as usize >= mesh.vertices().len() {
+        return Vec::new();
+    }
+    let star = mesh.vertex_triangles(v);
+    let across = star.iter().filter_map(|&t| {
+        let [a, b] = mesh.triangles()[t as usize]
+            .into_iter()
+            .filter(|&w| w != v)
+            .collect::<Vec<_>>()
+            .try_into()
+            .ok()?;
+        let e = mesh.edge_between(a, b)?;
+        mesh.edges()[e as usize]
+            .triangles
+            .into_iter()
+            .flatten()
+            .find(|&u| u != t)
+    });
+    refinement_region(mesh, star.iter().copied().chain(across))
+}
+
+/// The vertices a coarsening that removes `m` changes: `m` and its neighbours, and the last
+/// vertex, the corners of the last two triangles and the ends of the last three edges, which
+/// the removal may move into the freed ids ([`sdg_mesh::Merge`]).
+pub(super) fn coarsening_region(mesh: &Mesh, m: VertexId) -> Vec<VertexId> {
+    let n = mesh.vertices().len();
+    if m as usize >= n {
+        return Vec::new();
+    }
+    let mut region = vec![m, n as VertexId - 1];
+    region.extend(mesh.vertex_neighbors(m));
+    region.extend(mesh.triangles().iter().rev().take(2).flatten());
+    region.extend(mesh.edges().iter().rev().take(3).flat_map(|e| e.vertices));
+    region.sort_unstable();
+    region.dedup();
+    region
 }

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use sdg_mesh::{Front, Mesh, Pitcher, SplitError, TriangleId};
-use sdg_scheduler::Changed;
+use sdg_scheduler::{Changed, Region};
 use sdg_solver::basis::Basis;
 use sdg_solver::element::FrontSolution;
 use sdg_solver::norms::{FrontEnergy, front_energy};
@@ -111,7 +111,9 @@ impl Live<'_> {
     /// a step was refused (the steps before it stay done). Errors (bad `t` or `fraction`, a
     /// degenerate child) change nothing.
     pub fn split_at(&mut self, t: TriangleId, fraction: f64) -> Result<bool, SplitError> {
-        let (split, changed, _) = self.solve.split_at(self.state, t, None, fraction)?;
+        let everything = Region::everything();
+        let (split, changed, _) =
+            (self.solve).split_at(self.state, &everything, t, None, fraction)?;
         self.changed.offer.extend(changed.offer);
         self.changed.below_end += changed.below_end;
         Ok(split)

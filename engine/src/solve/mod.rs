@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use parking_lot::Mutex;
 
 use sdg_mesh::{Front, Mesh, Pitcher, TagId, Tent, TriangleId};
-use sdg_scheduler::{Changed, Events, VertexId, Work};
+use sdg_scheduler::{Changed, Events, Lease, Region, VertexId, Work};
 use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::norms::{front_energy, initial_energy, slice_errors};
@@ -43,7 +43,7 @@ mod network;
 mod propagation;
 mod summary;
 
-use adaptivity::refine_to_max_edge;
+use adaptivity::{coarsening_region, extension_region, refine_to_max_edge, refinement_region};
 use book::{Book, Milestone, Milestones};
 pub use checkpoint::Control;
 use checkpoint::Counts;
@@ -168,10 +168,11 @@ impl Solve<'_> {
     /// [`Work::tent`] without its trace.
     fn solve_tent(
         &self,
-        state: &Frontier,
+        lease: &mut Lease<'_, Frontier>,
         solver: &mut PatchSolver,
         v: VertexId,
     ) -> Result<(f64, Outcome), EngineError> {
+        let state = lease.state();
         let (mesh, front) = (&state.mesh, &state.front);
         let star = mesh.vertex_triangles(v);
         if star.len() > self.max_star {
@@ -196,14 +197,12 @@ impl Solve<'_> {
             t_old: front.time(v),
             t_new,
         };
-        let solved = solver.solve(
-            mesh,
-            front,
-            &tent,
-            &self.problem.boundary,
-            self.initial,
-            &state.solution,
-        );
+        solver.prepare(mesh, front, &tent, &state.solution);
+        // The claim keeps the star as it is while events run elsewhere.
+        let solved = lease.unlocked(|| solver.solve_prepared(&self.problem.boundary, self.initial));
+        let state = lease.state();
+        let (mesh, front) = (&state.mesh, &state.front);
+        let star = mesh.vertex_triangles(v);
         let report = match solved {
             Ok(report) => report,
             Err(failure) => {
@@ -572,6 +571,20 @@ impl Solve<'_> {
     }
 }
 
+impl<'a> Solve<'a> {
+    /// Queues the extension of the tip at `v` as a regional event.
+    fn push_extension(&'a self, events: &Events<'a, Frontier>, v: VertexId, extension: Extension) {
+        events.push_regional(
+            Box::new(move |state: &Frontier| extension_region(&state.mesh, v)),
+            Box::new(move |state: &mut Frontier, region: &Region<'_>| {
+                self.traced_region(state, None, |state| {
+                    self.extend(state, region, v, &extension)
+                })
+            }),
+        );
+    }
+}
+
 impl<'a> Work<'a> for Solve<'a> {
     type State = Frontier;
     type Scratch = PatchSolver;
@@ -580,16 +593,16 @@ impl<'a> Work<'a> for Solve<'a> {
 
     fn tent(
         &self,
-        state: &Frontier,
+        lease: &mut Lease<'_, Frontier>,
         solver: &mut PatchSolver,
         v: VertexId,
         _: &Events<'a, Frontier>,
     ) -> Result<(f64, Outcome), EngineError> {
         let Some(tracer) = &self.tracer else {
-            return self.solve_tent(state, solver, v);
+            return self.solve_tent(lease, solver, v);
         };
-        let begun = tracer.begin(&state.mesh, v);
-        let result = self.solve_tent(state, solver, v);
+        let begun = tracer.begin(&lease.state().mesh, v);
+        let result = self.solve_tent(lease, solver, v);
         if let Ok((_, outcome)) = &result {
             let (kind, changed) = match outcome {
                 Outcome::Accepted { report, .. } if report.newton_iterations > 0 => {
@@ -634,19 +647,13 @@ impl<'a> Work<'a> for Solve<'a> {
                     book.timings.output_s += started.elapsed().as_secs_f64();
                 }
                 if let Some(extension) = extension {
-                    events.push(Box::new(move |state: &mut Frontier| {
-                        self.traced_region(state, None, |state| self.extend(state, v, &extension))
-                    }));
+                    self.push_extension(events, v, extension);
                 }
                 if self.problem.fracture.is_some() {
                     // The tent changed the front over the triangles of its neighbours' stars.
                     for &u in state.mesh.vertex_neighbors(v) {
                         if let Some(retry) = Extension::retry(state, u) {
-                            events.push(Box::new(move |state: &mut Frontier| {
-                                self.traced_region(state, None, |state| {
-                                    self.extend(state, u, &retry)
-                                })
-                            }));
+                            self.push_extension(events, u, retry);
                         }
                     }
                 }
@@ -657,12 +664,15 @@ impl<'a> Work<'a> for Solve<'a> {
                 report,
                 interface,
             } => {
-                events.push(Box::new(move |state: &mut Frontier| {
-                    let m = coarsening.vertex;
-                    self.traced_region(state, Some(m), |state| {
-                        self.coarsen(state, &coarsening, &report, interface)
-                    })
-                }));
+                let m = coarsening.vertex;
+                events.push_regional(
+                    Box::new(move |state: &Frontier| coarsening_region(&state.mesh, m)),
+                    Box::new(move |state: &mut Frontier, _: &Region<'_>| {
+                        self.traced_region(state, Some(m), |state| {
+                            self.coarsen(state, &coarsening, &report, interface)
+                        })
+                    }),
+                );
                 return Ok(());
             }
             Outcome::Failed => return Ok(()),
@@ -671,9 +681,17 @@ impl<'a> Work<'a> for Solve<'a> {
                 book.patches += 1;
                 book.rejected += 1;
                 let at = state.mesh.vertex(v);
-                events.push(Box::new(move |state: &mut Frontier| {
-                    self.traced_region(state, None, |state| self.refine(state, v, at, &star))
-                }));
+                let triangles: Vec<TriangleId> = star.iter().map(|&(t, _)| t).collect();
+                events.push_regional(
+                    Box::new(move |state: &Frontier| {
+                        refinement_region(&state.mesh, triangles.iter().copied())
+                    }),
+                    Box::new(move |state: &mut Frontier, region: &Region<'_>| {
+                        self.traced_region(state, None, |state| {
+                            self.refine(state, region, v, at, &star)
+                        })
+                    }),
+                );
                 return Ok(());
             }
         };

@@ -22,7 +22,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 use sdg_mesh::{EdgeId, Mesh, TriangleId, VertexId};
-use sdg_scheduler::Changed;
+use sdg_scheduler::{Changed, Region};
 use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, evaluate};
 use sdg_solver::face::{FaceBasis, FaceState, STATE_COMPONENTS};
@@ -165,6 +165,7 @@ impl Solve<'_> {
     pub(super) fn extend(
         &self,
         state: &mut Frontier,
+        region: &Region<'_>,
         v: VertexId,
         extension: &Extension,
     ) -> Changed {
@@ -194,7 +195,7 @@ impl Solve<'_> {
         // First the far ends of the new edges, splitting edges where the directions need it.
         let mut plans: Vec<Plan> = Vec::new();
         for &d in extension.directions.iter().filter(|d| d.is_finite()) {
-            let plan = self.plan(fracture, state, (v, tip), d, &mut changed);
+            let plan = self.plan(fracture, state, region, (v, tip), d, &mut changed);
             let plan = match plan {
                 // Two new edges keep the shield angle between them (snapping may turn them).
                 Plan::Edge(w)
@@ -312,6 +313,7 @@ impl Solve<'_> {
         &self,
         fracture: &Fracture,
         state: &mut Frontier,
+        region: &Region<'_>,
         (v, tip): (VertexId, Option<Tip>),
         d: f64,
         changed: &mut Changed,
@@ -348,7 +350,7 @@ impl Solve<'_> {
                 .find(|&w| may_take(mesh, w))
                 .map_or(Plan::Refused, Plan::Edge);
         }
-        match self.split_at(state, c.triangle, Some(c.corner), c.fraction) {
+        match self.split_at(state, region, c.triangle, Some(c.corner), c.fraction) {
             Ok((split, more, new)) => {
                 changed.offer.extend(more.offer);
                 changed.below_end += more.below_end;

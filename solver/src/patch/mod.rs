@@ -433,7 +433,8 @@ impl PatchSolver {
     /// read; the tent gives its own) with inflow from the elements in `solution`, which it does
     /// not change: [`Self::commit`] stores the result. The caller owns the star: no other thread
     /// touches these triangles, their edges or the neighbours' times meanwhile. Fails when the
-    /// Newton iterations of a patch with contact faces do not converge.
+    /// Newton iterations of a patch with contact faces do not converge. The same as
+    /// [`Self::prepare`] then [`Self::solve_prepared`].
     pub fn solve(
         &mut self,
         mesh: &Mesh,
@@ -443,6 +444,14 @@ impl PatchSolver {
         initial: Initial,
         solution: &FrontSolution,
     ) -> Result<PatchReport, NewtonFailure> {
+        self.prepare(mesh, front, tent, solution);
+        self.solve_prepared(boundary, initial)
+    }
+
+    /// Copies everything the patch of `tent` reads from `mesh`, `front` and `solution` into the
+    /// solver (the star's geometry, the inflow elements, the interface states below its contact
+    /// faces), so that [`Self::solve_prepared`] can solve it while others change them.
+    pub fn prepare(&mut self, mesh: &Mesh, front: &Front, tent: &Tent, solution: &FrontSolution) {
         let c = self.system.c_ref();
         let v = tent.vertex;
         let star = mesh.vertex_triangles(v);
@@ -482,7 +491,16 @@ impl PatchSolver {
         }
 
         self.inflow.gather(star, solution);
-        self.solve_slots(boundary, initial, solution)
+        self.find_contact_faces(solution);
+    }
+
+    /// Solves the patch [`Self::prepare`] read, as [`Self::solve`] does.
+    pub fn solve_prepared(
+        &mut self,
+        boundary: &Boundary,
+        initial: Initial,
+    ) -> Result<PatchReport, NewtonFailure> {
+        self.solve_slots(boundary, initial)
     }
 
     /// Solves the coarsening patch that removes vertex `m`, the midpoint of edge `ends` (as
@@ -580,17 +598,16 @@ impl PatchSolver {
         }
         self.used = parents;
         self.inflow.gather(&sources[..2 * parents], solution);
-        self.solve_slots(boundary, initial, solution).ok()
+        self.find_contact_faces(solution);
+        self.solve_slots(boundary, initial).ok()
     }
 
-    /// Assembles and solves the patch of the first `self.used` slots, whose inflow sources are
-    /// gathered, and computes the element reports. `solution` holds the interface faces below
-    /// the patch's contact faces.
+    /// Assembles and solves the patch of the first `self.used` slots, whose inflow sources and
+    /// contact faces are gathered, and computes the element reports.
     fn solve_slots(
         &mut self,
         boundary: &Boundary,
         initial: Initial,
-        solution: &FrontSolution,
     ) -> Result<PatchReport, NewtonFailure> {
         let started = Instant::now();
         let c = self.system.c_ref();
@@ -599,7 +616,6 @@ impl PatchSolver {
         let fields = self.system.fields();
         let m = n * fields;
         self.blocks.reset(d, m);
-        self.find_contact_faces(solution);
         let a_mu = [
             self.system.a_n([1.0, 0.0, 0.0]),
             self.system.a_n([0.0, 1.0, 0.0]),
