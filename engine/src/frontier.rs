@@ -74,11 +74,13 @@ pub(crate) struct Coarsening {
 }
 
 /// How far refinement may go: no piece of an edge shorter than `min_edge` (m), no vertex star
-/// above `max_star` triangles.
+/// above `max_star` triangles, no triangle split with a corner that `region` says a tent in
+/// flight holds.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Limits {
+pub(crate) struct Limits<'r> {
     pub(crate) min_edge: f64,
     pub(crate) max_star: usize,
+    pub(crate) region: Region<'r>,
 }
 
 /// What a refinement changed.
@@ -235,13 +237,12 @@ impl Frontier {
         t: TriangleId,
         corner: Option<usize>,
         fraction: f64,
-        region: &Region<'_>,
-        limits: Limits,
+        limits: Limits<'_>,
         initial_energy: &dyn Fn([Point; 3]) -> f64,
         refined: &mut Refined,
     ) -> Result<bool, SplitError> {
         self.apply_splits(
-            region,
+            &limits.region,
             limits.min_edge,
             limits.max_star,
             initial_energy,

@@ -272,13 +272,13 @@ impl Solve<'_> {
         let limits = Limits {
             min_edge: self.min_edge,
             max_star: self.max_star,
+            region: *region,
         };
         let mut refined = Refined::default();
         let split = state.split_at(
             t,
             corner,
             fraction,
-            region,
             limits,
             &|corners| self.initial_energy(corners),
             &mut refined,
