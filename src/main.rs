@@ -397,7 +397,11 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
     let entries = sdg_engine::trace::read(&args.trace)?;
     let one = sdg_engine::trace::replay(&entries, 1, overhead_s).wall_time_s;
     match sdg_engine::trace::rounds(&entries) {
-        0 => println!("model: the asynchronous scheduler (a trace without rounds)"),
+        0 => println!(
+            "model: the asynchronous scheduler (a trace without rounds; its {} refinements, \
+             coarsenings and crack extensions run beside the tents that hold none of their vertices)",
+            sdg_engine::trace::regions(&entries)
+        ),
         n => println!("model: the deterministic scheduler's {n} rounds"),
     }
     print_predictions(&scaling.predictions, one);
@@ -411,19 +415,6 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
         parts.events_s,
         parts.scheduler_s
     );
-    if let Some((regional, critical)) = &scaling.regional {
-        println!(
-            "with regional events (a model of a scheduler not built: each of the {} refinements, \
-             coarsenings and crack extensions waits only for the tents at the vertices it changes and their \
-             neighbours and takes one worker; the other events still run alone):",
-            sdg_engine::trace::regions(&entries)
-        );
-        print_predictions(regional, one);
-        println!(
-            "critical path {critical:.4} s: at most {:.2}x over one worker",
-            one / critical
-        );
-    }
     Ok(())
 }
 

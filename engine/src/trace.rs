@@ -11,10 +11,10 @@
 //!
 //! The replay models the asynchronous scheduler: a tent is ready once its dependencies are done,
 //! and each free worker takes the ready tent that came first in the trace, paying a fixed claim
-//! overhead per tent; an event, of either kind, waits for every tent before it and runs alone,
-//! as the scheduler runs them. [`replay_regional`] models a scheduler that is not built: a
-//! `region` event waits only for its dependencies and takes one worker, while the others go on
-//! solving. A trace of a deterministic run also marks the end of each round (`round`, with the
+//! overhead per tent; a `region` event, like a tent, waits only for its dependencies and takes
+//! one worker while the others go on solving, as the scheduler runs regional events; an `event`
+//! waits for every tent before it and runs alone. A trace of a deterministic run also marks the
+//! end of each round (`round`, with the
 //! time the scheduler spent on it alone: choosing its vertices and recording its tents), and is
 //! replayed as those rounds, which are the same for any thread count: a round's tents go to the
 //! first free worker in trace order, then its events and the scheduler's own time run alone.
@@ -84,9 +84,14 @@ impl Kind {
 }
 
 impl Kind {
-    /// Events of either kind: the scheduler runs them alone, between tents.
+    /// Events of either kind: deterministic rounds run them alone, after the round's tents.
     fn is_event(self) -> bool {
         matches!(self, Self::Event | Self::Region)
+    }
+
+    /// What the asynchronous scheduler runs alone: every event but the regional ones.
+    fn runs_alone(self) -> bool {
+        matches!(self, Self::Event | Self::Round)
     }
 }
 
@@ -417,27 +422,15 @@ pub fn replay(entries: &[Entry], workers: usize, overhead_s: f64) -> Prediction 
     if rounds(entries) > 0 {
         return replay_rounds(entries, workers, overhead_s);
     }
-    replay_between(entries, workers, overhead_s, Kind::is_event)
+    replay_between(entries, workers, overhead_s)
 }
 
-/// [`replay`] of an asynchronous trace for a scheduler that runs `region` events as the
-/// claims layer would let it (not built): each waits only for the tents and events at the
-/// vertices it changes and their neighbours, takes one worker and pays the claim overhead, and
-/// the tents there after it wait for it; the other events still run alone.
-pub fn replay_regional(entries: &[Entry], workers: usize, overhead_s: f64) -> Prediction {
-    replay_between(entries, workers.max(1), overhead_s, |k| {
-        matches!(k, Kind::Event | Kind::Round)
-    })
-}
-
-/// The dependency-graph replay of `entries` in segments between the events `alone` says run
-/// alone, which are added to the wall time.
-fn replay_between(
-    entries: &[Entry],
-    workers: usize,
-    overhead_s: f64,
-    alone: impl Fn(Kind) -> bool,
-) -> Prediction {
+/// The dependency-graph replay of an asynchronous trace in segments between the events that run
+/// alone ([`Kind::runs_alone`]), which are added to the wall time; a `region` event waits for
+/// its dependencies (the tents and events at the vertices it changes and their neighbours),
+/// takes one worker and pays the claim overhead, and the tents there after it wait for it.
+fn replay_between(entries: &[Entry], workers: usize, overhead_s: f64) -> Prediction {
+    let alone = |k: Kind| k.runs_alone();
     let (mut clock, mut ready_area) = (0.0, 0.0);
     for segment in entries.split(|e| alone(e.kind)) {
         let (span, area) = replay_segment(segment, workers, overhead_s);
@@ -527,10 +520,11 @@ pub fn critical_path(entries: &[Entry], overhead_s: f64) -> f64 {
 /// What the critical path is made of, s.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CriticalPath {
-    /// Tents on it, with their claim overhead: the longest chains between events, or the
-    /// longest tent of each round.
+    /// Tents on it, with their claim overhead: the longest chains between the events that run
+    /// alone (regional events included in them), or the longest tent of each round.
     pub tents_s: f64,
-    /// Events, each of which runs alone.
+    /// Events that run alone: in an asynchronous trace all but the regional ones, in a
+    /// deterministic one all.
     pub events_s: f64,
     /// The deterministic scheduler's own time on its rounds (0 for an asynchronous trace).
     pub scheduler_s: f64,
@@ -544,10 +538,7 @@ pub fn critical_path_parts(entries: &[Entry], overhead_s: f64) -> CriticalPath {
             .filter(|e| e.kind == kind)
             .fold(0.0, |sum, e| sum + e.duration_s)
     };
-    let (events_s, scheduler_s) = (
-        time_of(Kind::Event) + time_of(Kind::Region),
-        time_of(Kind::Round),
-    );
+    let scheduler_s = time_of(Kind::Round);
     if rounds(entries) > 0 {
         let tents_s = entries
             .split_inclusive(|e| e.kind == Kind::Round)
@@ -559,32 +550,18 @@ pub fn critical_path_parts(entries: &[Entry], overhead_s: f64) -> CriticalPath {
             .sum();
         return CriticalPath {
             tents_s,
-            events_s,
+            events_s: time_of(Kind::Event) + time_of(Kind::Region),
             scheduler_s,
         };
     }
     CriticalPath {
         tents_s: entries
-            .split(|e| e.kind.is_event())
+            .split(|e| e.kind.runs_alone())
             .map(|segment| longest_chain(segment, overhead_s))
             .sum(),
-        events_s,
+        events_s: time_of(Kind::Event),
         scheduler_s,
     }
-}
-
-/// The critical path of [`replay_regional`], s: the longest chains of tents and `region`
-/// events between the events that run alone, plus those events.
-pub fn critical_path_regional(entries: &[Entry], overhead_s: f64) -> f64 {
-    let alone = |k: Kind| matches!(k, Kind::Event | Kind::Round);
-    entries
-        .split(|e| alone(e.kind))
-        .map(|segment| longest_chain(segment, overhead_s))
-        .sum::<f64>()
-        + (entries.iter())
-            .filter(|e| alone(e.kind))
-            .map(|e| e.duration_s)
-            .sum::<f64>()
 }
 
 /// The longest chain of dependencies in `segment` (sorted by id), each item with `overhead_s`,
@@ -685,9 +662,6 @@ pub struct Scaling {
     pub predictions: Vec<Prediction>,
     /// Its critical path, s.
     pub critical_s: f64,
-    /// The same with regional events ([`replay_regional`]) and its critical path (s), for an
-    /// asynchronous trace with `region` rows.
-    pub regional: Option<(Vec<Prediction>, f64)>,
 }
 
 /// `sdg scaling`: replays the trace at `path` on each of `workers`; with `png`, draws the
@@ -714,12 +688,6 @@ pub fn scaling_job(
     let scaling = Scaling {
         predictions: predict(replay),
         critical_s: critical_path(&entries, overhead_s),
-        regional: (rounds(&entries) == 0 && regions(&entries) > 0).then(|| {
-            (
-                predict(replay_regional),
-                critical_path_regional(&entries, overhead_s),
-            )
-        }),
     };
     if let Some(png) = png {
         let one = replay(&entries, 1, overhead_s).wall_time_s;
@@ -736,20 +704,12 @@ pub fn scaling_job(
         let ideal: Vec<(f64, f64)> = (scaling.predictions.iter())
             .map(|p| (p.workers as f64, p.workers as f64))
             .collect();
-        let mut chart = LineChart::new("predicted speedup", "workers", "speedup over 1 worker")
+        LineChart::new("predicted speedup", "workers", "speedup over 1 worker")
             .series(
                 "replayed trace",
                 &speedups(&scaling.predictions),
                 LineStyle::Solid,
-            );
-        if let Some((regional, _)) = &scaling.regional {
-            chart = chart.series(
-                "with regional events (model)",
-                &speedups(regional),
-                LineStyle::Solid,
-            );
-        }
-        chart
+            )
             .series("ideal", &ideal, LineStyle::Dashed)
             .series(
                 "critical path bound",
@@ -814,7 +774,7 @@ mod tests {
     /// A regional event waits only for its dependencies and takes one worker; an event of the
     /// other kind still runs alone.
     #[test]
-    fn the_regional_replay_lets_other_tents_run_beside_a_region_event() {
+    fn the_replay_lets_other_tents_run_beside_a_region_event() {
         let event = |id: u64, duration_s: f64, kind: Kind, deps: &[u64]| Entry {
             kind,
             vertex: None,
@@ -829,14 +789,12 @@ mod tests {
             tent(5, 1.0, &[]),
         ];
         assert_eq!(regions(&entries), 1);
-        // As the scheduler runs: max(1, 2) + 0.5 + 1 + 0.25 + 1.
-        assert_eq!(replay(&entries, 2, 0.0).wall_time_s, 4.75);
-        assert_eq!(critical_path(&entries, 0.0), 4.75);
-        // Regional: tent 1 runs beside the event and tent 3 (1 + 0.5 + 1), then 0.25 + 1.
-        assert_eq!(replay_regional(&entries, 2, 0.0).wall_time_s, 3.75);
-        assert_eq!(critical_path_regional(&entries, 0.0), 3.75);
-        // One worker does everything in turn either way.
-        assert_eq!(replay_regional(&entries, 1, 0.0).wall_time_s, 5.75);
+        // Tent 1 runs beside the event and tent 3 (1 + 0.5 + 1), then 0.25 + 1.
+        assert_eq!(replay(&entries, 2, 0.0).wall_time_s, 3.75);
+        assert_eq!(critical_path(&entries, 0.0), 3.75);
+        let parts = critical_path_parts(&entries, 0.0);
+        assert_eq!((parts.tents_s, parts.events_s), (3.5, 0.25));
+        // One worker does everything in turn.
         assert_eq!(replay(&entries, 1, 0.0).wall_time_s, 5.75);
     }
 
