@@ -921,8 +921,8 @@ fn a_traced_adaptive_run_replays_its_regional_events_beside_tents() {
         "{table}"
     );
     // Only the history rows run alone, a small part of the work.
-    let events = number_after(&table, "events ", 's');
-    let tents = number_after(&table, "tents ", 's');
+    let events = number_after(&table, "s, events ", 's');
+    let tents = number_after(&table, "over one worker; tents ", 's');
     assert!(events < 0.1 * tents, "{table}");
     // No number of workers beats the critical path.
     let bound = number_after(&table, "at most ", 'x');

@@ -3,9 +3,11 @@
 //! Worker threads advance one shared [`Front`] together. A worker claims a vertex that is a local
 //! minimum of the front (exclusive on the vertex, shared on its neighbours, see [`claim`]),
 //! pitches its tent and solves its patch through [`Work::tent`], records it, releases the claim
-//! and offers the vertex and its neighbours as new candidates. Topology changes are events ([`Action`]s)
-//! that run with exclusive access to the state, between tents. The design, its invariants and why it cannot deadlock
-//! or race are in `scheduler/README.md`.
+//! and offers the vertex and its neighbours as new candidates. Topology changes are events that
+//! run with exclusive access to the state: exclusive ones ([`Action`]) with no tent in flight,
+//! regional ones ([`RegionalAction`]) beside tents that solve without the state's lock
+//! ([`Lease::unlocked`]) and hold none of their vertices. The design, its invariants and why it
+//! cannot deadlock or race are in `scheduler/README.md`.
 //!
 //! Two modes:
 //! - asynchronous (default): candidates flow through work-stealing deques; a vertex is taken
@@ -87,8 +89,9 @@ pub trait Work<'a>: Sync {
     /// exclusively and its neighbours shared, and `v` a local minimum of the front below the end
     /// time. A tent that leaves `v` in place must make sure an event changes something first
     /// (otherwise it would be retried forever); in asynchronous mode its claim is held until
-    /// that event has run, so the event sees `v`'s star as the tent left it. May queue events,
-    /// but only events queued by [`Work::record`] run in a fixed order in deterministic mode.
+    /// the next batch of events, so the event sees `v`'s star as the tent left it if the batch
+    /// runs it (a regional event it puts back must check). May queue events, but only events
+    /// queued by [`Work::record`] run in a fixed order in deterministic mode.
     ///
     /// The tent reads the state through `lease`; it may let go of it while it solves
     /// ([`Lease::unlocked`]), and events may then change the state away from its claim.

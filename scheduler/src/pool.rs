@@ -25,9 +25,10 @@ use crate::{
 };
 
 /// Queued events that make a worker run them before its next tent; fewer wait until a worker
-/// finds nothing to claim. Each run of events stops every worker for the rest of its tent, so
-/// batching them saves that wait: on `adaptive_pulse` (about 1,000 events, 2 threads) the
-/// workers waited 0.36 s in all when every event ran at once, 0.06 to 0.07 s with 32.
+/// finds nothing to claim. A batch holds the state's lock exclusively, which tents need to start
+/// and to store their patches, so batching them saves waits: on `adaptive_pulse` (about 1,000
+/// events, 2 threads) the workers waited 0.36 s in all when every event ran at once, 0.06 to
+/// 0.07 s with 32 (measured when every batch also waited for the tents in flight).
 const EVENT_BATCH: usize = 32;
 
 /// The state and the claims on its vertices: shared by tents, exclusive for events.
