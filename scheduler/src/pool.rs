@@ -420,24 +420,33 @@ fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<Vertex
     let running = std::time::Instant::now();
     let Locked { state, claims } = &mut *locked;
     let mut touched = Vec::new();
+    let mut released = Vec::new();
     for (v, neighbours) in shared.held.lock().drain(..) {
         claims.release(&[v], &neighbours);
+        released.push(v);
         touched.push(v);
         touched.extend(neighbours);
     }
     // With the lock held exclusively, the tents in flight are solving without it.
     let alone = shared.in_flight.load(Ordering::SeqCst) == 0;
-    let (mut waiting, mut refused) = (Vec::new(), 0);
+    let (mut waiting, mut refused, mut waiting_region) = (Vec::new(), 0, Vec::new());
+    let mut removed = false;
     for event in events {
+        let vertices = state.mesh().vertices().len();
         let changed = match event {
             Queued::Exclusive(action) if alone => {
                 let changed = action(state);
                 shared.events.ran(true);
                 changed
             }
-            Queued::Regional(probe, action)
-                if alone || probe(&**state).iter().all(|&v| claims.is_free(v)) =>
-            {
+            Queued::Regional(probe, action) => {
+                let region = if alone { Vec::new() } else { probe(&**state) };
+                if !region.iter().all(|&v| claims.is_free(v)) {
+                    waiting_region.extend(region);
+                    refused += 1;
+                    waiting.push(Queued::Regional(probe, action));
+                    continue;
+                }
                 let changed = action(
                     state,
                     &Region {
@@ -448,15 +457,31 @@ fn run_events<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<Vertex
                 changed
             }
             event => {
-                refused += usize::from(matches!(event, Queued::Regional(..)));
                 waiting.push(event);
                 continue;
             }
         };
+        removed |= state.mesh().vertices().len() < vertices;
         claims.grow(state.mesh().vertices().len());
         count_remaining(&shared.remaining, changed.below_end);
         touched.extend(changed.offer);
         shared.events_run.fetch_add(1, Ordering::Relaxed);
+    }
+    // A held vertex that an event put back will change keeps its claim, so that it is not
+    // pitched again meanwhile (only while no event removed a vertex, which renumbers).
+    if !removed && !waiting_region.is_empty() {
+        waiting_region.sort_unstable();
+        let mut held = shared.held.lock();
+        for v in released {
+            if waiting_region.binary_search(&v).is_ok()
+                && (v as usize) < state.mesh().vertices().len()
+            {
+                let neighbours = state.mesh().vertex_neighbors(v);
+                if claims.try_claim(&[v], neighbours) {
+                    held.push((v, neighbours.to_vec()));
+                }
+            }
+        }
     }
     shared.events.put_back(waiting);
     shared.refused.store(refused, Ordering::SeqCst);
