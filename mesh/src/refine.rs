@@ -207,22 +207,28 @@ impl Mesh {
         let mut chain = vec![t];
         let mut s = t;
         while chain.len() < limit {
-            let e = self.refinement_edge_id(s);
-            let Some(u) = self.edges[e as usize]
-                .triangles
-                .into_iter()
-                .flatten()
-                .find(|&u| u != s)
-            else {
+            let Some((u, compatible)) = self.across_refinement_edge(s) else {
                 break;
             };
             chain.push(u);
-            if self.refinement_edge_id(u) == e {
+            if compatible {
                 break;
             }
             s = u;
         }
         chain
+    }
+
+    /// The triangle across the refinement edge of `s`, and whether that edge is its refinement
+    /// edge too (the closure's chain ends there); `None` on the boundary.
+    fn across_refinement_edge(&self, s: TriangleId) -> Option<(TriangleId, bool)> {
+        let e = self.refinement_edge_id(s);
+        let u = self.edges[e as usize]
+            .triangles
+            .into_iter()
+            .flatten()
+            .find(|&u| u != s)?;
+        Some((u, self.refinement_edge_id(u) == e))
     }
 
     /// True when the chain the closure of a split of `t`'s refinement edge follows (the
@@ -231,16 +237,10 @@ impl Mesh {
     fn closure_returns_to(&self, t: TriangleId) -> bool {
         let mut s = t;
         for _ in 0..self.triangles.len() {
-            let e = self.refinement_edge_id(s);
-            let Some(u) = self.edges[e as usize]
-                .triangles
-                .into_iter()
-                .flatten()
-                .find(|&u| u != s)
-            else {
+            let Some((u, compatible)) = self.across_refinement_edge(s) else {
                 return false;
             };
-            if self.refinement_edge_id(u) == e {
+            if compatible {
                 return false;
             }
             if u == t {
@@ -763,6 +763,34 @@ mod tests {
             }
         }
         assert!(checked > 200, "{checked}");
+    }
+
+    /// The chain lists exactly the triangles a bisection then splits (kept ids, existing
+    /// before it); the closure's other splits are of their children.
+    #[test]
+    fn the_bisection_chain_lists_the_triangles_a_bisection_splits() {
+        let mut m = square(4, Diagonal::Alternate, 0.1).build().unwrap();
+        let mut rng = XorShift(5);
+        let mut longest = 0;
+        for _ in 0..300 {
+            let t = rng.below(m.triangles().len());
+            let chain = m.bisection_chain(t, usize::MAX);
+            let before = m.triangles().len() as TriangleId;
+            let mut split: Vec<TriangleId> = refine(&mut m, t)
+                .iter()
+                .flat_map(|s| s.halves.iter().map(|&(kept, _)| kept))
+                .filter(|&kept| kept < before)
+                .collect();
+            split.sort_unstable();
+            split.dedup();
+            let mut listed = chain.clone();
+            listed.sort_unstable();
+            assert_eq!(listed, split, "triangle {t}: chain {chain:?}");
+            longest = longest.max(chain.len());
+        }
+        assert!(longest >= 4, "only chains of {longest}");
+        let cut = m.bisection_chain(0, 2);
+        assert!(cut.len() <= 2);
     }
 
     #[test]

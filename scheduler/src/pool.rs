@@ -272,30 +272,25 @@ fn offer<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, local: &Worker<VertexId>, 
     }
 }
 
-/// Sleeps until a candidate is queued, an event is pending, or the run ends.
+/// Sleeps until a candidate is queued, an event could run, or the run ends.
 fn sleep<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>) {
-    let mut sleeping = shared.sleep.lock();
-    if shared.queued.load(Ordering::SeqCst) > 0
-        || shared.events_runnable()
-        || shared.stop.load(Ordering::SeqCst)
-        || shared.remaining.load(Ordering::SeqCst) == 0
-    {
-        return;
-    }
-    *sleeping += 1;
-    let asleep = std::time::Instant::now();
-    shared.wake.wait(&mut sleeping);
-    shared.wait_time.add_since(asleep);
-    *sleeping -= 1;
+    wait_unless(shared, || {
+        shared.queued.load(Ordering::SeqCst) > 0 || shared.events_runnable()
+    });
 }
 
 /// Sleeps until no tent is in flight while an exclusive event waits, or the run ends.
 fn drain<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>) {
+    wait_unless(shared, || {
+        !shared.events.has_exclusive() || shared.in_flight.load(Ordering::SeqCst) == 0
+    });
+}
+
+/// Sleeps until woken, unless `awake` or the run's end holds when checked with the sleep mutex
+/// held (whoever makes `awake` true notifies under the same mutex: no lost wake-up).
+fn wait_unless<'a, W: Work<'a>>(shared: &Shared<'_, 'a, W>, awake: impl Fn() -> bool) {
     let mut sleeping = shared.sleep.lock();
-    if !shared.events.has_exclusive()
-        || shared.in_flight.load(Ordering::SeqCst) == 0
-        || shared.stop.load(Ordering::SeqCst)
-        || shared.remaining.load(Ordering::SeqCst) == 0
+    if awake() || shared.stop.load(Ordering::SeqCst) || shared.remaining.load(Ordering::SeqCst) == 0
     {
         return;
     }

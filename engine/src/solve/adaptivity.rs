@@ -417,3 +417,72 @@ pub(super) fn coarsening_region(mesh: &Mesh, m: VertexId) -> Vec<VertexId> {
     region.dedup();
     region
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sdg_mesh::{Diagonal, Rectangle};
+
+    /// A vertex's star as a tent holds it: its triangles' ids, corners and edge ids.
+    fn star(mesh: &Mesh, v: VertexId) -> Vec<(TriangleId, [VertexId; 3], [u32; 3])> {
+        let mut star: Vec<_> = mesh
+            .vertex_triangles(v)
+            .iter()
+            .map(|&t| (t, mesh.triangles()[t as usize], mesh.triangle_edges(t)))
+            .collect();
+        star.sort_unstable();
+        star
+    }
+
+    /// Every vertex whose star (triangle ids, corners, edge ids) or id a coarsening changes is
+    /// in its region, so that a regional coarsening leaves every claimed star alone.
+    #[test]
+    fn a_coarsening_changes_nothing_outside_its_region() {
+        let mut mesh = Rectangle {
+            width: 1.0,
+            height: 1.0,
+            nx: 4,
+            ny: 4,
+            diagonal: Diagonal::Alternate,
+            interfaces: Vec::new(),
+            perturb: 0.1,
+            seed: 3,
+        }
+        .build()
+        .unwrap();
+        let mut splits = Vec::new();
+        for k in 0..60u32 {
+            let t = (k * 37) % mesh.triangles().len() as u32;
+            mesh.bisect(t, &mut |_, _, _| true, &mut splits);
+        }
+        let mut checked = 0;
+        for m in 0..mesh.vertices().len() as VertexId {
+            if mesh.coarsenable(m).is_none() {
+                continue;
+            }
+            let region = coarsening_region(&mesh, m);
+            let mut after = mesh.clone();
+            let merge = after.coarsen(m).expect("coarsenable");
+            for w in (0..mesh.vertices().len() as VertexId).filter(|&w| w != m) {
+                let moved = merge.vertex_after(w) != w;
+                let renamed: Vec<_> = star(&mesh, w)
+                    .into_iter()
+                    .map(|(t, corners, edges)| {
+                        (
+                            merge.triangle_after(t),
+                            corners.map(|c| merge.vertex_after(c)),
+                            edges,
+                        )
+                    })
+                    .collect();
+                let changed = moved || renamed != star(&after, merge.vertex_after(w));
+                assert!(
+                    !changed || region.contains(&w),
+                    "coarsening {m} changes vertex {w} outside {region:?}"
+                );
+            }
+            checked += 1;
+        }
+        assert!(checked > 20, "{checked} coarsenings");
+    }
+}
