@@ -675,7 +675,7 @@ pub fn effective_traction(stress: [f64; 3], beta: f64, th: f64) -> (f64, f64) {
 /// The global maximum over plane orientations of [`effective_traction`]: `(th, s_eff)` with the
 /// normal angle `th` in [0, pi) (radians) and `s_eff` (Pa); the left-hand side `s_*` of (4.15).
 ///
-/// Closed form in the principal frame (`c = cos 2(th - angle)`, see [`Principal`]): `s_eff^2` is
+/// Closed form in the principal frame (`c = cos 2(th - angle)`, see `Principal`): `s_eff^2` is
 /// `(p + q c)^2 + beta^2 q^2 (1 - c^2)` where `sn > 0` and `beta^2 q^2 (1 - c^2)` elsewhere, so the
 /// maximum over `c` in [-1, 1] is at `c = 1` (largest normal traction), at `c = 0` (largest shear,
 /// compressive when `p <= 0`) or, for `beta > 1`, at the stationary point `c*` of the concave

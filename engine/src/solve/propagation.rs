@@ -111,7 +111,7 @@ pub struct FractureSummary {
     /// branching, m; none without an initial crack.
     pub first_branching_distance: Option<f64>,
     /// The first fork of the crack network with two arms reaching `fracture.macro_length`
-    /// beyond the one the crack came in by ([`network`]); none without that setting or such a
+    /// beyond the one the crack came in by (`network`); none without that setting or such a
     /// fork.
     pub macro_branching: Option<MacroFork>,
 }

@@ -13,7 +13,7 @@
 //!
 //! Above an interface edge the vertical faces take their targets from the interface's law
 //! ([`crate::interface`]): bonded faces keep the linear path, free faces are traction-free on
-//! both sides (still linear), and contact faces make the patch a Newton solve ([`contact`]).
+//! both sides (still linear), and contact faces make the patch a Newton solve (`contact`).
 
 use std::time::Instant;
 
