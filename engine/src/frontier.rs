@@ -199,30 +199,19 @@ impl Frontier {
     }
 
     /// Bisects triangle `t` (and whatever the closure needs) as long as every split keeps the
-    /// front causal, halves no edge shorter than `2 min_edge` (m) and leaves every vertex star
-    /// at most `max_star` triangles, and splits no triangle with a corner that `region` says a
-    /// tent in flight holds. Adds what changed to `refined`; `t` itself may be left whole when a
-    /// split was refused. `initial_energy(corners)` is the discrete energy of the
+    /// front causal and stays within `limits` (no half of an edge shorter than `min_edge`).
+    /// Adds what changed to `refined`; `t` itself may be left whole when a split was refused. `initial_energy(corners)` is the discrete energy of the
     /// initial data on a triangle (scaled units).
     pub(crate) fn refine(
         &mut self,
         t: TriangleId,
-        region: &Region<'_>,
-        min_edge: f64,
-        max_star: usize,
+        limits: Limits<'_>,
         initial_energy: &dyn Fn([Point; 3]) -> f64,
         refined: &mut Refined,
     ) {
-        self.apply_splits(
-            region,
-            min_edge,
-            max_star,
-            initial_energy,
-            refined,
-            |mesh, allow, splits| {
-                mesh.bisect(t, &mut |mesh, done, u| allow(mesh, done, u, 0.5), splits)
-            },
-        );
+        self.apply_splits(limits, initial_energy, refined, |mesh, allow, splits| {
+            mesh.bisect(t, &mut |mesh, done, u| allow(mesh, done, u, 0.5), splits)
+        });
     }
 
     /// [`Frontier::refine`] with an edge of `t` split at `fraction` of its length from its
@@ -242,9 +231,7 @@ impl Frontier {
         refined: &mut Refined,
     ) -> Result<bool, SplitError> {
         self.apply_splits(
-            &limits.region,
-            limits.min_edge,
-            limits.max_star,
+            limits,
             initial_energy,
             refined,
             |mesh, allow, splits| match corner {
@@ -260,9 +247,11 @@ impl Frontier {
     /// ([`Split::interpolate`]), a child keeps its parent's element and an edge half its face.
     fn apply_splits<R>(
         &mut self,
-        region: &Region<'_>,
-        min_edge: f64,
-        max_star: usize,
+        Limits {
+            min_edge,
+            max_star,
+            region,
+        }: Limits<'_>,
         initial_energy: &dyn Fn([Point; 3]) -> f64,
         refined: &mut Refined,
         split: impl FnOnce(&mut Mesh, &mut AllowSplit, &mut Vec<Split>) -> R,

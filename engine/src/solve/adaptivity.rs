@@ -228,11 +228,14 @@ impl Solve<'_> {
         };
         for &(t, corners) in star {
             if unchanged(state, t, corners) {
+                let limits = Limits {
+                    min_edge: adapt.min_edge,
+                    max_star: self.max_star,
+                    region: *region,
+                };
                 state.refine(
                     t,
-                    region,
-                    adapt.min_edge,
-                    self.max_star,
+                    limits,
                     &|corners| self.initial_energy(corners),
                     &mut refined,
                 );
@@ -335,14 +338,12 @@ pub(super) fn refine_to_max_edge(
             continue;
         }
         let before = state.mesh.triangles().len();
-        state.refine(
-            t,
-            &Region::everything(),
-            adapt.min_edge,
+        let limits = Limits {
+            min_edge: adapt.min_edge,
             max_star,
-            &|_| 0.0,
-            &mut refined,
-        );
+            region: Region::everything(),
+        };
+        state.refine(t, limits, &|_| 0.0, &mut refined);
         if state.mesh.triangles().len() == before {
             return Err(format!(
                 "adapt.max_edge or adapt.zone: an edge of {limit} m cannot be reached at \
