@@ -289,3 +289,38 @@ fn damage_mode1_crack_runs_slower_than_c_r() {
     eprintln!("fastest tip {fastest:.0} m/s");
     assert!(summary.energy.balance_residual_rel.abs() < 1e-8);
 }
+
+/// The seed's two delays (set 1: 1e-8 s, set 2: 1e-9 s) on `configs/damage_mode1.toml`'s
+/// straight path at its load, to 1.5 us: the shorter delay debonds first, runs faster and
+/// dissipates far less per metre of crack; a damage law without a length of its own takes its
+/// toughness from the delay (docs/verification.md, "The delay alone, on a straight mode-I
+/// path", which also has the plate's lower load, where the shorter delay does not debond).
+/// Long (two runs of about 1M patches): `cargo test --release --test damage -- --ignored`.
+#[test]
+#[ignore = "long: run on demand"]
+fn the_shorter_delay_debonds_sooner_runs_faster_and_dissipates_less() {
+    const C_R: f64 = 938.0;
+    // Start (s), median tip speed (m/s) and fracture energy per metre of crack (J/m^2).
+    let run = |delay: &str| {
+        let delay = format!("interface.1.delay={delay}");
+        let problem = common::shipped("damage_mode1.toml", &["time.end=1.5e-6", &delay]);
+        let (summary, dir) = solve(&problem, 2, true);
+        let tips = tip_rows(dir.path());
+        assert!(!tips.is_empty(), "{delay}: no crack");
+        let mut speeds: Vec<f64> = tips.iter().map(|t| t[4]).filter(|v| !v.is_nan()).collect();
+        speeds.sort_by(f64::total_cmp);
+        let length = tips.last().unwrap()[3];
+        let result = (
+            tips[0][0],
+            speeds[speeds.len() / 2],
+            summary.energy.fracture_energy / length,
+        );
+        eprintln!("{delay}: start, median speed, energy per length {result:?}");
+        result
+    };
+    let (start_1, speed_1, energy_1) = run("1e-8");
+    let (start_2, speed_2, energy_2) = run("1e-9");
+    assert!(start_2 < start_1 - 0.1e-6, "{start_2} against {start_1}");
+    assert!(speed_2 > speed_1 + 0.1 * C_R, "{speed_2} against {speed_1}");
+    assert!(energy_2 < 0.2 * energy_1, "{energy_2} against {energy_1}");
+}
