@@ -32,6 +32,9 @@ pub struct Fracture {
     pub shield: f64,
     /// Crossings nearer than this fraction of an edge to its end take the edge to that end.
     pub snap: f64,
+    /// Where no split may be made, the crack takes an edge within this angle of its
+    /// direction, radians.
+    pub floor_angle: f64,
     /// Mixity factor `beta` of the damage law of `tag`.
     pub beta: f64,
     /// Nucleation from random defects, if configured.
@@ -100,6 +103,9 @@ impl Fracture {
             threshold: config.threshold,
             shield: config.shield_angle.to_radians(),
             snap: config.snap,
+            floor_angle: config
+                .floor_angle
+                .map_or(0.5 * config.shield_angle.to_radians(), f64::to_radians),
             beta: damage.beta,
             nucleation: config
                 .defects()
@@ -257,10 +263,17 @@ impl Fracture {
 impl Fracture {
     /// True when the crack wanting direction `d` (radians) at `tip` (vertex `v`) may take the
     /// existing edge from `v` to its neighbour `w` instead: it may join `w` ([`Fracture::may_join`])
-    /// and the edge lies within half the shield angle of `d`.
-    pub fn may_take(&self, mesh: &Mesh, v: VertexId, tip: Tip, d: f64, w: VertexId) -> bool {
-        self.may_join(mesh, v, tip, w)
-            && angle_between(angle_of(mesh, v, w), d) <= 0.5 * self.shield
+    /// and the edge lies within `within` (radians) of `d`: half the shield angle where a split
+    /// could be made instead, [`Fracture::floor_angle`] where none may.
+    pub fn may_take(
+        &self,
+        mesh: &Mesh,
+        (v, tip): (VertexId, Tip),
+        d: f64,
+        w: VertexId,
+        within: f64,
+    ) -> bool {
+        self.may_join(mesh, v, tip, w) && angle_between(angle_of(mesh, v, w), d) <= within
     }
 
     /// True when the crack at `tip` (vertex `v`) may run along the existing edge from `v` to
@@ -492,6 +505,7 @@ mod tests {
             threshold: 1.0,
             shield: 35f64.to_radians(),
             snap: 0.2,
+            floor_angle: 17.5f64.to_radians(),
             beta: 1.0,
             nucleation: None,
         };
@@ -704,8 +718,16 @@ mod tests {
         for w in [ahead, up, back] {
             assert!(mesh.edge_between(v, w).is_some());
         }
-        assert!(fracture.may_take(&mesh, v, tip, 0.0, ahead));
-        assert!(!fracture.may_take(&mesh, v, tip, 0.0, up));
+        let half = 0.5 * fracture.shield;
+        assert!(fracture.may_take(&mesh, (v, tip), 0.0, ahead, half));
+        assert!(!fracture.may_take(&mesh, (v, tip), 0.0, up, half));
+        // A direction 22 degrees up, between the two edges 45 degrees apart, is more than half
+        // the shield angle from both and within the whole of it from both.
+        let d = 22f64.to_radians();
+        for w in [ahead, up] {
+            assert!(!fracture.may_take(&mesh, (v, tip), d, w, half));
+            assert!(fracture.may_take(&mesh, (v, tip), d, w, fracture.shield));
+        }
         assert!(fracture.may_join(&mesh, v, tip, up));
         assert!(!fracture.may_join(&mesh, v, tip, back));
         // Once the edge ahead is a crack, the edge 45 degrees from it still keeps the shield

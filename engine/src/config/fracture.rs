@@ -30,6 +30,13 @@ pub struct FractureConfig {
     /// instead of splitting (default 0.2, in (0, 0.5]).
     #[serde(default = "default_snap")]
     pub snap: f64,
+    /// Where no split may be made (a piece would be shorter than `min_piece`), the crack takes
+    /// an existing edge of the tip's triangle within this angle of its direction, degrees in
+    /// (0, 90). Default half the shield angle; with the whole shield angle, a tip on a grid of
+    /// edges 45 degrees apart always finds one (it does not stand still while the mesh is at
+    /// its floor).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor_angle: Option<f64>,
     /// No split for a crack leaves a piece of an edge shorter than this, m (> 0). Default
     /// `adapt.min_edge`, or without `[adapt]` a quarter of the initial mesh's shortest edge.
     /// Below `adapt.min_edge` the crack may split triangles the indicator no longer refines,
@@ -160,6 +167,14 @@ impl Config {
                 format!("must be a fraction of an edge in (0, 0.5], got {}", f.snap),
             );
         }
+        if let Some(angle) = f.floor_angle
+            && !(angle > 0.0 && angle < 90.0)
+        {
+            return fail(
+                "floor_angle",
+                format!("must be in (0, 90) degrees, got {angle}"),
+            );
+        }
         for (key, length) in [("macro_length", f.macro_length), ("min_piece", f.min_piece)] {
             if let Some(length) = length
                 && !(length.is_finite() && length > 0.0)
@@ -252,6 +267,16 @@ shield_angle = 35.0
                 "positive length",
             ),
             ("fracture.snap=0.0", "fracture.snap", "(0, 0.5]"),
+            (
+                "fracture.floor_angle=90.0",
+                "fracture.floor_angle",
+                "(0, 90)",
+            ),
+            (
+                "fracture.floor_angle=-5.0",
+                "fracture.floor_angle",
+                "(0, 90)",
+            ),
             (
                 "fracture.min_piece=-1e-6",
                 "fracture.min_piece",

@@ -338,16 +338,16 @@ impl Solve<'_> {
                 .find(|&w| fracture.may_join(mesh, v, tip, w))
                 .map_or(Plan::Arrest, Plan::Edge);
         }
-        let may_take = |mesh: &Mesh, w: VertexId| fracture.may_take(mesh, v, tip, d, w);
+        let may_take = |mesh: &Mesh, w, within| fracture.may_take(mesh, (v, tip), d, w, within);
         let near_end = c.fraction.min(1.0 - c.fraction);
-        if near_end < fracture.snap && may_take(mesh, ends[0]) {
+        if near_end < fracture.snap && may_take(mesh, ends[0], 0.5 * fracture.shield) {
             return Plan::Edge(ends[0]);
         }
         if near_end * fracture::distance(mesh, p, q) < self.min_edge {
             // No split is allowed there, now or later.
             return ends
                 .into_iter()
-                .find(|&w| may_take(mesh, w))
+                .find(|&w| may_take(mesh, w, fracture.floor_angle))
                 .map_or(Plan::Refused, Plan::Edge);
         }
         match self.split_at(state, region, c.triangle, Some(c.corner), c.fraction) {
