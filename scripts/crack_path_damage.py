@@ -6,7 +6,8 @@ damage) from the crack vertex nearest (X0, Y0) to the one nearest (X1, Y1), metr
 path's length, how much of it lies on edges with damage at least 0.99 and 0.9, the least
 damage on it, and, with --edges, the damage of each of its edges in order. The arms that
 `summary.json`'s `fracture.macro_branching` measures follow crack edges whatever their
-damage; this tells how much of such an arm has debonded.
+damage, and its `open_arms` sum the edges at 0.99 or more on each arm's path from the fork to
+its farthest point; this script follows any path and tells where it has not debonded.
 
 Usage: python3 scripts/crack_path_damage.py OUTPUT X0 Y0 X1 Y1 [--edges]
 Python 3 standard library only.

@@ -361,7 +361,9 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
         );
         if let Some(f) = &summary.fracture {
             let fork = f.macro_branching.as_ref().map_or(String::new(), |m| {
-                let arms: Vec<String> = m.arms.iter().map(|a| format!("{a:.3e}")).collect();
+                let arms: Vec<String> = (m.arms.iter().zip(&m.open_arms))
+                    .map(|(a, open)| format!("{a:.3e} ({open:.3e} open)"))
+                    .collect();
                 let from_tip = m.distance.map_or(String::new(), |d| {
                     format!(", {d:.3e} m from the initial tip")
                 });

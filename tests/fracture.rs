@@ -83,6 +83,12 @@ fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branch
     assert_eq!((fork.point, fork.time), ([x, 1e-3], rows[branching][0]));
     assert_eq!(fork.distance, Some(x - 1e-3));
     assert_eq!(fork.arms.len(), 2, "{fork:?}");
+    // Each arm's open length is the part of its reach on debonded edges: at most the reach.
+    assert_eq!(fork.open_arms.len(), 2, "{fork:?}");
+    assert!(
+        (fork.arms.iter().zip(&fork.open_arms)).all(|(&a, &o)| (0.0..=a).contains(&o)),
+        "{fork:?}"
+    );
     // The mesh refused both splits when the tip's tent tested it (the front too steep over the
     // crossed triangles for their thin children) and made them when a neighbour's tent retried
     // them, at the tip's same front time: a branching made whole or not at all.

@@ -475,12 +475,12 @@ pub fn distance(mesh: &Mesh, a: VertexId, b: VertexId) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use sdg_mesh::{Diagonal, GridSegment, Rectangle};
 
     /// A unit square in 4 x 4 cells with a notch from the left side to its centre.
-    fn notched() -> (Mesh, Fracture) {
+    pub(crate) fn notched() -> (Mesh, Fracture) {
         let mut mesh = Rectangle {
             width: 1.0,
             height: 1.0,
@@ -512,7 +512,7 @@ mod tests {
         (mesh, fracture)
     }
 
-    fn vertex_at(mesh: &Mesh, x: [f64; 2]) -> VertexId {
+    pub(crate) fn vertex_at(mesh: &Mesh, x: [f64; 2]) -> VertexId {
         (0..mesh.vertices().len() as VertexId)
             .find(|&v| geometry::distance(mesh.vertex(v), x) < 1e-12)
             .unwrap()

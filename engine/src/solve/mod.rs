@@ -378,24 +378,14 @@ impl Solve<'_> {
             "events.csv",
             propagation::events_csv(events, &config.time).as_bytes(),
         )?;
-        let order = config.solver.order;
-        let cracks = propagation::crack_edges(
-            &state.mesh,
-            &state.solution,
-            fracture,
-            order,
-            |tag| match self.problem.interfaces.law(tag) {
-                sdg_solver::interface::Law::Damage(d) => d.initial,
-                _ => 1.0,
-            },
-        );
+        let cracks = front_cracks(self.problem, fracture, state);
         if config.output.png {
             let time = config.time.clock(state.front.min_time());
             let fork = (config.fracture.as_ref())
                 .and_then(|f| f.macro_length)
                 .and_then(|length| {
                     let tips = initial_tip_points(fracture, &self.problem.mesh);
-                    propagation::macro_fork(&state.mesh, fracture, events, length, &tips)
+                    propagation::macro_fork(&state.mesh, fracture, events, &cracks, length, &tips)
                 });
             propagation::write_crack_path_png(
                 dir,
@@ -875,6 +865,25 @@ pub fn estimate_job(problem: &Problem, options: &RunOptions) -> Result<Estimate,
         .estimate(problem, start.max_star, threads, start.adapt.is_some()))
 }
 
+/// The crack edges of `state` with their damage on the front (initial cracks without a face
+/// solved at their law's initial damage, 1 for other laws).
+fn front_cracks(
+    problem: &Problem,
+    fracture: &crate::fracture::Fracture,
+    state: &Frontier,
+) -> Vec<propagation::CrackEdge> {
+    propagation::crack_edges(
+        &state.mesh,
+        &state.solution,
+        fracture,
+        problem.loaded.config.solver.order,
+        |tag| match problem.interfaces.law(tag) {
+            sdg_solver::interface::Law::Damage(d) => d.initial,
+            _ => 1.0,
+        },
+    )
+}
+
 /// The positions (m) of the tips of the initial cracks on the initial `mesh`.
 fn initial_tip_points(fracture: &crate::fracture::Fracture, mesh: &Mesh) -> Vec<[f64; 2]> {
     (fracture.initial_tips(mesh).iter())
@@ -1344,7 +1353,7 @@ fn run_job(
             let macro_length = config.fracture.as_ref().and_then(|f| f.macro_length);
             propagation::summary(
                 &book.fracture_events,
-                &state,
+                (&state, &front_cracks(problem, fracture, &state)),
                 fracture,
                 (&initial_tips, macro_length),
                 &config.time,

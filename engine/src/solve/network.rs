@@ -14,7 +14,9 @@
 //! second of those started. Microbranches, side cracks and the steps of a wavy crack leave arms
 //! shorter than `length` and are no macro fork; the seed's "the crack branches at 0.37 mm ahead
 //! of the initial crack tip at 2.26 us" is the first macro fork. Times are those of the crack
-//! edges, made ahead of the damage that debonds them.
+//! edges, made ahead of the damage that debonds them. The reach counts crack edges whatever
+//! their damage; each arm's *open* length is how much of the path of its reach lies on edges
+//! at [`OPEN_DAMAGE`] or more, the part that is an open crack.
 
 use std::cmp::Ordering;
 use std::collections::{BTreeMap, BinaryHeap};
@@ -34,7 +36,13 @@ pub(super) struct CrackLink {
     pub(super) time: f64,
     /// It belongs to an initial crack.
     pub(super) initial: bool,
+    /// Its damage on the front, in [0, 1].
+    pub(super) damage: f64,
 }
+
+/// The damage from which a crack edge counts as open: its faces carry at most 1% of the
+/// bonded traction.
+pub const OPEN_DAMAGE: f64 = 0.99;
 
 /// The first macroscopic fork of the crack network.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -48,10 +56,14 @@ pub struct MacroFork {
     /// Reach of each arm other than the incoming one that reaches the macro length, longest
     /// first, m.
     pub arms: Vec<f64>,
+    /// Per arm of `arms`, the length of the path of its reach (the shortest along crack edges
+    /// from the fork to the arm's farthest point) that lies on open edges (damage at least
+    /// [`OPEN_DAMAGE`]), m.
+    pub open_arms: Vec<f64>,
 }
 
-/// A vertex's neighbour along a crack edge, with the edge's length (m) and time (s).
-type Neighbour = (VertexId, f64, f64);
+/// A vertex's neighbour along a crack edge, with the edge's length (m), time (s) and damage.
+type Neighbour = (VertexId, f64, f64, f64);
 
 /// Per vertex of the network: its neighbours, its position (m) and whether an initial crack's
 /// edge ends there.
@@ -71,7 +83,9 @@ pub(super) fn first_macro_fork(
             let entry = graph
                 .entry(v)
                 .or_insert_with(|| (Vec::new(), link.points[i], false));
-            entry.0.push((link.ends[1 - i], length, link.time));
+            entry
+                .0
+                .push((link.ends[1 - i], length, link.time, link.damage));
             entry.2 |= link.initial;
         }
     }
@@ -80,7 +94,7 @@ pub(super) fn first_macro_fork(
         if neighbours.len() < 3 {
             continue;
         }
-        let Some((time, arms)) = fork_at(&graph, v, length) else {
+        let Some((time, arms, open_arms)) = fork_at(&graph, v, length) else {
             continue;
         };
         let candidate = MacroFork {
@@ -91,6 +105,7 @@ pub(super) fn first_macro_fork(
                 .map(|&tip| distance(tip, *point))
                 .min_by(f64::total_cmp),
             arms,
+            open_arms,
         };
         let earlier = |a: &MacroFork, b: &MacroFork| {
             a.time.total_cmp(&b.time).then(
@@ -111,37 +126,44 @@ pub(super) fn first_macro_fork(
 /// that links two cracks just past the fork) does not merge the arms it joins.
 const CORE: f64 = 0.1;
 
-/// When `v` is a macro fork for `length` (m): the time it forked (s) and the reaches of its
-/// long forward arms (m), longest first. The arms are the parts of the network outside the
-/// fork's core that hang on it; an arm starts with the earliest of its edges to the core.
-fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<(f64, Vec<f64>)> {
-    let distances = distances_from(graph, v);
+/// A fork's time (s), the reaches of its long forward arms (m), longest first, and their open
+/// lengths (m).
+type ForkArms = (f64, Vec<f64>, Vec<f64>);
+
+/// When `v` is a macro fork for `length` (m), its [`ForkArms`]. The arms are the parts of the
+/// network outside the fork's core that hang on it; an arm starts with the earliest of its
+/// edges to the core.
+fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<ForkArms> {
+    let (distances, previous) = distances_from(graph, v);
     let in_core = |u: VertexId| distances[&u] < CORE * length;
     let core: Vec<VertexId> = distances.keys().copied().filter(|&u| in_core(u)).collect();
     let mut arm_of: BTreeMap<VertexId, usize> = BTreeMap::new();
-    // (holds an initial crack, start, reach) of each arm.
-    let mut arms: Vec<(bool, f64, f64)> = Vec::new();
+    // (holds an initial crack, start, reach, farthest vertex) of each arm.
+    let mut arms: Vec<(bool, f64, f64, VertexId)> = Vec::new();
     for &c in &core {
-        for &(first, _, time) in &graph[&c].0 {
+        for &(first, _, time, _) in &graph[&c].0 {
             if in_core(first) {
                 continue;
             }
             if !arm_of.contains_key(&first) {
                 let arm = arms.len();
-                let (mut reach, mut initial) = (0.0f64, false);
+                let (mut reach, mut farthest, mut initial) = (0.0f64, first, false);
                 let mut stack = vec![first];
                 arm_of.insert(first, arm);
                 while let Some(u) = stack.pop() {
-                    reach = reach.max(distances[&u]);
+                    let d = distances[&u];
+                    if d > reach || (d == reach && u < farthest) {
+                        (reach, farthest) = (d, u);
+                    }
                     initial |= graph[&u].2;
-                    for &(w, _, _) in &graph[&u].0 {
+                    for &(w, _, _, _) in &graph[&u].0 {
                         if !in_core(w) && !arm_of.contains_key(&w) {
                             arm_of.insert(w, arm);
                             stack.push(w);
                         }
                     }
                 }
-                arms.push((initial, f64::INFINITY, reach));
+                arms.push((initial, f64::INFINITY, reach, farthest));
             }
             let start = &mut arms[arm_of[&first]].1;
             *start = start.min(time);
@@ -153,11 +175,12 @@ fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<(f64, Vec<f64>)> {
             .then(a.1.total_cmp(&b.1))
             .then(b.2.total_cmp(&a.2))
     });
-    let mut long: Vec<(f64, f64)> = arms
+    // (start, reach, open length) of the long forward arms.
+    let mut long: Vec<(f64, f64, f64)> = arms
         .into_iter()
         .skip(1)
         .filter(|a| a.2 >= length)
-        .map(|a| (a.1, a.2))
+        .map(|a| (a.1, a.2, open_length(&previous, a.3)))
         .collect();
     long.sort_by(|a, b| a.0.total_cmp(&b.0));
     if long.len() < 2 {
@@ -165,26 +188,49 @@ fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<(f64, Vec<f64>)> {
     }
     let time = long[1].0;
     long.sort_by(|a, b| b.1.total_cmp(&a.1));
-    Some((time, long.into_iter().map(|a| a.1).collect()))
+    Some((
+        time,
+        long.iter().map(|a| a.1).collect(),
+        long.iter().map(|a| a.2).collect(),
+    ))
 }
 
-/// Distances (m) along crack edges from `v` to every vertex of its part of the network.
-fn distances_from(graph: &Graph, v: VertexId) -> BTreeMap<VertexId, f64> {
+/// Per vertex reached, the previous vertex on its shortest path and the length (m) and damage
+/// of the edge from there.
+type Previous = BTreeMap<VertexId, (VertexId, f64, f64)>;
+
+/// Distances (m) along crack edges from `v` to every vertex of its part of the network, and the
+/// shortest paths' [`Previous`].
+fn distances_from(graph: &Graph, v: VertexId) -> (BTreeMap<VertexId, f64>, Previous) {
     let mut best: BTreeMap<VertexId, f64> = BTreeMap::from([(v, 0.0)]);
+    let mut previous = Previous::new();
     let mut queue = BinaryHeap::from([Nearest(0.0, v)]);
     while let Some(Nearest(d, u)) = queue.pop() {
         if d > best[&u] {
             continue;
         }
-        for &(w, edge, _) in &graph[&u].0 {
+        for &(w, edge, _, damage) in &graph[&u].0 {
             let next = d + edge;
             if best.get(&w).is_none_or(|&old| next < old) {
                 best.insert(w, next);
+                previous.insert(w, (u, edge, damage));
                 queue.push(Nearest(next, w));
             }
         }
     }
-    best
+    (best, previous)
+}
+
+/// The length (m) of the open edges on the shortest path to `u` that `previous` records.
+fn open_length(previous: &Previous, mut u: VertexId) -> f64 {
+    let mut open = 0.0;
+    while let Some(&(from, edge, damage)) = previous.get(&u) {
+        if damage >= OPEN_DAMAGE {
+            open += edge;
+        }
+        u = from;
+    }
+    open
 }
 
 /// A queue entry of Dijkstra's search, nearest first.
@@ -223,6 +269,7 @@ mod tests {
                 points: [w[0], w[1]],
                 time: times[i],
                 initial: times[i] == 0.0,
+                damage: 1.0,
             })
             .collect()
     }
@@ -236,18 +283,21 @@ mod tests {
             points: [[1.0, 0.0], [1.5, 0.5]],
             time: 1.0,
             initial: false,
+            damage: 1.0,
         });
         links.push(CrackLink {
             ends: [2, 3],
             points: [[1.5, 0.5], [2.0, 1.0]],
             time: 1.5,
             initial: false,
+            damage: 1.0,
         });
         links.push(CrackLink {
             ends: [1, 4],
             points: [[1.0, 0.0], [1.5, -0.5]],
             time: 2.0,
             initial: false,
+            damage: 1.0,
         });
         links
     }
@@ -302,6 +352,7 @@ mod tests {
                 points,
                 time,
                 initial: false,
+                damage: 1.0,
             });
         }
         let fork = first_macro_fork(&links, 0.5, &[[1.0, 0.0]]).unwrap();
@@ -324,6 +375,7 @@ mod tests {
                 points: [w[0], w[1]],
                 time: 1.0 + i as f64,
                 initial: false,
+                damage: 1.0,
             });
         }
         links.push(CrackLink {
@@ -331,6 +383,7 @@ mod tests {
             points: [[3.0, 0.0], [9.0, 0.0]],
             time: 9.0,
             initial: false,
+            damage: 1.0,
         });
         assert_eq!(first_macro_fork(&links, 0.5, &[]), None);
     }

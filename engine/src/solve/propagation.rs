@@ -21,7 +21,7 @@ use std::borrow::Cow;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
-use sdg_mesh::{EdgeId, Mesh, TriangleId, VertexId};
+use sdg_mesh::{EdgeId, Mesh, TagId, TriangleId, VertexId};
 use sdg_scheduler::{Changed, Region};
 use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, evaluate};
@@ -638,12 +638,12 @@ const ZOOM_MAX_EDGED_VERTICES: usize = 1500;
 /// Size of `crack_path.png`, pixels.
 const CRACK_PATH_PNG_SIZE: (u32, u32) = (1200, 900);
 
-/// The summary of the fracture events of a run on the final `state`; `initial_tips` are the
-/// positions of the initial cracks' tips, m; `macro_length` the arms' reach of a macro fork, m;
-/// its times are on the clock of `time`.
+/// The summary of the fracture events of a run on the final `state`, whose crack edges are
+/// `cracks`; `initial_tips` are the positions of the initial cracks' tips, m; `macro_length`
+/// the arms' reach of a macro fork, m; its times are on the clock of `time`.
 pub(super) fn summary(
     events: &[FractureEvent],
-    state: &Frontier,
+    (state, cracks): (&Frontier, &[CrackEdge]),
     fracture: &Fracture,
     (initial_tips, macro_length): (&[[f64; 2]], Option<f64>),
     time: &TimeConfig,
@@ -651,7 +651,7 @@ pub(super) fn summary(
     let count = |kind: &str| events.iter().filter(|e| e.kind == kind).count() as u64;
     let (first_branching_time, first_branching_distance) = first_branching(events, initial_tips);
     let macro_branching = macro_length
-        .and_then(|length| macro_fork(&state.mesh, fracture, events, length, initial_tips))
+        .and_then(|length| macro_fork(&state.mesh, fracture, events, cracks, length, initial_tips))
         .map(|fork| MacroFork {
             time: time.clock(fork.time),
             ..fork
@@ -682,21 +682,28 @@ pub(super) fn macro_fork(
     mesh: &Mesh,
     fracture: &Fracture,
     events: &[FractureEvent],
+    cracks: &[CrackEdge],
     length: f64,
     initial_tips: &[[f64; 2]],
 ) -> Option<MacroFork> {
-    network::first_macro_fork(&crack_links(mesh, fracture, events), length, initial_tips)
+    let links = crack_links(mesh, fracture.tag, events, cracks);
+    network::first_macro_fork(&links, length, initial_tips)
 }
 
-/// The crack edges of `mesh` as links of the crack network, each made when the extension
-/// whose segment it lies on was (see [`cracks_csv`]), initial cracks (every tag but the one of
-/// new crack edges) at 0.
-fn crack_links(mesh: &Mesh, fracture: &Fracture, events: &[FractureEvent]) -> Vec<CrackLink> {
+/// The crack edges `cracks` of `mesh` as links of the crack network with their damage, each
+/// made when the extension whose segment it lies on was (see [`cracks_csv`]), initial cracks
+/// (every tag but `grown`, the one of new crack edges) at 0.
+fn crack_links(
+    mesh: &Mesh,
+    grown: TagId,
+    events: &[FractureEvent],
+    cracks: &[CrackEdge],
+) -> Vec<CrackLink> {
     let extensions: Vec<&FractureEvent> = events.iter().filter(|e| e.kind == "extension").collect();
-    mesh.edges()
+    cracks
         .iter()
-        .filter(|edge| fracture.is_crack(edge.tag))
-        .map(|edge| {
+        .map(|crack| {
+            let edge = &mesh.edges()[crack.edge as usize];
             let points = edge.vertices.map(|w| mesh.vertex(w));
             let middle = [
                 0.5 * (points[0][0] + points[1][0]),
@@ -710,7 +717,8 @@ fn crack_links(mesh: &Mesh, fracture: &Fracture, events: &[FractureEvent]) -> Ve
                 ends: edge.vertices,
                 points,
                 time,
-                initial: edge.tag != Some(fracture.tag),
+                initial: edge.tag != Some(grown),
+                damage: crack.damage,
             }
         })
         .collect()
@@ -796,6 +804,7 @@ fn on_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
 
 #[cfg(test)]
 mod tests {
+    use super::super::network::OPEN_DAMAGE;
     use super::*;
     use sdg_solver::crack::Level;
 
@@ -842,6 +851,51 @@ mod tests {
         let [x0, x1, ..] = zoom_window([[2e-3, 5e-3]].into_iter(), &domain).unwrap();
         assert!((x1 - x0 - 0.012 * 16e-3f64.hypot(10e-3)).abs() < 1e-12);
         assert_eq!(zoom_window(std::iter::empty(), &domain), None);
+    }
+
+    /// On the unit square's notch to its centre, cracks grown up and down from the notch's tip
+    /// along the grid (quarter-length edges) make a macro fork there with two half-length arms;
+    /// the lower arm's second edge is half damaged, so a quarter of that arm is open.
+    #[test]
+    fn a_macro_fork_s_arms_count_their_open_length() {
+        let (mut mesh, fracture) = crate::fracture::tests::notched();
+        let at = |mesh: &Mesh, x| crate::fracture::tests::vertex_at(mesh, x);
+        let path = [[0.5, 1.0], [0.5, 0.75], [0.5, 0.5], [0.5, 0.25], [0.5, 0.0]];
+        let mut events = Vec::new();
+        for (i, pair) in path.windows(2).enumerate() {
+            let e = mesh
+                .edge_between(at(&mesh, pair[0]), at(&mesh, pair[1]))
+                .unwrap();
+            mesh.set_tag(e, Some(fracture.tag));
+            events.push(extension(i as f64, i as u32, pair[0], pair[1]));
+        }
+        let cracks = |half_damaged: f64| -> Vec<CrackEdge> {
+            (0..mesh.edges().len() as EdgeId)
+                .filter(|&e| fracture.is_crack(mesh.edges()[e as usize].tag))
+                .map(|e| {
+                    let ends = mesh.edges()[e as usize].vertices.map(|v| mesh.vertex(v));
+                    let lowest = ends[0][1].min(ends[1][1]) == 0.0;
+                    CrackEdge {
+                        edge: e,
+                        ends,
+                        damage: if lowest { half_damaged } else { 1.0 },
+                    }
+                })
+                .collect()
+        };
+        let tips = [[0.5, 0.5]];
+        let fork = macro_fork(&mesh, &fracture, &events, &cracks(0.5), 0.5, &tips).unwrap();
+        assert_eq!((fork.point, fork.distance), ([0.5, 0.5], Some(0.0)));
+        assert_eq!(
+            (fork.arms, fork.open_arms),
+            (vec![0.5, 0.5], vec![0.5, 0.25])
+        );
+        // An edge at the threshold is open; just below it, not.
+        let fork = macro_fork(&mesh, &fracture, &events, &cracks(OPEN_DAMAGE), 0.5, &tips);
+        assert_eq!(fork.unwrap().open_arms, vec![0.5, 0.5]);
+        let below = OPEN_DAMAGE - 1e-9;
+        let fork = macro_fork(&mesh, &fracture, &events, &cracks(below), 0.5, &tips);
+        assert_eq!(fork.unwrap().open_arms, vec![0.5, 0.25]);
     }
 
     fn extension(time: f64, branch: u32, from: [f64; 2], to: [f64; 2]) -> FractureEvent {
