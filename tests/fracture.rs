@@ -554,8 +554,9 @@ fn the_full_branching_run_is_the_main_job_finer_over_the_seed_s_time_span() {
 }
 
 /// `configs/crack_branching_set2.toml` is the main job with the seed's second parameter set
-/// (4.5: `tau = 1e-3 us`, `rho_N` 100 times larger) at the full run's finer resolution
-/// (`adapt.min_edge`), with crack tips refined from the start, to the seed's 3.0 us.
+/// (4.5: `tau = 1e-3 us`, `rho_N` 100 times larger) at half the full run's floor
+/// (`adapt.min_edge`: the set's process zone is a tenth of the first's), with crack tips
+/// refined from the start, to the seed's 3.0 us.
 #[test]
 fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved_tips() {
     let (mut main, mut set2, full) = (
@@ -576,8 +577,11 @@ fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved
     }
     assert_eq!(float(&main["fracture"]["defect_density"]) * 100.0, 1e13);
     assert_eq!(float(&set2["fracture"]["defect_density"]), 1e13);
-    assert_eq!(float(&set2["adapt"]["tip_edge"]), 6e-6);
-    assert_eq!(set2["adapt"]["min_edge"], full["adapt"]["min_edge"]);
+    assert_eq!(float(&set2["adapt"]["tip_edge"]), 3e-6);
+    assert_eq!(
+        float(&set2["adapt"]["min_edge"]),
+        0.5 * float(&full["adapt"]["min_edge"])
+    );
     assert!((float(&set2["time"]["end"]) - 3e-6).abs() < 1e-8);
     assert!(!main["adapt"].as_table().unwrap().contains_key("tip_edge"));
     for t in [&mut main, &mut set2] {
