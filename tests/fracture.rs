@@ -17,13 +17,15 @@ fn events(dir: &Path) -> (Vec<Vec<f64>>, Vec<String>) {
         &dir.join("events.csv"),
         &["time_s", "x_m", "y_m", "to_x_m", "to_y_m"],
     );
+    (rows, column(dir, 1))
+}
+
+/// Column `index` of every `events.csv` row, as text.
+fn column(dir: &Path, index: usize) -> Vec<String> {
     let text = std::fs::read_to_string(dir.join("events.csv")).unwrap();
-    let kinds = text
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(1).unwrap().to_string())
-        .collect();
-    (rows, kinds)
+    (text.lines().skip(1))
+        .map(|l| l.split(',').nth(index).unwrap().to_string())
+        .collect()
 }
 
 #[test]
@@ -64,8 +66,8 @@ fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branch
         straight += 1;
     }
     assert!(straight >= 5, "{extensions:?}");
-    let fork = [extensions[straight], extensions[straight + 1]];
-    let angles = fork.map(|e| {
+    let fork_edges = [extensions[straight], extensions[straight + 1]];
+    let angles = fork_edges.map(|e| {
         assert_eq!([e[1], e[2]], [x, 1e-3], "{e:?}");
         (e[4] - e[2]).atan2(e[3] - e[1]).to_degrees()
     });
@@ -91,13 +93,27 @@ fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branch
     );
     // The mesh refused both splits when the tip's tent tested it (the front too steep over the
     // crossed triangles for their thin children) and made them when a neighbour's tent retried
-    // them, at the tip's same front time: a branching made whole or not at all.
-    let refused = rows
-        .iter()
-        .zip(&kinds)
-        .filter(|(r, kind)| *kind == "refused" && r[..3] == rows[branching][..3])
-        .count();
-    assert_eq!(refused, 2, "{rows:?} {kinds:?}");
+    // them, at the tip's same front time: a branching made whole or not at all. Each refused
+    // row names that reason and ends where its retried edge ended.
+    let reasons = column(dir.path(), 7);
+    let refused: Vec<usize> = (0..rows.len())
+        .filter(|&i| kinds[i] == "refused" && rows[i][..3] == rows[branching][..3])
+        .collect();
+    assert_eq!(refused.len(), 2, "{rows:?} {kinds:?}");
+    for (&i, made) in refused.iter().zip(fork_edges) {
+        assert_eq!(reasons[i], "front", "{reasons:?}");
+        let miss = (rows[i][3] - made[3]).hypot(rows[i][4] - made[4]);
+        assert!(miss < 1e-15, "refused {:?}, made {made:?}", rows[i]);
+    }
+    assert!(
+        (reasons.iter().zip(&kinds)).all(|(r, k)| r.is_empty() == (k != "refused")),
+        "{reasons:?} {kinds:?}"
+    );
+    assert_eq!(
+        fracture.refusals.values().sum::<u64>(),
+        fracture.refused,
+        "{fracture:?}"
+    );
     // The first new edges are debonded (D = 1 up to the polynomial's overshoot).
     let cracks = csv_columns(
         &dir.path().join("cracks.csv"),

@@ -77,9 +77,47 @@ pub(super) struct FractureEvent {
     kind: Cow<'static, str>,
     /// The crack branch; none for a coarsening of an initial crack's edges.
     branch: Option<u32>,
-    /// Where it happened and, for an extension, the new edge's far end (m).
+    /// Where it happened and, for an extension, the new edge's far end; for a refused edge,
+    /// where it would have ended (the crossing of its direction with the edge opposite the tip,
+    /// or the vertex it would have taken), m.
     from: [f64; 2],
     to: [f64; 2],
+    /// Why a new edge was refused ([`Refusal::name`]); none for other events.
+    #[serde(default)]
+    reason: Option<Cow<'static, str>>,
+}
+
+/// Why the mesh could not make a new crack edge when its tip was tested.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Refusal {
+    /// The direction leaves the domain at the tip (a boundary vertex).
+    Outside,
+    /// No split of the crossed edge may leave pieces that short (`fracture.min_piece`) and no
+    /// end of it lies within `fracture.floor_angle` of the direction under the rules.
+    Floor,
+    /// The front over the crossed triangle is too steep for the split's thin child now
+    /// ([`sdg_mesh::Pitcher::may_split_at`]); it changes as the triangle's corners are pitched.
+    Front,
+    /// A child of the split would be degenerate (a very flat triangle).
+    Degenerate,
+    /// The tip's two new edges would be closer than the shield angle.
+    Shield,
+    /// The closure of the tip's second split split its first new edge.
+    Closure,
+}
+
+impl Refusal {
+    /// The name in `events.csv` and `summary.json`.
+    fn name(self) -> &'static str {
+        match self {
+            Refusal::Outside => "outside",
+            Refusal::Floor => "floor",
+            Refusal::Front => "front",
+            Refusal::Degenerate => "degenerate",
+            Refusal::Shield => "shield",
+            Refusal::Closure => "closure",
+        }
+    }
 }
 
 /// `fracture` in `summary.json`.
@@ -96,6 +134,8 @@ pub struct FractureSummary {
     /// New crack edges the mesh could not make when their tip was tested; the tip tries again
     /// after its neighbours' tents.
     pub refused: u64,
+    /// `refused` by reason (`events.csv` column `reason`), reasons that occurred only.
+    pub refusals: BTreeMap<String, u64>,
     /// Merges of two fully debonded crack edges into one by coarsening (the crack's wake).
     pub wake_coarsenings: u64,
     /// Crack branches: the initial tips, every branching's new one and each half of every
@@ -204,7 +244,7 @@ impl Solve<'_> {
                         _ => false,
                     }) =>
                 {
-                    Plan::Refused
+                    Plan::Refused(Refusal::Shield, state.mesh.vertex(w))
                 }
                 plan => plan,
             };
@@ -215,16 +255,23 @@ impl Solve<'_> {
             if let Plan::Edge(w) = *plan
                 && state.mesh.edge_between(v, w).is_none()
             {
-                *plan = Plan::Refused;
+                *plan = Plan::Refused(Refusal::Closure, state.mesh.vertex(w));
             }
         }
-        let refused = plans.iter().filter(|&&p| p == Plan::Refused).count();
+        let refusals: Vec<(Refusal, [f64; 2])> = plans
+            .iter()
+            .filter_map(|&p| match p {
+                Plan::Refused(reason, toward) => Some((reason, toward)),
+                _ => None,
+            })
+            .collect();
         let event = |kind: &'static str, branch, to| FractureEvent {
             time,
             kind: kind.into(),
             branch,
             from: at,
             to,
+            reason: None,
         };
         let mut events = Vec::new();
         if extension.nucleation {
@@ -232,12 +279,15 @@ impl Solve<'_> {
         }
         if !extension.retry {
             let branch = tip.map(|tip| tip.branch);
-            events.extend((0..refused).map(|_| event("refused", branch, at)));
+            events.extend(refusals.iter().map(|&(reason, toward)| FractureEvent {
+                reason: Some(reason.name().into()),
+                ..event("refused", branch, toward)
+            }));
         }
         // A tip makes all its edges or none (a branching is not lost half-made); its splits
         // stay as refinements, and the same directions are tried again after neighbours' tents.
         if let Some(tip) = &mut state.tips[v as usize]
-            && refused > 0
+            && !refusals.is_empty()
         {
             tip.pending = Some(Pending {
                 directions: extension.directions,
@@ -255,7 +305,7 @@ impl Solve<'_> {
                 _ => (state.next_branch, true),
             };
             let target = match plan {
-                Plan::Refused => continue,
+                Plan::Refused(..) => continue,
                 Plan::Arrest => {
                     events.push(event("arrest", Some(branch), at));
                     state.tips[v as usize] = None;
@@ -320,7 +370,7 @@ impl Solve<'_> {
     ) -> Plan {
         let mesh = &state.mesh;
         let Some(c) = fracture::crossing(mesh, v, d) else {
-            return Plan::Refused;
+            return Plan::Refused(Refusal::Outside, mesh.vertex(v));
         };
         let tip = tip.unwrap_or(Tip {
             direction: d,
@@ -330,6 +380,10 @@ impl Solve<'_> {
         // The edge's ends, the one nearer the crossing first.
         let [p, q] = mesh.edges()[c.edge as usize].vertices;
         let ends = if c.fraction < 0.5 { [p, q] } else { [q, p] };
+        let toward = {
+            let [a, b] = [p, q].map(|w| mesh.vertex(w));
+            [0, 1].map(|k| a[k] + c.fraction * (b[k] - a[k]))
+        };
         if fracture.is_crack(mesh.edges()[c.edge as usize].tag) {
             // The direction runs into another crack: the tip joins it at an end of the crack
             // edge it meets, or stops short of it where the shield angle forbids both.
@@ -348,7 +402,7 @@ impl Solve<'_> {
             return ends
                 .into_iter()
                 .find(|&w| may_take(mesh, w, fracture.floor_angle))
-                .map_or(Plan::Refused, Plan::Edge);
+                .map_or(Plan::Refused(Refusal::Floor, toward), Plan::Edge);
         }
         match self.split_at(state, region, c.triangle, Some(c.corner), c.fraction) {
             Ok((split, more, new)) => {
@@ -357,11 +411,10 @@ impl Solve<'_> {
                 if split {
                     Plan::Edge(*new.last().expect("a split adds a vertex"))
                 } else {
-                    Plan::Refused
+                    Plan::Refused(Refusal::Front, toward)
                 }
             }
-            // A child would be degenerate (a very flat triangle): as refused.
-            Err(_) => Plan::Refused,
+            Err(_) => Plan::Refused(Refusal::Degenerate, toward),
         }
     }
 }
@@ -380,8 +433,9 @@ enum Plan {
     Edge(VertexId),
     /// The direction crosses a crack and no edge may join it: the tip stops short.
     Arrest,
-    /// The mesh cannot make the edge now.
-    Refused,
+    /// The mesh cannot make the edge now, for this reason; it would have ended at this point
+    /// (m).
+    Refused(Refusal, [f64; 2]),
 }
 
 /// The in-plane stress (Pa) at the tent's vertex `v` at time `t` (s), the middle of its pole, in
@@ -417,18 +471,19 @@ fn element_stress(
 /// `events.csv`: one line per fracture event in the order they happened, at its time on the
 /// clock of `time`.
 pub(super) fn events_csv(events: &[FractureEvent], time: &TimeConfig) -> String {
-    let mut csv = String::from("time_s,event,branch,x_m,y_m,to_x_m,to_y_m\n");
+    let mut csv = String::from("time_s,event,branch,x_m,y_m,to_x_m,to_y_m,reason\n");
     for e in events {
         let _ = writeln!(
             csv,
-            "{:e},{},{},{:e},{:e},{:e},{:e}",
+            "{:e},{},{},{:e},{:e},{:e},{:e},{}",
             time.clock(e.time),
             e.kind,
             e.branch.map_or(String::new(), |b| b.to_string()),
             e.from[0],
             e.from[1],
             e.to[0],
-            e.to[1]
+            e.to[1],
+            e.reason.as_deref().unwrap_or("")
         );
     }
     csv
@@ -514,6 +569,7 @@ pub(super) fn wake_coarsening(
             .and_then(|e| e.branch),
         from,
         to,
+        reason: None,
     }
 }
 
@@ -662,6 +718,13 @@ pub(super) fn summary(
         branchings: count("branching"),
         arrests: count("arrest"),
         refused: count("refused"),
+        refusals: events.iter().filter_map(|e| e.reason.as_deref()).fold(
+            BTreeMap::new(),
+            |mut by, reason| {
+                *by.entry(reason.to_owned()).or_insert(0) += 1;
+                by
+            },
+        ),
         wake_coarsenings: count("coarsening"),
         branches: state.next_branch,
         active_tips: state.tips.iter().flatten().count(),
@@ -905,6 +968,7 @@ mod tests {
             branch: Some(branch),
             from,
             to,
+            reason: None,
         }
     }
 
@@ -942,6 +1006,7 @@ mod tests {
             branch: Some(2),
             from: [0.0, 0.0],
             to: [0.0, 0.0],
+            reason: None,
         }];
         let mut crossings = Vec::new();
         let mut tip = |x: f64, time: f64| {
