@@ -8,7 +8,8 @@ run's clock) and prints:
   1 - eps after -ln((exp(a eps) - 1) / (exp(a) - 1)) / a delays: 1.69 tau for a = 10 and
   eps = 1e-4, the shipped law's;
 - per branch with states above c_R, its extensions in time order with the gap to the previous
-  one and the speed that gap lays the edge at, over c_R.
+  one, the speed that gap lays the edge at, over c_R, and the tests the mesh refused at the
+  tip in that gap by reason (the `reason` column of events.csv, docs/config.md).
 
 Usage: python3 scripts/crack_lag.py OUTPUT [TAU_S [C_R_M_S]]   (defaults 1e-8 s, 938 m/s: the
 main job's delay and PMMA's Rayleigh speed). Python 3 standard library only.
@@ -56,6 +57,11 @@ def main():
         for e in events
         if e["event"] == "extension"
     ]
+    refused = [
+        (float(e["time_s"]), e["branch"], (float(e["x_m"]), float(e["y_m"])), e.get("reason", ""))
+        for e in events
+        if e["event"] == "refused"
+    ]
     above, below, fast = [], [], set()
     with open(out + "/crack_tips.csv") as f:
         for row in csv.DictReader(f):
@@ -73,14 +79,19 @@ def main():
     print("  %4d states above c_R: %s" % (len(above), quantiles(above)))
     print("  %4d other states:     %s" % (len(below), quantiles(below)))
     for branch in sorted(fast, key=int):
-        print("branch %s, extensions (time, gap, laid at):" % branch)
+        print("branch %s, extensions (time, gap, laid at, refused tests since):" % branch)
         previous = None
         for t, b, a, z in sorted(e for e in laid if e[1] == branch):
             line = "  %.4f us" % (t * 1e6)
             if previous is not None and t > previous:
                 gap = t - previous
                 line += "  %6.2f ns  %6.2f c_R" % (gap * 1e9, math.dist(a, z) / gap / c_r)
-            print(line)
+                reasons = {}
+                for rt, rb, at, reason in refused:
+                    if rb == branch and at == a and previous < rt <= t:
+                        reasons[reason] = reasons.get(reason, 0) + 1
+                line += "  " + ", ".join("%d %s" % (n, r) for r, n in sorted(reasons.items()))
+            print(line.rstrip())
             previous = t
 
 
