@@ -58,8 +58,8 @@ fn paths(value: &Value, prefix: &str, out: &mut BTreeSet<String>) {
 }
 
 /// Runs the shipped `config` with `sets` on one thread and checks its summary against the
-/// documentation; `sections` are optional keys the run must write.
-fn check(config: &str, sets: &[&str], sections: &[&str]) {
+/// documentation; `sections` are optional keys the run must write. Returns the summary.
+fn check(config: &str, sets: &[&str], sections: &[&str]) -> Value {
     let dir = tempfile::tempdir().unwrap();
     let config = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("configs")
@@ -103,6 +103,7 @@ fn check(config: &str, sets: &[&str], sections: &[&str]) {
     for s in sections {
         assert!(written.contains(*s), "{s} not written: {text}");
     }
+    summary
 }
 
 #[test]
@@ -119,16 +120,29 @@ fn plane_wave_summary_is_documented() {
     );
 }
 
+/// With `[fracture]`, `crack` repeats the network's totals of `fracture` under the names of
+/// the crack-branching problem's outputs.
 #[test]
 fn fracture_summary_is_documented() {
-    check(
-        "crack_growth.toml",
-        &["time.end=2e-8"],
-        &["crack", "fracture"],
-    );
+    let network = [
+        "branches",
+        "total_length",
+        "first_branching_time",
+        "first_branching_distance",
+    ];
+    let keys: Vec<String> = network.iter().map(|k| format!("crack.{k}")).collect();
+    let mut sections = vec!["crack", "fracture"];
+    sections.extend(keys.iter().map(String::as_str));
+    let summary = check("crack_growth.toml", &["time.end=2e-8"], &sections);
+    for k in network {
+        assert_eq!(summary["crack"][k], summary["fracture"][k], "{k}");
+    }
+    assert!(summary["crack"]["branches"].as_u64().unwrap() >= 1);
 }
 
+/// Without `[fracture]`, `crack` has the tips' keys alone.
 #[test]
 fn loading_summary_is_documented() {
-    check("mode1_lefm.toml", &["time.end=2e-8"], &["loading", "crack"]);
+    let summary = check("mode1_lefm.toml", &["time.end=2e-8"], &["loading", "crack"]);
+    assert!(summary["crack"].get("branches").is_none(), "{summary}");
 }

@@ -66,6 +66,26 @@ pub struct CrackSummary {
     pub max_speed_over_c_r: f64,
     /// Tip states whose speed is above `c_R`.
     pub states_over_c_r: usize,
+    /// With `[fracture]`, the crack network's totals under the names the crack-branching
+    /// problem gives them (`crack.branches`, ...).
+    #[serde(flatten)]
+    pub network: Option<CrackNetwork>,
+}
+
+/// The crack network's totals of a run with `[fracture]`: the values of `fracture.branches`,
+/// `fracture.total_length`, `fracture.first_branching_time` and
+/// `fracture.first_branching_distance`, repeated in `crack` where the crack-branching problem
+/// (issue 14, "Outputs") names them.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct CrackNetwork {
+    /// Crack branches.
+    pub branches: u32,
+    /// Total length of the crack edges added, m.
+    pub total_length: f64,
+    /// Time of the first branching on the config's clock, s; `null` if none.
+    pub first_branching_time: Option<f64>,
+    /// Distance from the nearest initial tip to the first branching, m; `null` if none.
+    pub first_branching_distance: Option<f64>,
 }
 
 /// Per point, the first crossing of one level.

@@ -47,7 +47,7 @@ use adaptivity::{coarsening_region, extension_region, refine_to_max_edge, refine
 use book::{Book, Milestone, Milestones};
 pub use checkpoint::Control;
 use checkpoint::Counts;
-pub use crack_output::CrackSummary;
+pub use crack_output::{CrackNetwork, CrackSummary};
 use live::Intervention;
 pub use live::{Live, solve_job_with};
 use propagation::Extension;
@@ -1320,6 +1320,17 @@ fn run_job(
             stress_l2_rel: e.stress,
         }
     });
+    let fracture = problem.fracture.as_ref().map(|fracture| {
+        let initial_tips = initial_tip_points(fracture, &problem.mesh);
+        let macro_length = config.fracture.as_ref().and_then(|f| f.macro_length);
+        propagation::summary(
+            &book.fracture_events,
+            (&state, &front_cracks(problem, fracture, &state)),
+            fracture,
+            (&initial_tips, macro_length),
+            &config.time,
+        )
+    });
     let (min_edge, max_edge) = mesh.edge_length_range();
     let mut summary = RunSummary {
         command: "run",
@@ -1347,18 +1358,16 @@ fn run_job(
         energy,
         interface,
         loading: problem.loading,
-        crack,
-        fracture: problem.fracture.as_ref().map(|fracture| {
-            let initial_tips = initial_tip_points(fracture, &problem.mesh);
-            let macro_length = config.fracture.as_ref().and_then(|f| f.macro_length);
-            propagation::summary(
-                &book.fracture_events,
-                (&state, &front_cracks(problem, fracture, &state)),
-                fracture,
-                (&initial_tips, macro_length),
-                &config.time,
-            )
+        crack: crack.map(|crack| CrackSummary {
+            network: fracture.as_ref().map(|f| CrackNetwork {
+                branches: f.branches,
+                total_length: f.total_length,
+                first_branching_time: f.first_branching_time,
+                first_branching_distance: f.first_branching_distance,
+            }),
+            ..crack
         }),
+        fracture,
         error,
         snapshots: book.snapshots.written().to_vec(),
         refinements: book.refinements,
