@@ -7,6 +7,8 @@ run's clock) and prints:
   c_R and for the others. Under full overload (f(y) = 1 from D = 0) the damage law reaches
   1 - eps after -ln((exp(a eps) - 1) / (exp(a) - 1)) / a delays: 1.69 tau for a = 10 and
   eps = 1e-4, the shipped law's;
+- per state above c_R, how its branch began (a nucleation, a branching off another branch, or
+  an initial crack's tip) and the state's distance and time from that start;
 - per branch with states above c_R, its extensions in time order with the gap to the previous
   one, the speed that gap lays the edge at, over c_R, and the tests the mesh refused at the
   tip in that gap by reason (the `reason` column of events.csv, docs/config.md).
@@ -62,7 +64,16 @@ def main():
         for e in events
         if e["event"] == "refused"
     ]
-    above, below, fast = [], [], set()
+    # A branch begins at its first extension; a nucleation or branching event at the same time
+    # and point says how (a nucleation's second branch has no event of its own).
+    starts = {(e["time_s"], e["x_m"], e["y_m"]): e["event"] for e in events
+              if e["event"] in ("nucleation", "branching")}
+    origins = {}
+    for e in events:
+        if e["event"] == "extension" and e["branch"] not in origins:
+            kind = starts.get((e["time_s"], e["x_m"], e["y_m"]), "initial crack")
+            origins[e["branch"]] = (kind, float(e["time_s"]), (float(e["x_m"]), float(e["y_m"])))
+    above, below, fast, states = [], [], set(), []
     with open(out + "/crack_tips.csv") as f:
         for row in csv.DictReader(f):
             t, point = float(row["t_s"]), (float(row["x_m"]), float(row["y_m"]))
@@ -73,11 +84,17 @@ def main():
             if float(row["speed_m_s"]) > c_r:
                 above.append(lag)
                 fast.add(row["branch"])
+                states.append((row["branch"], t, point, float(row["speed_m_s"]) / c_r))
             else:
                 below.append(lag)
     print("lag from laying to debonding, in tau:")
     print("  %4d states above c_R: %s" % (len(above), quantiles(above)))
     print("  %4d other states:     %s" % (len(below), quantiles(below)))
+    print("states above c_R (branch, time, speed, how the branch began, distance and time since):")
+    for branch, t, point, speed in states:
+        kind, start, at = origins[branch]
+        print("  %4s  %.4f us  %.2f c_R  %-13s  %6.1f um, %6.1f ns" % (
+            branch, t * 1e6, speed, kind, math.dist(point, at) * 1e6, (t - start) * 1e9))
     for branch in sorted(fast, key=int):
         print("branch %s, extensions (time, gap, laid at, refused tests since):" % branch)
         previous = None
