@@ -349,21 +349,35 @@ impl Fracture {
             return None;
         }
         let both = crack_directions(th);
-        if !on_surface {
-            return Some(both);
-        }
-        let corners = mesh.triangles()[strongest_triangle as usize].map(|w| mesh.vertex(w));
-        let [cx, cy] = [0, 1].map(|i| corners.iter().map(|p| p[i]).sum::<f64>() / 3.0);
-        let towards = (cy - y).atan2(cx - x);
-        let d = if angle_between(both[0], towards) <= angle_between(both[1], towards) {
-            both[0]
+        let directions = if on_surface {
+            let corners = mesh.triangles()[strongest_triangle as usize].map(|w| mesh.vertex(w));
+            let [cx, cy] = [0, 1].map(|i| corners.iter().map(|p| p[i]).sum::<f64>() / 3.0);
+            let towards = (cy - y).atan2(cx - x);
+            let d = if angle_between(both[0], towards) <= angle_between(both[1], towards) {
+                both[0]
+            } else {
+                both[1]
+            };
+            let clear = vertex_edges(mesh, v)
+                .filter(surface)
+                .all(|e| angle_between(d, angle_of(mesh, v, other_end(mesh, e, v))) >= self.shield);
+            if !clear || crossing(mesh, v, d).is_none() {
+                return None;
+            }
+            [d, f64::NAN]
         } else {
-            both[1]
+            both
         };
-        let clear = vertex_edges(mesh, v)
-            .filter(surface)
-            .all(|e| angle_between(d, angle_of(mesh, v, other_end(mesh, e, v))) >= self.shield);
-        (clear && crossing(mesh, v, d).is_some()).then_some([d, f64::NAN])
+        tracing::debug!(
+            vertex = v,
+            x,
+            y,
+            t = t_new,
+            traction = strongest * 1e-6,
+            defect = weakest * 1e-6,
+            "nucleation test (MPa)"
+        );
+        Some(directions)
     }
 }
 
