@@ -37,6 +37,13 @@ pub struct FractureConfig {
     /// its floor).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub floor_angle: Option<f64>,
+    /// A tip's forward half is taken about its crack's direction averaged over about this
+    /// length, m (> 0): each new edge of length `l` weighs `1 - exp(-l / tangent_length)`
+    /// against the direction before it. Default none: about the last edge alone, so that on the
+    /// finest grid, whose edges are 45 degrees apart, a tip may turn 45 degrees at every edge
+    /// and curl onto its own crack.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tangent_length: Option<f64>,
     /// No split for a crack leaves a piece of an edge shorter than this, m (> 0). Default
     /// `adapt.min_edge`, or without `[adapt]` a quarter of the initial mesh's shortest edge.
     /// Below `adapt.min_edge` the crack may split triangles the indicator no longer refines,
@@ -175,7 +182,11 @@ impl Config {
                 format!("must be in (0, 90) degrees, got {angle}"),
             );
         }
-        for (key, length) in [("macro_length", f.macro_length), ("min_piece", f.min_piece)] {
+        for (key, length) in [
+            ("macro_length", f.macro_length),
+            ("min_piece", f.min_piece),
+            ("tangent_length", f.tangent_length),
+        ] {
             if let Some(length) = length
                 && !(length.is_finite() && length > 0.0)
             {
@@ -280,6 +291,11 @@ shield_angle = 35.0
             (
                 "fracture.min_piece=-1e-6",
                 "fracture.min_piece",
+                "positive length",
+            ),
+            (
+                "fracture.tangent_length=0.0",
+                "fracture.tangent_length",
                 "positive length",
             ),
             (

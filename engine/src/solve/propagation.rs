@@ -330,7 +330,7 @@ impl Solve<'_> {
                 events.push(event("arrest", Some(branch), to));
             } else {
                 state.tips[target as usize] = Some(Tip {
-                    direction: (to[1] - at[1]).atan2(to[0] - at[0]),
+                    direction: fracture.tangent(tip.map(|t| t.direction), at, to),
                     branch,
                     pending: None,
                 });
