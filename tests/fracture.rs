@@ -571,8 +571,9 @@ fn the_full_branching_run_is_the_main_job_finer_over_the_seed_s_time_span() {
 
 /// `configs/crack_branching_set2.toml` is the main job with the seed's second parameter set
 /// (4.5: `tau = 1e-3 us`, `rho_N` 100 times larger) at half the full run's floor
-/// (`adapt.min_edge`: the set's process zone is a tenth of the first's), with crack tips
-/// refined from the start, to the seed's 3.0 us.
+/// (`adapt.min_edge`: the set's process zone `c_R tau` is a tenth of the first's, and so is the
+/// length its tips' tangent is averaged over), with crack tips refined from the start, to the
+/// seed's 3.0 us.
 #[test]
 fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved_tips() {
     let (mut main, mut set2, full) = (
@@ -581,6 +582,9 @@ fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved
         config_table("crack_branching_full.toml"),
     );
     let float = |v: &toml::Value| v.as_float().unwrap();
+    let c_r = sdg_solver::Material::new(3.24e9, 0.35, 1190.0, sdg_solver::Plane::Strain)
+        .unwrap()
+        .c_r();
     for (name, t) in [("main", &main), ("set2", &set2)] {
         let delays: Vec<f64> = t["interface"]
             .as_array()
@@ -590,6 +594,12 @@ fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved
             .collect();
         let expected = if name == "main" { 1e-8 } else { 1e-9 };
         assert_eq!(delays, [expected; 2], "{name}");
+        // Each set's tangent is averaged over its own process zone, c_R tau.
+        let length = float(&t["fracture"]["tangent_length"]);
+        assert!(
+            (length / (c_r * expected) - 1.0).abs() < 0.01,
+            "{name}: tangent_length = {length:e} m"
+        );
     }
     assert_eq!(float(&main["fracture"]["defect_density"]) * 100.0, 1e13);
     assert_eq!(float(&set2["fracture"]["defect_density"]), 1e13);
@@ -607,6 +617,7 @@ fn the_second_set_is_the_main_job_with_the_seed_s_delay_and_density_and_resolved
         let fracture = t["fracture"].as_table_mut().unwrap();
         fracture.remove("defect_density");
         fracture.remove("macro_length");
+        fracture.remove("tangent_length");
         let adapt = t["adapt"].as_table_mut().unwrap();
         adapt.remove("tip_edge");
         adapt.remove("min_edge");

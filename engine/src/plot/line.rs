@@ -153,9 +153,13 @@ impl LineChart {
                 let mut labelled = s.name.is_empty();
                 for run in self.runs(&s.points) {
                     let drawn = match s.style {
-                        LineStyle::Solid | LineStyle::Faint => {
-                            chart.draw_series(LineSeries::new(run, style))
-                        }
+                        // Segment by segment: a polyline wider than a pixel is joined with
+                        // unbounded miters, which draw spikes past the points at sharp turns
+                        // (a noisy tip speed seemed to cross `c_R` where no point did).
+                        LineStyle::Solid | LineStyle::Faint => chart.draw_series(
+                            run.windows(2)
+                                .map(|w| PathElement::new([w[0], w[1]], style)),
+                        ),
                         LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(
                             run,
                             (0.8 * f) as u32,
@@ -343,6 +347,45 @@ mod tests {
         assert!(count(&image, FAINT) > 300);
         // The faint series takes no palette colour.
         assert_eq!(count(&image, PALETTE[1]), 0);
+    }
+
+    /// The topmost row holding a pixel of exactly `colour`.
+    fn top_row(image: &Image, colour: RGBColor) -> Option<usize> {
+        let width = image.width as usize;
+        image
+            .rgb
+            .chunks(3)
+            .position(|p| p == [colour.0, colour.1, colour.2])
+            .map(|i| i / width)
+    }
+
+    #[test]
+    fn sharp_turns_draw_nothing_past_their_points() {
+        // Tip speeds (m/s) against time (us) of a branch of the main job: a steep drop and
+        // rise within a pixel, drawn until 2026-11-29 as a spike past `c_R` (938.9 m/s) that
+        // no point reaches.
+        let speeds = [
+            (1.75, 400.0),
+            (2.899965, 797.346),
+            (2.902192, 785.998),
+            (2.903786, 601.860),
+            (2.904457, 651.448),
+            (3.6, 400.0),
+        ];
+        let image = LineChart::new("tip speed", "t (us)", "v (m/s)")
+            .series("", &speeds, LineStyle::Solid)
+            .series("", &[(1.75, 938.9), (3.6, 938.9)], LineStyle::Solid)
+            .render((1000, 600))
+            .unwrap();
+        let (top, c_r) = (top_row(&image, PALETTE[0]), top_row(&image, PALETTE[1]));
+        let (Some(top), Some(c_r)) = (top, c_r) else {
+            panic!("both series are drawn: {top:?} {c_r:?}");
+        };
+        // No names, no legend: the rows are the lines'.
+        assert!(
+            top > c_r + 20,
+            "speeds drawn up to row {top}, c_R at row {c_r}"
+        );
     }
 
     #[test]
