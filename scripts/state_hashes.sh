@@ -4,7 +4,8 @@
 # behaviour alone can be checked against the run before it:
 #   scripts/state_hashes.sh BINARY > before.txt; ...; scripts/state_hashes.sh BINARY > after.txt
 #   diff before.txt after.txt
-# Prints one line per config: file, patches, state_hash, then the md5 of each CSV the run wrote.
+# Prints one line per config: file, patches, state_hash, then the md5 of each CSV, VTU and PVD
+# file the run wrote.
 set -euo pipefail
 bin=${1:?usage: scripts/state_hashes.sh BINARY [CONFIG...]}
 shift
@@ -30,7 +31,8 @@ span = end - start
 print(repr(start + (3.4e-6 if start < 0 else 0.1 * span)))
 PY
 )
-    args+=(--set "time.end=$end")
+    # One snapshot, at the shortened end.
+    args+=(--set "time.end=$end" --set "output.snapshot_times=[$end]")
   fi
   if ! "$bin" run "$config" "${args[@]}" >/dev/null 2>"$out/$name.err"; then
     echo "$name FAILED: $(tail -1 "$out/$name.err")"
@@ -40,7 +42,7 @@ PY
 import hashlib, json, pathlib, sys
 d = pathlib.Path(sys.argv[1])
 s = json.loads((d / "summary.json").read_text())
-files = sorted(p for p in d.rglob("*.csv"))
+files = sorted(p for p in d.rglob("*") if p.suffix in (".csv", ".vtu", ".pvd"))
 digests = " ".join(f"{p.relative_to(d)}:{hashlib.md5(p.read_bytes()).hexdigest()[:12]}" for p in files)
 print(sys.argv[2], s["patches"], s["state_hash"], digests)
 PY

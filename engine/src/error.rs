@@ -68,3 +68,11 @@ impl EngineError {
         }
     }
 }
+
+/// A scheduler failure as an engine error.
+pub(crate) fn scheduler_error(e: sdg_scheduler::RunError<EngineError>) -> EngineError {
+    match e {
+        sdg_scheduler::RunError::Work(e) => e,
+        stalled => EngineError::Runtime(stalled.to_string()),
+    }
+}

@@ -504,7 +504,7 @@ mod tests {
         let pitcher = Pitcher::new(&mesh, 1.0, 0.9, 0.5).unwrap();
         let total = all_tents(&mesh, &pitcher);
         let front = Front::flat(mesh.vertices().len(), 0.0);
-        let pitched = crate::run::pitch_to_end(&mesh, &pitcher, &front, |_, _| {}).unwrap();
+        let pitched = crate::job::pitch_to_end(&mesh, &pitcher, &front, |_, _| {}).unwrap();
         assert_eq!(total, pitched);
     }
 

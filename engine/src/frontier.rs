@@ -26,7 +26,7 @@ use sdg_scheduler::Region;
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::face::FaceState;
 
-use crate::fracture::Tip;
+use crate::fracture::criteria::Tip;
 
 /// The space mesh, its front, the elements under the front and the pitcher.
 #[derive(Debug, serde::Serialize, serde::Deserialize)]

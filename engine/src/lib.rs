@@ -1,29 +1,28 @@
 //! The engine: configuration, problem setup, the run loop wiring mesh, solver and scheduler, and
 //! the outputs of a run.
 
-mod adapt;
+mod adaptivity;
 pub mod config;
 pub mod error;
 pub mod estimate;
 pub mod fracture;
 mod frontier;
+pub mod job;
 pub mod lefm;
 pub mod output;
 pub mod plot;
 pub mod problem;
 pub mod progress;
-pub mod run;
-pub mod snapshot;
 pub mod solve;
-pub mod spacetime;
 pub mod trace;
 
 pub use config::{Config, ConfigError, LoadedConfig};
 pub use error::EngineError;
 pub use estimate::Estimate;
+pub use fracture::{CrackNetwork, CrackSummary, FractureSummary};
+pub use job::{MeshSummary, RunOptions, mesh_job, pitch_to_end};
+pub use output::spacetime::SpacetimeMesh;
 pub use problem::Problem;
-pub use run::{MeshSummary, RunOptions, mesh_job, pitch_to_end};
 pub use solve::{Control, RunSummary, estimate_job, solve_job};
 #[doc(hidden)]
 pub use solve::{Live, solve_job_with};
-pub use spacetime::SpacetimeMesh;

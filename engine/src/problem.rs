@@ -14,7 +14,7 @@ use crate::config::{
     ProfileName, WaveName, rectangle_key,
 };
 use crate::error::EngineError;
-use crate::fracture::Fracture;
+use crate::fracture::criteria::Fracture;
 
 /// Everything a run needs that is derived from the configuration.
 #[derive(Clone, Debug)]

@@ -20,6 +20,7 @@
 //!   thread count or timing.
 
 pub mod claim;
+mod error;
 mod pool;
 mod rounds;
 mod serial;
@@ -32,6 +33,8 @@ use parking_lot::Mutex;
 use sdg_mesh::{Front, Mesh};
 
 pub use claim::{ClaimTable, VertexId};
+pub use error::RunError;
+use error::panic_message;
 pub use serial::run_serial;
 
 /// How to run.
@@ -391,33 +394,6 @@ impl Clock {
     fn total(&self) -> Duration {
         Duration::from_nanos(self.0.load(Ordering::Relaxed))
     }
-}
-
-/// What stopped a run before the front reached the end time.
-#[derive(Debug, thiserror::Error)]
-pub enum RunError<E> {
-    /// No vertex below the end time can be pitched: the pitching rule lost progress.
-    #[error("no progress: {remaining} vertices are below the end time but none can be pitched")]
-    Stalled {
-        /// Vertices not yet at the end time.
-        remaining: usize,
-    },
-    /// A tent or a record failed.
-    #[error(transparent)]
-    Work(E),
-    /// A tent, a record or an event panicked: a bug. The run ends in every mode, with the
-    /// panic's message, instead of leaving the other threads waiting.
-    #[error("internal error (a bug, please report it): {0}")]
-    Panic(String),
-}
-
-/// The message of a caught panic.
-pub(crate) fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "a panic without a message".into())
 }
 
 /// True when `v` is below `t_end` and no neighbour is earlier.

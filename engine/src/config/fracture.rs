@@ -3,10 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use sdg_solver::interface::Law;
 use sdg_solver::nucleation::DefectStrengths;
-
-use super::Config;
 
 /// `[fracture]`: crack propagation.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
@@ -117,84 +114,6 @@ impl FractureConfig {
 
 fn default_snap() -> f64 {
     0.2
-}
-
-impl Config {
-    /// Checks `[fracture]`: `(key, reason)`.
-    pub(super) fn validate_fracture(&self) -> Result<(), (String, String)> {
-        let Some(f) = &self.fracture else {
-            return Ok(());
-        };
-        let fail = |key: &str, reason: String| Err((format!("fracture.{key}"), reason));
-        let law_of = |tag: &str| {
-            self.interface
-                .iter()
-                .find(|i| i.tags.iter().any(|t| t == tag))
-                .and_then(|i| i.to_law().ok())
-        };
-        match law_of(&f.tag) {
-            Some(Law::Damage(d)) if d.initial == 0.0 => {}
-            _ => {
-                return fail(
-                    "tag",
-                    format!(
-                        "`{}` must be the tag of an [[interface]] with law = \"damage\" and no \
-                         initial_damage: new crack edges start bonded",
-                        f.tag
-                    ),
-                );
-            }
-        }
-        for (i, tag) in f.from.iter().enumerate() {
-            if !matches!(law_of(tag), Some(Law::Damage(_) | Law::Free)) {
-                return fail(
-                    &format!("from[{i}]"),
-                    format!(
-                        "`{tag}` must be the tag of an [[interface]] with law = \"damage\" or \
-                         \"free\": a crack"
-                    ),
-                );
-            }
-        }
-        if !(f.threshold.is_finite() && f.threshold > 0.0) {
-            return fail(
-                "threshold",
-                format!("must be a positive stress in Pa, got {}", f.threshold),
-            );
-        }
-        if !(f.shield_angle > 0.0 && f.shield_angle < 90.0) {
-            return fail(
-                "shield_angle",
-                format!("must be in (0, 90) degrees, got {}", f.shield_angle),
-            );
-        }
-        if !(f.snap > 0.0 && f.snap <= 0.5) {
-            return fail(
-                "snap",
-                format!("must be a fraction of an edge in (0, 0.5], got {}", f.snap),
-            );
-        }
-        if let Some(angle) = f.floor_angle
-            && !(angle > 0.0 && angle < 90.0)
-        {
-            return fail(
-                "floor_angle",
-                format!("must be in (0, 90) degrees, got {angle}"),
-            );
-        }
-        for (key, length) in [
-            ("macro_length", f.macro_length),
-            ("min_piece", f.min_piece),
-            ("tangent_length", f.tangent_length),
-        ] {
-            if let Some(length) = length
-                && !(length.is_finite() && length > 0.0)
-            {
-                return fail(key, format!("must be a positive length in m, got {length}"));
-            }
-        }
-        f.defects().map(drop)
-    }
 }
 
 #[cfg(test)]

@@ -9,10 +9,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use sdg_solver::interface::Law;
-
-use super::{BoundaryConfig, BoundaryKind, Config, HistoryConfig, HistoryKind};
-
 /// `[loading]`: a mode-I load from its load ratio.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -40,94 +36,6 @@ pub struct LoadScales {
     pub work_of_separation: f64,
     /// Rayleigh wave speed `c_R`, m/s: with `tau'`, the unit `tau' c_R` of normalized length.
     pub c_r: f64,
-}
-
-impl Config {
-    /// The scales of `[loading]`, if any; `(key, reason)` when the section is invalid.
-    pub fn load_scales(&self) -> Result<Option<LoadScales>, (String, String)> {
-        let Some(l) = &self.loading else {
-            return Ok(None);
-        };
-        let fail = |key: &str, reason: String| Err((format!("loading.{key}"), reason));
-        if !(l.load_ratio > 0.0 && l.load_ratio <= 1.0) {
-            return fail(
-                "load_ratio",
-                format!(
-                    "must be in (0, 1]: above 1 the bulk load exceeds the strength, got {}",
-                    l.load_ratio
-                ),
-            );
-        }
-        let law = self
-            .interface
-            .iter()
-            .find(|i| i.tags.contains(&l.interface))
-            .and_then(|i| i.to_law().ok());
-        let Some(Law::XuNeedleman(cohesive)) = law else {
-            return fail(
-                "interface",
-                format!(
-                    "`{}` must be the tag of an [[interface]] with law = \"xu_needleman\"",
-                    l.interface
-                ),
-            );
-        };
-        if l.sides.is_empty() {
-            return fail("sides", "lists no side".into());
-        }
-        if let Some(side) = l
-            .sides
-            .iter()
-            .find(|s| self.boundary.iter().any(|b| b.sides.contains(s)))
-        {
-            return fail(
-                "sides",
-                format!("side `{side}` has a [[boundary]] condition already"),
-            );
-        }
-        let material = self
-            .material()
-            .map_err(|e| (e.key.unwrap_or_default(), e.reason))?;
-        let sigma_bar = l.load_ratio * cohesive.strength;
-        let phi = std::f64::consts::E * cohesive.strength * cohesive.critical_separation;
-        let tau = std::f64::consts::PI * material.mu() * phi * material.c_d()
-            / (4.0 * (material.c_s() * sigma_bar).powi(2));
-        Ok(Some(LoadScales {
-            load_ratio: l.load_ratio,
-            sigma_bar,
-            tau,
-            work_of_separation: phi,
-            c_r: material.c_r(),
-        }))
-    }
-
-    /// The boundary conditions: each `[[boundary]]` entry with its key prefix, then the
-    /// transmitting sides of `[loading]` (prefix `loading`), whose scales must be valid.
-    pub fn boundaries(&self) -> Vec<(String, BoundaryConfig)> {
-        let mut all: Vec<(String, BoundaryConfig)> = self
-            .boundary
-            .iter()
-            .enumerate()
-            .map(|(i, b)| (format!("boundary[{i}]"), b.clone()))
-            .collect();
-        if let (Some(l), Ok(Some(scales))) = (&self.loading, self.load_scales()) {
-            all.push((
-                "loading".into(),
-                BoundaryConfig {
-                    sides: l.sides.clone(),
-                    kind: BoundaryKind::Transmitting,
-                    value: None,
-                    incoming: Some(vec![scales.sigma_bar, 0.0]),
-                    history: Some(HistoryConfig {
-                        kind: HistoryKind::Smooth,
-                        ramp: Some(scales.tau),
-                        points: None,
-                    }),
-                },
-            ));
-        }
-        all
-    }
 }
 
 #[cfg(test)]

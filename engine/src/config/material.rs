@@ -2,10 +2,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use sdg_solver::{Material, Plane};
-
-use super::{Config, ConfigError};
-
 /// The 2D mode of elasticity.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -30,42 +26,6 @@ pub struct MaterialConfig {
     pub density: f64,
     /// `"strain"`, `"stress"` or `"antiplane"`.
     pub plane: PlaneName,
-}
-
-impl Config {
-    /// The material, validated.
-    pub fn material(&self) -> Result<Material, ConfigError> {
-        let m = &self.material;
-        let plane = match m.plane {
-            PlaneName::Strain => Plane::Strain,
-            PlaneName::Stress => Plane::Stress,
-            PlaneName::Antiplane => Plane::Antiplane,
-        };
-        let material =
-            Material::new(m.young, m.poisson, m.density, plane).map_err(|e| ConfigError {
-                file: String::new(),
-                key: Some(format!("material.{}", e.field())),
-                reason: e
-                    .to_string()
-                    .split_once(": ")
-                    .map_or(e.to_string(), |(_, r)| r.to_string()),
-            })?;
-        // Each value in range, the wave speeds and impedances may still over- or underflow.
-        let (c_d, c_s) = (material.c_d(), material.c_s());
-        let speeds = [c_d, c_s, m.density * c_d, m.density * c_s];
-        if !speeds.iter().all(|x| x.is_finite() && *x > 0.0) {
-            return Err(ConfigError {
-                file: String::new(),
-                key: Some("material".into()),
-                reason: format!(
-                    "young = {:e} Pa over density = {:e} kg/m^3 gives wave speeds c_d = {c_d:e} \
-                     m/s, c_s = {c_s:e} m/s: they and the impedances must be positive and finite",
-                    m.young, m.density
-                ),
-            });
-        }
-        Ok(material)
-    }
 }
 
 #[cfg(test)]

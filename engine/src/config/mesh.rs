@@ -4,8 +4,6 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Deserializer, Serialize};
 
-use super::Config;
-
 /// Where the space mesh comes from.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -109,35 +107,6 @@ fn one_or_many<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<SegmentConfig>, D:
         }
     }
     d.deserialize_any(OneOrMany)
-}
-
-impl Config {
-    /// The rectangle generator's parameters; missing keys read as zero (validation rejects them).
-    pub fn rectangle(&self) -> sdg_mesh::Rectangle {
-        let m = &self.mesh;
-        sdg_mesh::Rectangle {
-            width: m.width.unwrap_or(0.0),
-            height: m.height.unwrap_or(0.0),
-            nx: m.nx.unwrap_or(0),
-            ny: m.ny.unwrap_or(0),
-            diagonal: match m.diagonal.unwrap_or_default() {
-                DiagonalName::Right => sdg_mesh::Diagonal::Right,
-                DiagonalName::Left => sdg_mesh::Diagonal::Left,
-                DiagonalName::Alternate => sdg_mesh::Diagonal::Alternate,
-            },
-            interfaces: m
-                .interface
-                .iter()
-                .map(|i| sdg_mesh::GridSegment {
-                    from: i.from,
-                    to: i.to,
-                    tag: i.tag.clone(),
-                })
-                .collect(),
-            perturb: m.perturb.unwrap_or(0.0),
-            seed: m.seed.unwrap_or(0),
-        }
-    }
 }
 
 /// The config key of a rectangle generator error: `mesh.nx`, or `mesh.interface[k]` for the

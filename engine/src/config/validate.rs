@@ -1,6 +1,11 @@
 //! Load-time validation: the checks of values that the schema's types cannot express.
 
-use super::{BoundaryKind, Config, MeshKind, PlaneName, WaveName, rectangle_key};
+use sdg_solver::interface::Law;
+
+use super::conditions::{BoundaryKind, WaveName};
+use super::material::PlaneName;
+use super::mesh::{MeshKind, rectangle_key};
+use super::schema::Config;
 
 /// Shortest wall time between checkpoints, s (`checkpoint.every_wall_s`).
 const MIN_WALL_CHECKPOINT_S: f64 = 1.0;
@@ -363,6 +368,84 @@ impl Config {
             entry.to_law().map_err(|(k, r)| (key(&k), r))?;
         }
         Ok(())
+    }
+}
+
+impl Config {
+    /// Checks `[fracture]`: `(key, reason)`.
+    pub(super) fn validate_fracture(&self) -> Result<(), (String, String)> {
+        let Some(f) = &self.fracture else {
+            return Ok(());
+        };
+        let fail = |key: &str, reason: String| Err((format!("fracture.{key}"), reason));
+        let law_of = |tag: &str| {
+            self.interface
+                .iter()
+                .find(|i| i.tags.iter().any(|t| t == tag))
+                .and_then(|i| i.to_law().ok())
+        };
+        match law_of(&f.tag) {
+            Some(Law::Damage(d)) if d.initial == 0.0 => {}
+            _ => {
+                return fail(
+                    "tag",
+                    format!(
+                        "`{}` must be the tag of an [[interface]] with law = \"damage\" and no \
+                         initial_damage: new crack edges start bonded",
+                        f.tag
+                    ),
+                );
+            }
+        }
+        for (i, tag) in f.from.iter().enumerate() {
+            if !matches!(law_of(tag), Some(Law::Damage(_) | Law::Free)) {
+                return fail(
+                    &format!("from[{i}]"),
+                    format!(
+                        "`{tag}` must be the tag of an [[interface]] with law = \"damage\" or \
+                         \"free\": a crack"
+                    ),
+                );
+            }
+        }
+        if !(f.threshold.is_finite() && f.threshold > 0.0) {
+            return fail(
+                "threshold",
+                format!("must be a positive stress in Pa, got {}", f.threshold),
+            );
+        }
+        if !(f.shield_angle > 0.0 && f.shield_angle < 90.0) {
+            return fail(
+                "shield_angle",
+                format!("must be in (0, 90) degrees, got {}", f.shield_angle),
+            );
+        }
+        if !(f.snap > 0.0 && f.snap <= 0.5) {
+            return fail(
+                "snap",
+                format!("must be a fraction of an edge in (0, 0.5], got {}", f.snap),
+            );
+        }
+        if let Some(angle) = f.floor_angle
+            && !(angle > 0.0 && angle < 90.0)
+        {
+            return fail(
+                "floor_angle",
+                format!("must be in (0, 90) degrees, got {angle}"),
+            );
+        }
+        for (key, length) in [
+            ("macro_length", f.macro_length),
+            ("min_piece", f.min_piece),
+            ("tangent_length", f.tangent_length),
+        ] {
+            if let Some(length) = length
+                && !(length.is_finite() && length > 0.0)
+            {
+                return fail(key, format!("must be a positive length in m, got {length}"));
+            }
+        }
+        f.defects().map(drop)
     }
 }
 

@@ -2,7 +2,9 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{FieldPlot, LineChart, LineStyle, Values, VtuGrid};
+use super::field::{FieldPlot, Values};
+use super::line::{LineChart, LineStyle};
+use super::vtu::VtuGrid;
 use crate::error::EngineError;
 use crate::output::Field;
 

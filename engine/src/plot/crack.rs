@@ -5,7 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{Image, LineChart, LineStyle};
+use super::canvas::Image;
+use super::line::{LineChart, LineStyle};
 use crate::error::EngineError;
 use crate::lefm;
 

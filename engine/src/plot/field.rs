@@ -5,7 +5,7 @@
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::{Image, finite_range, font_family, font_px, plot_error, tick_label, widen};
+use super::canvas::{Image, finite_range, font_family, font_px, plot_error, tick_label, widen};
 use crate::error::EngineError;
 
 /// The scalar to colour: one value per point (interpolated linearly on each triangle) or one per

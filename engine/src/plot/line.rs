@@ -4,7 +4,9 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::{Image, finite_range, font_family, font_px, plot_error, tick_label_within, widen};
+use super::canvas::{
+    Image, finite_range, font_family, font_px, plot_error, tick_label_within, widen,
+};
 use crate::error::EngineError;
 
 /// How a series is drawn.

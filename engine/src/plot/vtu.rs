@@ -615,7 +615,7 @@ mod tests {
         let data: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
         let encode = |bytes: &[u8]| {
             let mut s = String::new();
-            crate::output::base64(&mut s, bytes);
+            crate::output::files::base64(&mut s, bytes);
             s
         };
         if zlib {

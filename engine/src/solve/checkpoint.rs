@@ -17,9 +17,7 @@
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 
-use parking_lot::Mutex;
 use serde::{Deserialize, Serialize};
 
 use super::book::Book;
@@ -47,88 +45,32 @@ const FREE_KEYS: [&str; 5] = [
 /// Configuration keys a restart may change to extend the run (after the checkpoint's front).
 const EXTENSION_KEYS: [&str; 2] = ["time.end", "output.snapshot_times"];
 
-/// Requests to a running solve from outside its workers (signals, job control): it pauses at
-/// the next quiescent point, writes a checkpoint and goes on, or stops with exit code 3.
-#[derive(Debug, Default)]
-pub struct Control {
-    pending: AtomicBool,
-    request: Mutex<Request>,
-}
-
-/// What was asked since the last checkpoint.
-#[derive(Debug, Default)]
-pub(super) struct Request {
-    /// Write a checkpoint and go on.
-    pub(super) checkpoint: bool,
-    /// Write a checkpoint and stop, for this reason.
-    pub(super) stop: Option<String>,
-    /// Write a checkpoint and fail (exit code 1): a patch failed a guard.
-    pub(super) failure: Option<String>,
-}
-
-impl Control {
-    /// Asks for a checkpoint, after which the run goes on (SIGUSR1).
-    pub fn checkpoint(&self) {
-        self.request.lock().checkpoint = true;
-        self.pending.store(true, Ordering::Release);
-    }
-
-    /// Asks for a checkpoint and a stop with exit code 3 (SIGTERM, SIGINT, the wall-time
-    /// limit); `reason` says why. The first reason given is kept.
-    pub fn stop(&self, reason: impl Into<String>) {
-        self.request
-            .lock()
-            .stop
-            .get_or_insert_with(|| reason.into());
-        self.pending.store(true, Ordering::Release);
-    }
-
-    /// Asks for a checkpoint and a failure (exit code 1) with `reason`: a patch failed a
-    /// guard and was not stored. The first reason given is kept.
-    pub(super) fn fail(&self, reason: String) {
-        self.request.lock().failure.get_or_insert(reason);
-        self.pending.store(true, Ordering::Release);
-    }
-
-    /// True when a request waits.
-    pub(super) fn is_pending(&self) -> bool {
-        self.pending.load(Ordering::Acquire)
-    }
-
-    /// Takes the requests.
-    pub(super) fn take(&self) -> Request {
-        let mut request = self.request.lock();
-        self.pending.store(false, Ordering::Release);
-        std::mem::take(&mut *request)
-    }
-}
-
 /// Counts of the run so far that live outside the bookkeeping.
 #[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
 #[serde(default)]
-pub(super) struct Counts {
+pub(crate) struct Counts {
     /// Tents, topology events and deterministic rounds so far.
-    pub(super) tents: u64,
-    pub(super) events: u64,
-    pub(super) rounds: u64,
+    pub(crate) tents: u64,
+    pub(crate) events: u64,
+    pub(crate) rounds: u64,
     /// Wall time of the solve so far, s, over every restart.
-    pub(super) wall_time_s: f64,
+    pub(crate) wall_time_s: f64,
     /// The scheduler's events and waiting so far, s, summed over threads.
-    pub(super) events_s: f64,
-    pub(super) waiting_s: f64,
+    pub(crate) events_s: f64,
+    pub(crate) waiting_s: f64,
     /// Checkpoints written so far: the number of the next file.
-    pub(super) written: u64,
+    pub(crate) written: u64,
 }
 
 /// What identifies a checkpoint without its state.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-pub(super) struct Header {
+pub(crate) struct Header {
     /// The `sdg` version that wrote it.
-    pub(super) version: String,
+    pub(crate) version: String,
     /// The configuration of the run, as JSON.
-    pub(super) config: String,
+    pub(crate) config: String,
     /// The front's least time, s.
-    pub(super) time: f64,
+    pub(crate) time: f64,
 }
 
 /// A checkpoint being written: borrowed from the running solve.
@@ -142,23 +84,23 @@ struct Saved<'a> {
 
 /// A checkpoint read back.
 #[derive(Deserialize)]
-pub(super) struct Restored {
-    pub(super) header: Header,
-    pub(super) counts: Counts,
-    pub(super) frontier: Frontier,
-    pub(super) book: Book,
+pub(crate) struct Restored {
+    pub(crate) header: Header,
+    pub(crate) counts: Counts,
+    pub(crate) frontier: Frontier,
+    pub(crate) book: Book,
 }
 
 /// The checkpoint folder of a run and how many files it keeps.
 #[derive(Debug)]
-pub(super) struct Folder {
-    pub(super) dir: PathBuf,
+pub(crate) struct Folder {
+    pub(crate) dir: PathBuf,
     keep: usize,
 }
 
 impl Folder {
     /// The folder of `config` whose outputs go to `output`.
-    pub(super) fn new(config: &Config, output: &Path) -> Self {
+    pub(crate) fn new(config: &Config, output: &Path) -> Self {
         let c = &config.checkpoint;
         Self {
             dir: c.dir.clone().unwrap_or_else(|| output.join("checkpoints")),
@@ -170,7 +112,7 @@ impl Folder {
     /// restarts from that folder (`restart` is it or a file in it): a new run numbers its files
     /// from 1, so the rotation by number would keep the earlier run's files and delete its own,
     /// and `--restart` on the folder would pick up the earlier run.
-    pub(super) fn check_unmixed(&self, restart: Option<&Path>) -> Result<(), EngineError> {
+    pub(crate) fn check_unmixed(&self, restart: Option<&Path>) -> Result<(), EngineError> {
         let existing = list(&self.dir);
         let Some(newest) = existing.last() else {
             return Ok(());
@@ -202,7 +144,7 @@ impl Folder {
     /// `written` files before it: after that one and after every file already in the folder,
     /// so that a restart never overwrites the checkpoint it started from, and the newest file
     /// (what `--restart` on the folder takes) is always the last one written.
-    pub(super) fn next_number(&self, written: u64) -> u64 {
+    pub(crate) fn next_number(&self, written: u64) -> u64 {
         let numbered = list(&self.dir).into_iter().filter_map(|p| {
             p.file_stem()?
                 .to_str()?
@@ -215,7 +157,7 @@ impl Folder {
 
     /// Writes checkpoint number `counts.written` of `frontier` and `book` (held still by the
     /// caller), then removes all but the newest `keep`. Returns its path.
-    pub(super) fn write(
+    pub(crate) fn write(
         &self,
         config: &Config,
         counts: Counts,
@@ -298,7 +240,7 @@ fn config_json(config: &Config) -> String {
 /// Reads the checkpoint at `path`, or the newest valid one when `path` is a folder, for a run
 /// of `config`. A file that is not a whole checkpoint of this configuration is refused (exit 2)
 /// with the reason; in a folder, older files are tried after a refused newer one.
-pub(super) fn restore(path: &Path, config: &Config) -> Result<(PathBuf, Restored), EngineError> {
+pub(crate) fn restore(path: &Path, config: &Config) -> Result<(PathBuf, Restored), EngineError> {
     let refuse = |reason: String| EngineError::Input(reason);
     if !path.is_dir() {
         return read(path, config)
@@ -376,7 +318,7 @@ fn payload(bytes: &[u8]) -> Result<&[u8], String> {
 /// The first key (dotted) where two configurations in JSON differ, ignoring [`FREE_KEYS`].
 /// True when `config` moves the end time or the snapshot times of the run whose checkpoint
 /// holds the configuration `saved`.
-pub(super) fn extends(saved: &str, config: &Config) -> bool {
+pub(crate) fn extends(saved: &str, config: &Config) -> bool {
     let (Ok(saved), Ok(current)) = (
         serde_json::from_str::<serde_json::Value>(saved),
         serde_json::to_value(config),

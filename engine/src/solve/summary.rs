@@ -112,10 +112,10 @@ pub struct RunSummary {
     pub loading: Option<crate::problem::Loading>,
     /// Crack tips of cohesive interfaces (runs with a cohesive law).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub crack: Option<super::crack_output::CrackSummary>,
+    pub crack: Option<crate::fracture::tips::CrackSummary>,
     /// Crack propagation (runs with `[fracture]`).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub fracture: Option<super::propagation::FractureSummary>,
+    pub fracture: Option<crate::fracture::records::FractureSummary>,
     /// Errors against `[exact]`, when configured.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<ErrorSummary>,
@@ -190,7 +190,7 @@ pub struct CheckpointSummary {
 
 /// FNV-1a over the bits of the front times, of every element under the front and of every
 /// interface face on it.
-pub(super) fn state_hash(front: &Front, solution: &FrontSolution, size: usize) -> String {
+pub(crate) fn state_hash(front: &Front, solution: &FrontSolution, size: usize) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     let mut feed = |x: f64| {
         for byte in x.to_bits().to_le_bytes() {

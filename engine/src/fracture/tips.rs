@@ -212,7 +212,7 @@ pub fn write(
 /// `crack_tips.csv` (one row per tip state, keyed by its crack in the column `key`) and its
 /// totals; `c_r` is the Rayleigh speed, m/s; each state's time is written on the clock of
 /// `time`.
-pub(super) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
+pub(crate) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
     key: &str,
     cracks: impl IntoIterator<Item = (K, S)>,
     c_r: f64,

@@ -13,14 +13,14 @@ use sdg_solver::interface::Mode;
 use sdg_solver::patch::{InterfaceSample, PatchSolver};
 
 use crate::config::TimeConfig;
+use crate::output::snapshot::{InterfaceValues, cut_face};
 use crate::problem::Probe;
-use crate::snapshot::{InterfaceValues, cut_face};
 
 /// One interface face's cut by a snapshot plane: time (s), ends (m) and values there.
-pub(super) type Cut = (f64, [[f64; 2]; 2], [InterfaceValues; 2]);
+pub(crate) type Cut = (f64, [[f64; 2]; 2], [InterfaceValues; 2]);
 
 /// Cuts the last patch's contact faces by the planes of the snapshot `times` (s) they cross.
-pub(super) fn snapshot_cuts(times: &[f64], c_ref: f64, solver: &mut PatchSolver) -> Vec<Cut> {
+pub(crate) fn snapshot_cuts(times: &[f64], c_ref: f64, solver: &mut PatchSolver) -> Vec<Cut> {
     let mut cuts = Vec::new();
     for k in 0..solver.interface_faces().len() {
         let (edge, face) = solver.interface_faces()[k];
@@ -63,7 +63,7 @@ pub(super) fn snapshot_cuts(times: &[f64], c_ref: f64, solver: &mut PatchSolver)
 
 /// Samples the last patch of `solver` at each of `probes` that lies on one of its contact
 /// faces' edges: `(probe index, sample)`.
-pub(super) fn sample(
+pub(crate) fn sample(
     probes: &[Probe],
     mesh: &Mesh,
     solver: &mut PatchSolver,
@@ -97,7 +97,7 @@ fn on_segment(x: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
 
 /// `interface.csv`: one row per sample, sorted by probe and time, at its time on the clock of
 /// `time`.
-pub(super) fn csv(
+pub(crate) fn csv(
     probes: &[Probe],
     samples: &mut [(usize, InterfaceSample)],
     time: &TimeConfig,

@@ -1,95 +1,45 @@
-//! Crack propagation in a run (seed 4.3.2; the criteria are in [`crate::fracture`]).
-//!
-//! The tent at a crack tip evaluates the stress at the middle of its pole, once the patch is
-//! accepted: the mean of the patch elements' stresses there, weighted by their angles at the tip
-//! (the average over a small disc around it). When the tip has directions to extend along, an
-//! event extends it: per direction, the crack takes the existing edge of the tip's star when the
-//! direction crosses the opposite edge near one of its ends (`snap`) and that edge keeps to the
-//! rules ([`Fracture::may_take`]), and otherwise splits that edge where the direction crosses it
-//! ([`Frontier::split_at`] towards the tip), or, where no split may be that short, takes an end
-//! within the rules. The new edge takes the crack tag (a damage interface, bonded at first:
-//! nothing on the front changes) and its far end becomes a tip, unless it lies on the boundary
-//! or on another crack (the crack arrests there). A direction that crosses a crack edge joins
-//! that crack at an end of the edge ([`Fracture::may_join`]) and arrests, or stops short where
-//! the shield angle forbids both ends.
-//! Two directions make a branch: the first keeps the tip's branch id, the second takes a new
-//! one. A tip makes all its edges or none: when the mesh refuses one, the tip keeps its
-//! directions ([`Pending`]) and tries again after each tent of a neighbour, until its own next
-//! tent tests anew.
+//! The crack records of a run: fracture events, crack edges, their files and pictures, and the
+//! statistics of the crack network in `summary.json`.
 
+use super::criteria::Fracture;
+use super::network::{self, CrackLink, MacroFork};
+use super::tips::{self, TipState};
+use crate::config::TimeConfig;
+use crate::frontier::Frontier;
+use sdg_mesh::{EdgeId, Mesh, TagId};
+use sdg_solver::crack::Crossing;
+use sdg_solver::element::FrontSolution;
+use sdg_solver::face::{FaceBasis, FaceState, STATE_COMPONENTS};
+use serde::Serialize;
 use std::borrow::Cow;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
-use sdg_mesh::{EdgeId, Mesh, TagId, TriangleId, VertexId};
-use sdg_scheduler::{Changed, Region};
-use sdg_solver::crack::Crossing;
-use sdg_solver::element::{FrontSolution, evaluate};
-use sdg_solver::face::{FaceBasis, FaceState, STATE_COMPONENTS};
-use sdg_solver::patch::PatchSolver;
-use serde::Serialize;
-
-use super::Solve;
-use super::crack_output::{self, TipState};
-use super::network::{self, CrackLink, MacroFork};
-use crate::config::TimeConfig;
-use crate::fracture::{self, Fracture, Pending, Tip};
-use crate::frontier::Frontier;
-use crate::plot::{FieldPlot, Values};
-
 /// Scratch size for one element's basis values and fields at a point.
-const SCRATCH: usize = 64;
-
-/// A tip's directions to extend along, found by the tent at its vertex.
-#[derive(Debug)]
-pub(super) struct Extension {
-    /// The tip's position (m), to notice renumbering.
-    at: [f64; 2],
-    /// Directions (radians), unused entries NaN.
-    directions: [f64; 2],
-    /// A crack nucleates at the vertex (it is no tip): both directions are new branches.
-    nucleation: bool,
-    /// A tip's [`Pending`] directions, tried again after a neighbour's tent: made only while
-    /// the tip stays where its test left it, and a refusal is not recorded again.
-    retry: bool,
-}
-
-impl Extension {
-    /// The retry of the pending directions of the tip at `v`, when it has fresh ones (its
-    /// front time is still that of its test).
-    pub(super) fn retry(state: &Frontier, v: VertexId) -> Option<Extension> {
-        let pending = state.tips[v as usize]?.pending?;
-        (state.front.time(v) == pending.time).then(|| Extension {
-            at: state.mesh.vertex(v),
-            directions: pending.directions,
-            nucleation: false,
-            retry: true,
-        })
-    }
-}
+pub(crate) const SCRATCH: usize = 64;
 
 /// One line of `events.csv`.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub(super) struct FractureEvent {
+pub(crate) struct FractureEvent {
     /// Front time at the tip, s.
-    time: f64,
+    pub(crate) time: f64,
     /// `nucleation`, `extension`, `branching`, `arrest`, `refused` or `coarsening`.
-    kind: Cow<'static, str>,
+    pub(crate) kind: Cow<'static, str>,
     /// The crack branch; none for a coarsening of an initial crack's edges.
-    branch: Option<u32>,
+    pub(crate) branch: Option<u32>,
     /// Where it happened and, for an extension, the new edge's far end; for a refused edge,
     /// where it would have ended (the crossing of its direction with the edge opposite the tip,
     /// or the vertex it would have taken), m.
-    from: [f64; 2],
-    to: [f64; 2],
+    pub(crate) from: [f64; 2],
+    pub(crate) to: [f64; 2],
     /// Why a new edge was refused ([`Refusal::name`]); none for other events.
     #[serde(default)]
-    reason: Option<Cow<'static, str>>,
+    pub(crate) reason: Option<Cow<'static, str>>,
 }
 
 /// Why the mesh could not make a new crack edge when its tip was tested.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Refusal {
+pub(crate) enum Refusal {
     /// The direction leaves the domain at the tip (a boundary vertex).
     Outside,
     /// No split of the crossed edge may leave pieces that short (`fracture.min_piece`) and no
@@ -108,7 +58,7 @@ enum Refusal {
 
 impl Refusal {
     /// The name in `events.csv` and `summary.json`.
-    fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Refusal::Outside => "outside",
             Refusal::Floor => "floor",
@@ -156,321 +106,9 @@ pub struct FractureSummary {
     pub macro_branching: Option<MacroFork>,
 }
 
-impl Solve<'_> {
-    /// The extension of the tip at `v` after its patch (of the tent from `t_old` to `t_new`, s)
-    /// was accepted, if it has directions to extend along.
-    pub(super) fn extension(
-        &self,
-        fracture: &Fracture,
-        state: &Frontier,
-        solver: &PatchSolver,
-        v: VertexId,
-        times: [f64; 2],
-    ) -> Option<Extension> {
-        let mesh = &state.mesh;
-        let t_mid = 0.5 * (times[0] + times[1]);
-        let stress = |t| element_stress(self, mesh, solver, v, t, t_mid);
-        let (directions, nucleation) = match state.tips[v as usize] {
-            Some(tip) => {
-                let candidates = fracture.candidates(mesh, v, stress);
-                let directions = fracture.select(mesh, v, tip, &candidates);
-                if !candidates.is_empty() {
-                    let [x, y] = mesh.vertex(v);
-                    let degrees_mpa = |(d, s): (f64, f64)| (d.to_degrees(), s * 1e-6);
-                    tracing::debug!(
-                        vertex = v,
-                        x,
-                        y,
-                        t = t_mid,
-                        travel = tip.direction.to_degrees(),
-                        maxima = ?candidates.iter().copied().map(degrees_mpa).collect::<Vec<_>>(),
-                        chosen = ?directions.map(f64::to_degrees),
-                        "propagation test (degrees, MPa)"
-                    );
-                }
-                (directions, false)
-            }
-            None => (fracture.nucleates(mesh, v, times[1], stress)?, true),
-        };
-        directions[0].is_finite().then_some(Extension {
-            at: mesh.vertex(v),
-            directions,
-            nucleation,
-            retry: false,
-        })
-    }
-
-    /// The event of an [`Extension`] of the tip at `v`: adds the crack edges (see the module
-    /// documentation) and returns what changed for the scheduler.
-    pub(super) fn extend(
-        &self,
-        state: &mut Frontier,
-        region: &Region<'_>,
-        v: VertexId,
-        extension: &Extension,
-    ) -> Changed {
-        let fracture = self
-            .problem
-            .fracture
-            .as_ref()
-            .expect("extensions need [fracture]");
-        let mesh = &state.mesh;
-        if (v as usize) >= mesh.vertices().len() || mesh.vertex(v) != extension.at {
-            return Changed::default();
-        }
-        // A nucleation site is no tip (it may be on a crack); a tip must still be one.
-        let tip = state.tips[v as usize];
-        let still = if extension.nucleation {
-            tip.is_none()
-        } else {
-            tip.is_some() && !fracture.crack_edges(mesh, v).is_empty()
-        };
-        let fresh = || Extension::retry(state, v).is_some();
-        if !still || (extension.retry && !fresh()) {
-            return Changed::default();
-        }
-        let time = state.front.time(v);
-        let at = mesh.vertex(v);
-        let mut changed = Changed::default();
-        // First the far ends of the new edges, splitting edges where the directions need it.
-        let mut plans: Vec<Plan> = Vec::new();
-        for &d in extension.directions.iter().filter(|d| d.is_finite()) {
-            let plan = self.plan(fracture, state, region, (v, tip), d, &mut changed);
-            let plan = match plan {
-                // Two new edges keep the shield angle between them (snapping may turn them).
-                Plan::Edge(w)
-                    if plans.iter().any(|&other| match other {
-                        Plan::Edge(u) => !fracture.apart(&state.mesh, v, u, w),
-                        _ => false,
-                    }) =>
-                {
-                    Plan::Refused(Refusal::Shield, state.mesh.vertex(w))
-                }
-                plan => plan,
-            };
-            plans.push(plan);
-        }
-        // A later split's closure may have split an earlier new edge.
-        for plan in &mut plans {
-            if let Plan::Edge(w) = *plan
-                && state.mesh.edge_between(v, w).is_none()
-            {
-                *plan = Plan::Refused(Refusal::Closure, state.mesh.vertex(w));
-            }
-        }
-        let refusals: Vec<(Refusal, [f64; 2])> = plans
-            .iter()
-            .filter_map(|&p| match p {
-                Plan::Refused(reason, toward) => Some((reason, toward)),
-                _ => None,
-            })
-            .collect();
-        let event = |kind: &'static str, branch, to| FractureEvent {
-            time,
-            kind: kind.into(),
-            branch,
-            from: at,
-            to,
-            reason: None,
-        };
-        let mut events = Vec::new();
-        if extension.nucleation {
-            events.push(event("nucleation", Some(state.next_branch), at));
-        }
-        if !extension.retry {
-            let branch = tip.map(|tip| tip.branch);
-            events.extend(refusals.iter().map(|&(reason, toward)| FractureEvent {
-                reason: Some(reason.name().into()),
-                ..event("refused", branch, toward)
-            }));
-        }
-        // A tip makes all its edges or none (a branching is not lost half-made); its splits
-        // stay as refinements, and the same directions are tried again after neighbours' tents.
-        if let Some(tip) = &mut state.tips[v as usize]
-            && !refusals.is_empty()
-        {
-            tip.pending = Some(Pending {
-                directions: extension.directions,
-                time,
-            });
-            self.book.lock().fracture_events.extend(events);
-            return sorted(changed);
-        }
-        let mut extended = 0;
-        for plan in plans {
-            // Each half of a nucleated crack is a new branch, travelling its way; so is a
-            // tip's second direction.
-            let (branch, new_branch) = match tip {
-                Some(tip) if extended == 0 => (tip.branch, false),
-                _ => (state.next_branch, true),
-            };
-            let target = match plan {
-                Plan::Refused(..) => continue,
-                Plan::Arrest => {
-                    events.push(event("arrest", Some(branch), at));
-                    state.tips[v as usize] = None;
-                    continue;
-                }
-                Plan::Edge(w) => w,
-            };
-            let mesh = &mut state.mesh;
-            let edge = mesh
-                .edge_between(v, target)
-                .expect("the target is a neighbour of the tip");
-            let joins = !fracture.crack_edges(mesh, target).is_empty();
-            mesh.set_tag(edge, Some(fracture.tag));
-            let to = mesh.vertex(target);
-            events.push(event("extension", Some(branch), to));
-            if new_branch {
-                state.next_branch += 1;
-            }
-            extended += 1;
-            changed.offer.extend([v, target]);
-            if joins || fracture::on_boundary(&state.mesh, target) {
-                events.push(event("arrest", Some(branch), to));
-            } else {
-                state.tips[target as usize] = Some(Tip {
-                    direction: fracture.tangent(tip.map(|t| t.direction), at, to),
-                    branch,
-                    pending: None,
-                });
-            }
-            state.tips[v as usize] = None;
-        }
-        if extension.nucleation && extended == 0 {
-            // Both ways ran into cracks at once (or the mesh refused them): nothing nucleated.
-            return sorted(changed);
-        }
-        if extended == 2 && !extension.nucleation {
-            let mut branching = events
-                .iter()
-                .find(|e| e.kind == "extension")
-                .expect("two extensions")
-                .clone();
-            branching.kind = "branching".into();
-            events.push(branching);
-        }
-        self.book.lock().fracture_events.extend(events);
-        sorted(changed)
-    }
-
-    /// Where the crack of `fracture` from the tip at `v` (`tip`; `None` at a nucleation site)
-    /// in direction `d` (radians) ends its new edge: the end of the crossed edge near the
-    /// crossing when the rules allow, else a split of that edge where the direction crosses it,
-    /// else (when no split can be that short) an end within the rules. Splits made are added to
-    /// `changed`.
-    fn plan(
-        &self,
-        fracture: &Fracture,
-        state: &mut Frontier,
-        region: &Region<'_>,
-        (v, tip): (VertexId, Option<Tip>),
-        d: f64,
-        changed: &mut Changed,
-    ) -> Plan {
-        let mesh = &state.mesh;
-        let Some(c) = fracture::crossing(mesh, v, d) else {
-            return Plan::Refused(Refusal::Outside, mesh.vertex(v));
-        };
-        let tip = tip.unwrap_or(Tip {
-            direction: d,
-            branch: 0,
-            pending: None,
-        });
-        // The edge's ends, the one nearer the crossing first.
-        let [p, q] = mesh.edges()[c.edge as usize].vertices;
-        let ends = if c.fraction < 0.5 { [p, q] } else { [q, p] };
-        let toward = {
-            let [a, b] = [p, q].map(|w| mesh.vertex(w));
-            [0, 1].map(|k| a[k] + c.fraction * (b[k] - a[k]))
-        };
-        if fracture.is_crack(mesh.edges()[c.edge as usize].tag) {
-            // The direction runs into another crack: the tip joins it at an end of the crack
-            // edge it meets, or stops short of it where the shield angle forbids both.
-            return ends
-                .into_iter()
-                .find(|&w| fracture.may_join(mesh, v, tip, w))
-                .map_or(Plan::Arrest, Plan::Edge);
-        }
-        let may_take = |mesh: &Mesh, w, within| fracture.may_take(mesh, (v, tip), d, w, within);
-        let near_end = c.fraction.min(1.0 - c.fraction);
-        if near_end < fracture.snap && may_take(mesh, ends[0], 0.5 * fracture.shield) {
-            return Plan::Edge(ends[0]);
-        }
-        if near_end * fracture::distance(mesh, p, q) < self.min_edge {
-            // No split is allowed there, now or later.
-            return ends
-                .into_iter()
-                .find(|&w| may_take(mesh, w, fracture.floor_angle))
-                .map_or(Plan::Refused(Refusal::Floor, toward), Plan::Edge);
-        }
-        match self.split_at(state, region, c.triangle, Some(c.corner), c.fraction) {
-            Ok((split, more, new)) => {
-                changed.offer.extend(more.offer);
-                changed.below_end += more.below_end;
-                if split {
-                    Plan::Edge(*new.last().expect("a split adds a vertex"))
-                } else {
-                    Plan::Refused(Refusal::Front, toward)
-                }
-            }
-            Err(_) => Plan::Refused(Refusal::Degenerate, toward),
-        }
-    }
-}
-
-/// `changed` with its offered vertices sorted and without repeats.
-fn sorted(mut changed: Changed) -> Changed {
-    changed.offer.sort_unstable();
-    changed.offer.dedup();
-    changed
-}
-
-/// How a direction of an extension ends its new edge.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Plan {
-    /// At this vertex, a neighbour of the tip.
-    Edge(VertexId),
-    /// The direction crosses a crack and no edge may join it: the tip stops short.
-    Arrest,
-    /// The mesh cannot make the edge now, for this reason; it would have ended at this point
-    /// (m).
-    Refused(Refusal, [f64; 2]),
-}
-
-/// The in-plane stress (Pa) at the tent's vertex `v` at time `t` (s), the middle of its pole, in
-/// the element over star triangle `triangle` of the patch `solver` just solved.
-fn element_stress(
-    solve: &Solve,
-    mesh: &Mesh,
-    solver: &PatchSolver,
-    v: VertexId,
-    triangle: TriangleId,
-    t: f64,
-) -> [f64; 3] {
-    let system = &solve.problem.system;
-    let (mut phi, mut values) = ([0.0; SCRATCH], [0.0; SCRATCH]);
-    let (n, width) = (solve.basis.len(), solver.width());
-    let (_, geometry, coefficients) = solver
-        .elements()
-        .find(|&(t, _, _)| t == triangle)
-        .expect("the patch has an element over every star triangle");
-    let [x, y] = mesh.vertex(v);
-    evaluate(
-        &solve.basis,
-        geometry,
-        coefficients,
-        [x, y, system.c_ref() * t],
-        &mut phi[..n],
-        &mut values[..width],
-    );
-    let z = system.z_ref();
-    [values[2], values[3], values[4]].map(|s| z * s)
-}
-
 /// `events.csv`: one line per fracture event in the order they happened, at its time on the
 /// clock of `time`.
-pub(super) fn events_csv(events: &[FractureEvent], time: &TimeConfig) -> String {
+pub(crate) fn events_csv(events: &[FractureEvent], time: &TimeConfig) -> String {
     let mut csv = String::from("time_s,event,branch,x_m,y_m,to_x_m,to_y_m,reason\n");
     for e in events {
         let _ = writeln!(
@@ -490,18 +128,18 @@ pub(super) fn events_csv(events: &[FractureEvent], time: &TimeConfig) -> String 
 }
 
 /// A crack edge at the end of a run.
-pub(super) struct CrackEdge {
-    pub(super) edge: sdg_mesh::EdgeId,
+pub(crate) struct CrackEdge {
+    pub(crate) edge: sdg_mesh::EdgeId,
     /// End points, m.
-    pub(super) ends: [[f64; 2]; 2],
+    pub(crate) ends: [[f64; 2]; 2],
     /// Damage on the front, in [0, 1]: the interface state at the top corner of the last face
     /// solved over the edge, or the tag's initial damage where none was.
-    pub(super) damage: f64,
+    pub(crate) damage: f64,
 }
 
 /// Every crack edge of `mesh` with its damage on the front; `initial_damage(tag)` for edges no
 /// face was solved over.
-pub(super) fn crack_edges(
+pub(crate) fn crack_edges(
     mesh: &Mesh,
     solution: &FrontSolution,
     fracture: &Fracture,
@@ -542,7 +180,7 @@ fn corner_damage(face: &FaceState, basis: &FaceBasis) -> [f64; 3] {
 /// The least damage `D` over edge `e` on the front: the smallest at the corners of the last
 /// face solved over it (faces of order `order`), or `initial` where none was. `D` never
 /// decreases in time, so this is the damage of the whole face up to the polynomial's wiggle.
-pub(super) fn least_damage(solution: &FrontSolution, e: EdgeId, order: usize, initial: f64) -> f64 {
+pub(crate) fn least_damage(solution: &FrontSolution, e: EdgeId, order: usize, initial: f64) -> f64 {
     solution.face(e as usize).map_or(initial, |face| {
         corner_damage(&face, &FaceBasis::new(order))
             .into_iter()
@@ -553,7 +191,7 @@ pub(super) fn least_damage(solution: &FrontSolution, e: EdgeId, order: usize, in
 /// A merge of two crack edges into one by coarsening (the crack's wake, seed Fig. 4.6), at
 /// front time `time` (s): the restored edge runs `from` `to` (m); its branch is the one whose
 /// extension made the removed vertex `at` (m) a crack vertex, if any (none on initial cracks).
-pub(super) fn wake_coarsening(
+pub(crate) fn wake_coarsening(
     events: &[FractureEvent],
     time: f64,
     at: [f64; 2],
@@ -577,7 +215,7 @@ pub(super) fn wake_coarsening(
 /// the one whose extension (in `events`) made the segment it lies on (bisections split an
 /// extension's edge and coarsening merges the halves again, so every crack edge lies on one);
 /// empty on initial cracks.
-pub(super) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge], events: &[FractureEvent]) -> String {
+pub(crate) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge], events: &[FractureEvent]) -> String {
     let extensions: Vec<&FractureEvent> = events.iter().filter(|e| e.kind == "extension").collect();
     let mut csv = String::from("x0_m,y0_m,x1_m,y1_m,tag,branch,damage\n");
     for c in cracks {
@@ -600,104 +238,10 @@ pub(super) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge], events: &[FractureEv
     csv
 }
 
-/// `crack_path.png`: the final mesh's domain with the crack edges in red and the triangles
-/// beside them coloured by their damage (the largest of a triangle's crack edges); and
-/// `crack_zoom.png`: the same around the edges the run added (`grown` tag), when there are
-/// any, with the mesh's edges unless they would hide the triangles.
-pub(super) fn write_crack_path_png(
-    dir: &std::path::Path,
-    mesh: &Mesh,
-    cracks: &[CrackEdge],
-    grown: sdg_mesh::TagId,
-    time: f64,
-    fork: Option<[f64; 2]>,
-) {
-    let mut damage = vec![f64::NAN; mesh.triangles().len()];
-    for c in cracks {
-        for t in mesh.edges()[c.edge as usize]
-            .triangles
-            .into_iter()
-            .flatten()
-        {
-            let d = &mut damage[t as usize];
-            *d = if d.is_nan() {
-                c.damage
-            } else {
-                d.max(c.damage)
-            };
-        }
-    }
-    let segments: Vec<[[f64; 2]; 2]> = cracks.iter().map(|c| c.ends).collect();
-    let markers: Vec<[f64; 2]> = fork.into_iter().collect();
-    let title = match fork {
-        Some(_) => "cracks (red), damage D beside them, first macro fork circled",
-        None => "cracks (red), damage D beside them",
-    };
-    let plot = FieldPlot::new(mesh.vertices(), mesh.triangles(), Values::Cells(&damage))
-        .title(title)
-        .time(Some(time))
-        .segments(&segments)
-        .markers(&markers);
-    let new_ends = cracks
-        .iter()
-        .filter(|c| mesh.edges()[c.edge as usize].tag == Some(grown))
-        .flat_map(|c| c.ends);
-    let zoom = zoom_window(new_ends, mesh.vertices()).map(|w| {
-        // The mesh's edges only where they leave the triangles visible.
-        let inside = |p: &&[f64; 2]| (w[0]..=w[1]).contains(&p[0]) && (w[2]..=w[3]).contains(&p[1]);
-        let shown = mesh.vertices().iter().filter(inside).count();
-        plot.clone()
-            .window(Some(w))
-            .edges(shown <= ZOOM_MAX_EDGED_VERTICES)
-    });
-    for (name, plot) in [("crack_path.png", Some(plot)), ("crack_zoom.png", zoom)] {
-        let Some(plot) = plot else { continue };
-        let path = dir.join(name);
-        let image = plot.render(CRACK_PATH_PNG_SIZE);
-        if let Err(e) = image.and_then(|image| image.write_png(&path)) {
-            tracing::warn!("{}: {e}", path.display());
-        }
-    }
-}
-
-/// The window `[xmin, xmax, ymin, ymax]` (m) of `crack_zoom.png` around `points`: centred on
-/// their bounding box, 1.2 times as large (at least 1% of the domain's diagonal) and with the
-/// picture's aspect ratio; `None` for no points.
-fn zoom_window(points: impl Iterator<Item = [f64; 2]>, domain: &[[f64; 2]]) -> Option<[f64; 4]> {
-    let [x0, x1, y0, y1] = bounding_box(points)?;
-    let [dx0, dx1, dy0, dy1] = bounding_box(domain.iter().copied())?;
-    let (w, h) = CRACK_PATH_PNG_SIZE;
-    let aspect = f64::from(h) / f64::from(w);
-    let least = 0.01 * (dx1 - dx0).hypot(dy1 - dy0);
-    let half_width = 0.6 * (x1 - x0).max((y1 - y0) / aspect).max(least);
-    let half_height = aspect * half_width;
-    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    Some([
-        cx - half_width,
-        cx + half_width,
-        cy - half_height,
-        cy + half_height,
-    ])
-}
-
-/// `[xmin, xmax, ymin, ymax]` of `points`; `None` for none.
-fn bounding_box(points: impl Iterator<Item = [f64; 2]>) -> Option<[f64; 4]> {
-    points.fold(None, |b, p| {
-        let [x0, x1, y0, y1] = b.unwrap_or([p[0], p[0], p[1], p[1]]);
-        Some([x0.min(p[0]), x1.max(p[0]), y0.min(p[1]), y1.max(p[1])])
-    })
-}
-
-/// Most mesh vertices in `crack_zoom.png`'s window for which it draws the mesh's edges.
-const ZOOM_MAX_EDGED_VERTICES: usize = 1500;
-
-/// Size of `crack_path.png`, pixels.
-const CRACK_PATH_PNG_SIZE: (u32, u32) = (1200, 900);
-
 /// The summary of the fracture events of a run on the final `state`, whose crack edges are
 /// `cracks`; `initial_tips` are the positions of the initial cracks' tips, m; `macro_length`
 /// the arms' reach of a macro fork, m; its times are on the clock of `time`.
-pub(super) fn summary(
+pub(crate) fn summary(
     events: &[FractureEvent],
     (state, cracks): (&Frontier, &[CrackEdge]),
     fracture: &Fracture,
@@ -741,7 +285,7 @@ pub(super) fn summary(
 
 /// The first macro fork of the crack network on `mesh` whose arms reach `length` (m)
 /// ([`network`]); `initial_tips` are the positions of the initial cracks' tips, m.
-pub(super) fn macro_fork(
+pub(crate) fn macro_fork(
     mesh: &Mesh,
     fracture: &Fracture,
     events: &[FractureEvent],
@@ -809,7 +353,7 @@ fn first_branching(
 
 /// The crack-tip states of every branch: the crossings of the damage levels on the crack edges
 /// the branch added (found by where they lie: later splits keep them on the segment), tracked
-/// per branch as a cohesive crack is per tag ([`crack_output::tip_states`]): the tip is where
+/// per branch as a cohesive crack is per tag ([`tips::tip_states`]): the tip is where
 /// the damage reaches `1 - eps`, behind the newest crack edge, whose insertion only marks where
 /// damage may start. The edges a nucleation makes are left out: the traction that exceeded the
 /// defect's strength loads them whole, so their points fail almost together (on the plate with
@@ -817,7 +361,7 @@ fn first_branching(
 /// branch's tip starts where they end. So are the edges that end a branch on another crack or
 /// the boundary (an arrest at the edge's far end): the ligament ahead of the tip, which breaks
 /// as a whole.
-pub(super) fn branch_tips(
+pub(crate) fn branch_tips(
     events: &[FractureEvent],
     crossings: &[Crossing],
 ) -> BTreeMap<u32, Vec<TipState>> {
@@ -851,7 +395,7 @@ pub(super) fn branch_tips(
     }
     by_branch
         .into_iter()
-        .map(|(branch, list)| (branch, crack_output::tip_states(&list)))
+        .map(|(branch, list)| (branch, tips::tip_states(&list)))
         .filter(|(_, states)| !states.is_empty())
         .collect()
 }
@@ -900,29 +444,13 @@ mod tests {
         assert!((least_damage(&solution, 1, 1, 0.25) - 0.9).abs() < 1e-15);
     }
 
-    #[test]
-    fn the_zoom_frames_the_grown_cracks() {
-        let domain = [[0.0, 0.0], [16e-3, 10e-3]];
-        // A 1 mm crack along x: 1.2 mm wide, with the picture's aspect ratio.
-        let crack = [[2e-3, 5e-3], [3e-3, 5e-3]];
-        let [x0, x1, y0, y1] = zoom_window(crack.into_iter(), &domain).unwrap();
-        assert!((x1 - x0 - 1.2e-3).abs() < 1e-12 && (x0 + x1 - 5e-3).abs() < 1e-12);
-        let (w, h) = CRACK_PATH_PNG_SIZE;
-        assert!(((y1 - y0) / (x1 - x0) - f64::from(h) / f64::from(w)).abs() < 1e-12);
-        assert!((y0 + y1 - 10e-3).abs() < 1e-12);
-        // A tiny one gets 1.2% of the domain's diagonal; none gets no picture.
-        let [x0, x1, ..] = zoom_window([[2e-3, 5e-3]].into_iter(), &domain).unwrap();
-        assert!((x1 - x0 - 0.012 * 16e-3f64.hypot(10e-3)).abs() < 1e-12);
-        assert_eq!(zoom_window(std::iter::empty(), &domain), None);
-    }
-
     /// On the unit square's notch to its centre, cracks grown up and down from the notch's tip
     /// along the grid (quarter-length edges) make a macro fork there with two half-length arms;
     /// the lower arm's second edge is half damaged, so a quarter of that arm is open.
     #[test]
     fn a_macro_fork_s_arms_count_their_open_length() {
-        let (mut mesh, fracture) = crate::fracture::tests::notched();
-        let at = |mesh: &Mesh, x| crate::fracture::tests::vertex_at(mesh, x);
+        let (mut mesh, fracture) = crate::fracture::criteria::tests::notched();
+        let at = |mesh: &Mesh, x| crate::fracture::criteria::tests::vertex_at(mesh, x);
         let path = [[0.5, 1.0], [0.5, 0.75], [0.5, 0.5], [0.5, 0.25], [0.5, 0.0]];
         let mut events = Vec::new();
         for (i, pair) in path.windows(2).enumerate() {
@@ -1036,7 +564,7 @@ mod tests {
         let tips = branch_tips(&events, &crossings);
         assert_eq!(tips.keys().copied().collect::<Vec<_>>(), [2]);
         assert_eq!(tips[&2].len(), 40);
-        let (_, summary) = crack_output::tips_csv("branch", &tips, 1000.0, &UNIT_TIME);
+        let (_, summary) = tips::tips_csv("branch", &tips, 1000.0, &UNIT_TIME);
         assert!(
             (summary.max_speed_over_c_r - 0.4).abs() < 0.004,
             "{summary:?}"
@@ -1079,7 +607,7 @@ mod tests {
             let tips = branch_tips(events, &crossings);
             (
                 tips[&0].len(),
-                crack_output::tips_csv("branch", &tips, 1000.0, &UNIT_TIME).1,
+                tips::tips_csv("branch", &tips, 1000.0, &UNIT_TIME).1,
             )
         };
         let (states, summary) = tips(&events);
@@ -1147,7 +675,7 @@ mod tests {
                 );
             }
         }
-        let (csv, summary) = crack_output::tips_csv("branch", &tips, 1000.0, &UNIT_TIME);
+        let (csv, summary) = tips::tips_csv("branch", &tips, 1000.0, &UNIT_TIME);
         assert_eq!(csv.lines().count(), 185);
         assert!(csv.starts_with("t_s,branch,x_m,"));
         assert!(

@@ -27,17 +27,17 @@ use sdg_mesh::VertexId;
 
 /// One crack edge of the network.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct CrackLink {
+pub(crate) struct CrackLink {
     /// Its end vertices.
-    pub(super) ends: [VertexId; 2],
+    pub(crate) ends: [VertexId; 2],
     /// Its end points, m.
-    pub(super) points: [[f64; 2]; 2],
+    pub(crate) points: [[f64; 2]; 2],
     /// When it was made, s (0 for initial cracks).
-    pub(super) time: f64,
+    pub(crate) time: f64,
     /// It belongs to an initial crack.
-    pub(super) initial: bool,
+    pub(crate) initial: bool,
     /// Its damage on the front, in [0, 1].
-    pub(super) damage: f64,
+    pub(crate) damage: f64,
 }
 
 /// The damage from which a crack edge counts as open: its faces carry at most 1% of the
@@ -71,7 +71,7 @@ type Graph = BTreeMap<VertexId, (Vec<Neighbour>, [f64; 2], bool)>;
 
 /// The first macro fork of the network of `links` whose forward arms reach `length` (m): the
 /// earliest to fork, the nearest to `initial_tips` (m) among those of equal time.
-pub(super) fn first_macro_fork(
+pub(crate) fn first_macro_fork(
     links: &[CrackLink],
     length: f64,
     initial_tips: &[[f64; 2]],

@@ -8,16 +8,17 @@ use sdg_scheduler::{Changed, Region, VertexId};
 use sdg_solver::interface::Law;
 use sdg_solver::patch::{PatchReport, PatchSolver};
 
-use super::propagation::{least_damage, wake_coarsening};
-use super::{InterfaceRecords, Outcome, Solve};
-use crate::adapt::Adapt;
+use super::indicator::Adapt;
+use crate::fracture::records::{least_damage, wake_coarsening};
 use crate::frontier::{Coarsening, Frontier, Limits, Refined, refinement_edge_length};
+use crate::solve::context::Solve;
+use crate::solve::tent::{InterfaceRecords, Outcome};
 
 impl Solve<'_> {
     /// The indicator of a patch with `report` over spacetime volume `volume` (m^2 s): the larger
     /// of the bulk (numerical dissipation) and the cohesive (traction mismatch) measures, both
     /// normalized alike.
-    pub(super) fn indicator(&self, adapt: &Adapt, report: &PatchReport, volume: f64) -> f64 {
+    pub(crate) fn indicator(&self, adapt: &Adapt, report: &PatchReport, volume: f64) -> f64 {
         let energy = f64::from_bits(self.energy_reference.load(Ordering::Relaxed));
         let measure = report.dissipation.max(report.cohesive_mismatch);
         adapt.indicator(measure, volume, energy)
@@ -30,7 +31,7 @@ impl Solve<'_> {
     /// pitcher's invariant, the edge is not longer than `adapt.max_edge` and, when it is longer
     /// than `adapt.tip_edge`, no active crack tip is a corner of `m`'s star (the tip's refinement
     /// would split it again).
-    pub(super) fn coarsening(
+    pub(crate) fn coarsening(
         &self,
         adapt: &Adapt,
         state: &Frontier,
@@ -84,7 +85,7 @@ impl Solve<'_> {
 
     /// Solves the coarsening patch of vertex `m`, claimed for a tent, when `m` may be coarsened
     /// now and the patch is within the tolerance: the outcome for the coarsening event.
-    pub(super) fn try_coarsening(
+    pub(crate) fn try_coarsening(
         &self,
         adapt: &Adapt,
         state: &Frontier,
@@ -141,7 +142,7 @@ impl Solve<'_> {
 
     /// The coarsening event: applies `coarsening` (with `report` and its `interface` records) if
     /// nothing changed since it was solved; otherwise the patch counts as rejected.
-    pub(super) fn coarsen(
+    pub(crate) fn coarsen(
         &self,
         state: &mut Frontier,
         coarsening: &Coarsening,
@@ -198,7 +199,7 @@ impl Solve<'_> {
     /// True when star triangle `t` may be bisected now: its halves would not be too short, the
     /// front stays causal, and the star of the corner that gains a triangle stays within the
     /// patch solvers' capacity.
-    pub(super) fn may_refine(&self, adapt: &Adapt, state: &Frontier, t: TriangleId) -> bool {
+    pub(crate) fn may_refine(&self, adapt: &Adapt, state: &Frontier, t: TriangleId) -> bool {
         let mesh = &state.mesh;
         let apex = mesh.triangles()[t as usize][mesh.refinement_edge(t)];
         refinement_edge_length(mesh, t) >= 2.0 * adapt.min_edge
@@ -210,7 +211,7 @@ impl Solve<'_> {
     /// coarsening): bisects the triangles of `star` that are unchanged since. When none could
     /// be, the next tent at `v` is accepted whatever its indicator, so that the front keeps
     /// moving. Returns the vertices whose readiness changed.
-    pub(super) fn refine(
+    pub(crate) fn refine(
         &self,
         state: &mut Frontier,
         region: &Region<'_>,
@@ -264,7 +265,7 @@ impl Solve<'_> {
     /// refinement does. Returns whether `t` was split (a refused step leaves `t` whole and
     /// keeps the closure's bisections done before it), what changed for the scheduler and the
     /// new vertices. Runs as an event: `state` is held exclusively.
-    pub(super) fn split_at(
+    pub(crate) fn split_at(
         &self,
         state: &mut Frontier,
         region: &Region<'_>,
@@ -321,7 +322,7 @@ fn midpoint(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
 /// Bisects every triangle whose refinement edge is longer than `adapt.max_edge` (or a zone's at
 /// the edge's midpoint), on the flat initial front; or says which key asks for what the mesh
 /// cannot give, and why.
-pub(super) fn refine_to_max_edge(
+pub(crate) fn refine_to_max_edge(
     state: &mut Frontier,
     adapt: &Adapt,
     max_star: usize,
@@ -362,7 +363,7 @@ const PROBE_CHAIN: usize = 64;
 /// The vertices a refinement of `triangles` changes as the mesh is now
 /// ([`sdg_scheduler::Probe`]): the corners of the triangles the closures of their bisections
 /// split. Ids past the mesh are left out.
-pub(super) fn refinement_region(
+pub(crate) fn refinement_region(
     mesh: &Mesh,
     triangles: impl IntoIterator<Item = TriangleId>,
 ) -> Vec<VertexId> {
@@ -380,7 +381,7 @@ pub(super) fn refinement_region(
 
 /// The vertices a crack extension from the tip `v` changes: those of refining its star and the
 /// triangles across the edges opposite `v`, where a split toward `v` sends the closure.
-pub(super) fn extension_region(mesh: &Mesh, v: VertexId) -> Vec<VertexId> {
+pub(crate) fn extension_region(mesh: &Mesh, v: VertexId) -> Vec<VertexId> {
     if v as usize >= mesh.vertices().len() {
         return Vec::new();
     }
@@ -405,7 +406,7 @@ pub(super) fn extension_region(mesh: &Mesh, v: VertexId) -> Vec<VertexId> {
 /// The vertices a coarsening that removes `m` changes: `m` and its neighbours, and the last
 /// vertex, the corners of the last two triangles and the ends of the last three edges, which
 /// the removal may move into the freed ids ([`sdg_mesh::Merge`]).
-pub(super) fn coarsening_region(mesh: &Mesh, m: VertexId) -> Vec<VertexId> {
+pub(crate) fn coarsening_region(mesh: &Mesh, m: VertexId) -> Vec<VertexId> {
     let n = mesh.vertices().len();
     if m as usize >= n {
         return Vec::new();

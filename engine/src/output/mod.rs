@@ -1,0 +1,11 @@
+//! The files a run writes: atomic writes and the VTU grid writer (`files`), snapshots of the
+//! solution on planes of constant time (`snapshot`), the interface probes and crack surfaces cut
+//! by snapshot planes (`interface`), and the spacetime mesh of `sdg mesh` (`spacetime`).
+
+pub(crate) mod files;
+pub(crate) mod interface;
+pub(crate) mod snapshot;
+pub mod spacetime;
+
+pub(crate) use files::discard;
+pub use files::{CellType, Field, UnstructuredGrid, check_writable, write_atomic};

@@ -1,0 +1,175 @@
+//! The snapshot files: VTU grids of the slices and crack segments, their pictures, the writer
+//! thread that writes them off the solving threads, and the removal of an earlier run's.
+
+use super::slicing::{InterfaceValues, PointValues, Segment, Triangle};
+use crate::error::EngineError;
+use crate::output::{CellType, Field, UnstructuredGrid};
+use crate::plot::{FIELD_PNG_SIZE, FieldPlot, Values};
+use std::path::Path;
+
+/// The slice of the element `v` by the plane `tau = tau_s` (vertices within `tol` of it are on
+/// it), or `None` when neither rule applies or the slice has fewer than three corners.
+/// Removes from `dir` the snapshot files a run writes (`snapshot_NNNN.vtu` and `.png`,
+/// `cracks_NNNN.vtu`, `snapshots.pvd`), so that a new run's folder holds no snapshot of an
+/// earlier run that its collection does not list. Returns how many files were removed.
+pub(crate) fn remove_earlier(dir: &Path) -> Result<usize, EngineError> {
+    let numbered = |name: &str, prefix: &str, extensions: &[&str]| {
+        name.strip_prefix(prefix)
+            .and_then(|rest| rest.split_once('.'))
+            .is_some_and(|(digits, extension)| {
+                !digits.is_empty()
+                    && digits.bytes().all(|b| b.is_ascii_digit())
+                    && extensions.contains(&extension)
+            })
+    };
+    let entries = std::fs::read_dir(dir).map_err(|e| EngineError::io(dir, e))?;
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(name) = name.to_str() else { continue };
+        if !entry.file_type().is_ok_and(|t| t.is_file()) {
+            continue;
+        }
+        if name == "snapshots.pvd"
+            || numbered(name, "snapshot_", &["vtu", "png"])
+            || numbered(name, "cracks_", &["vtu"])
+        {
+            let path = entry.path();
+            std::fs::remove_file(&path).map_err(|e| EngineError::io(&path, e))?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
+/// Draws the velocity magnitude on `triangles` with the interface `segments` on top into the
+/// PNG file `path`.
+pub(super) fn draw_png(
+    triangles: &[Triangle],
+    segments: &[Segment],
+    time: f64,
+    path: &std::path::Path,
+) -> Result<(), EngineError> {
+    let points: Vec<[f64; 2]> = triangles.iter().flat_map(|t| t.xy).collect();
+    let speed: Vec<f64> = triangles
+        .iter()
+        .flat_map(|t| {
+            t.values
+                .iter()
+                .map(|v| v.velocity.iter().map(|c| c * c).sum::<f64>().sqrt())
+        })
+        .collect();
+    let corners: Vec<[u32; 3]> = (0..triangles.len() as u32)
+        .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+        .collect();
+    let lines: Vec<[[f64; 2]; 2]> = segments.iter().map(|s| s.xy).collect();
+    FieldPlot::new(&points, &corners, Values::Points(&speed))
+        .title("velocity magnitude (m/s)")
+        .time(Some(time))
+        .segments(&lines)
+        .render(FIELD_PNG_SIZE)?
+        .write_png(path)
+}
+
+/// The triangles as an unstructured grid with points `[x, y, 0]` (three per triangle: fields
+/// are discontinuous), point fields `velocity`, `stress`, `displacement`,
+/// `strain_energy_density` and cell field `area`.
+pub(super) fn triangles_grid(triangles: &[Triangle]) -> UnstructuredGrid {
+    let values = || triangles.iter().flat_map(|t| t.values.iter());
+    let field = |name: &str, components: usize, get: fn(&PointValues) -> &[f64]| Field {
+        name: name.into(),
+        components,
+        values: values().flat_map(|p| get(p).iter().copied()).collect(),
+    };
+    UnstructuredGrid {
+        cell_type: CellType::Triangle,
+        points: triangles
+            .iter()
+            .flat_map(|t| t.xy.iter().map(|p| [p[0], p[1], 0.0]))
+            .collect(),
+        connectivity: (0..3 * triangles.len() as u32).collect(),
+        point_data: vec![
+            field("velocity", 3, |p| &p.velocity),
+            field("stress", 6, |p| &p.stress),
+            field("displacement", 3, |p| &p.displacement),
+            field("strain_energy_density", 1, |p| {
+                std::slice::from_ref(&p.strain_energy_density)
+            }),
+        ],
+        cell_data: vec![Field::scalar(
+            "area",
+            triangles.iter().map(Triangle::area).collect(),
+        )],
+    }
+}
+
+/// The interface segments as an unstructured grid of lines with points `[x, y, 0]` (two per
+/// segment) and point fields `delta`, `slip`, `damage`, `traction` (normal, tangential, 0), `eta`,
+/// `mode`.
+pub(super) fn segments_grid(segments: &[Segment]) -> UnstructuredGrid {
+    let values = || segments.iter().flat_map(|s| s.values.iter());
+    let scalar = |name: &str, get: fn(&InterfaceValues) -> f64| {
+        Field::scalar(name, values().map(get).collect())
+    };
+    UnstructuredGrid {
+        cell_type: CellType::Line,
+        points: segments
+            .iter()
+            .flat_map(|s| s.xy.iter().map(|p| [p[0], p[1], 0.0]))
+            .collect(),
+        connectivity: (0..2 * segments.len() as u32).collect(),
+        point_data: vec![
+            scalar("delta", |v| v.delta),
+            scalar("slip", |v| v.slip),
+            scalar("damage", |v| v.damage),
+            Field {
+                name: "traction".into(),
+                components: 3,
+                values: values()
+                    .flat_map(|v| [v.traction[0], v.traction[1], 0.0])
+                    .collect(),
+            },
+            scalar("eta", |v| v.eta),
+            scalar("mode", |v| v.mode),
+        ],
+        cell_data: Vec::new(),
+    }
+}
+
+/// Writing one snapshot's files.
+pub(super) type Job = Box<dyn FnOnce() -> Result<(), EngineError> + Send>;
+
+/// A thread that runs [`Job`]s in the order they come, so that no worker waits for the disk
+/// or for a picture being drawn. After the first error it runs no more jobs (a collection must
+/// not list a file that failed) and keeps that error.
+pub(super) struct Writer {
+    pub(super) jobs: std::sync::mpsc::Sender<Job>,
+    pub(super) thread: std::thread::JoinHandle<Result<(), EngineError>>,
+    pub(super) failed: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Writer {
+    pub(super) fn start() -> Self {
+        let (jobs, queue) = std::sync::mpsc::channel::<Job>();
+        let failed = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let flag = failed.clone();
+        let thread = std::thread::spawn(move || {
+            for job in queue {
+                if let Err(e) = job() {
+                    flag.store(true, std::sync::atomic::Ordering::Release);
+                    return Err(e);
+                }
+            }
+            Ok(())
+        });
+        Self {
+            jobs,
+            thread,
+            failed,
+        }
+    }
+
+    pub(super) fn has_failed(&self) -> bool {
+        self.failed.load(std::sync::atomic::Ordering::Acquire)
+    }
+}

@@ -1,0 +1,211 @@
+//! The end of a solve: the last history row, the summary of the run, and its files.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use sdg_scheduler::Options;
+use sdg_solver::norms::{front_energy, slice_errors};
+
+use crate::error::EngineError;
+use crate::estimate::{self, Estimate};
+use crate::frontier::Frontier;
+use crate::job::RunOptions;
+use crate::output::write_atomic;
+use crate::plot;
+
+use super::checkpoint::Counts;
+use super::context::{Solve, initial_state};
+use super::outputs::{front_cracks, initial_tip_points};
+use super::summary::{
+    CheckpointSummary, EnergySummary, ErrorSummary, InterfaceSummary, RunSummary, Timings,
+    state_hash,
+};
+use super::tent::momentum_residual;
+use crate::fracture::records;
+use crate::fracture::tips::{CrackNetwork, CrackSummary};
+
+impl Solve<'_> {
+    /// Writes the outputs of the run that brought the front to `state` and its `summary.json`
+    /// into `dir`, from its `counts`, `checkpoints` and `estimate` on `scheduler`. Returns the
+    /// summary and the folder; a file that cannot be written is an error after every other
+    /// file was tried (no `summary.json` then).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn finish(
+        &self,
+        state: &Frontier,
+        options: &RunOptions,
+        dir: &Path,
+        counts: Counts,
+        checkpoints: CheckpointSummary,
+        estimate: Estimate,
+        scheduler: &Options,
+    ) -> Result<(RunSummary, PathBuf), EngineError> {
+        let problem = self.problem;
+        let config = &problem.loaded.config;
+        let system = &problem.system;
+        let rho = problem.material.density();
+        let t_end = config.time.span();
+        let (basis, width, initial) = (&self.basis, self.width, self.initial);
+        let wall_time_s = counts.wall_time_s;
+        let stats = counts;
+        let finishing = Instant::now();
+        let mut book = self.book.lock();
+        book.progress.finish();
+        self.history_row(state, &mut book);
+        // A snapshot that cannot be written fails the run (exit 1, no summary.json) after every
+        // other output is written.
+        let snapshots = book
+            .snapshots
+            .flush(t_end)
+            .and_then(|_| book.snapshots.finish());
+        tracing::info!(patches = stats.tents, wall_time_s, "solve finished");
+        if book.unresolved as f64 > 0.01 * book.patches as f64 {
+            tracing::warn!(
+                unresolved_patches = book.unresolved,
+                patches = book.patches,
+                largest_over_tol = book.unresolved_max,
+                "more than 1% of the patches were accepted above adapt.tol because refinement was at \
+                 its floor (adapt.min_edge, or adapt.far_edge away from cracks): the run is less \
+                 resolved than its tolerance asks"
+            );
+        }
+
+        let Frontier {
+            mesh,
+            front,
+            solution,
+            ..
+        } = state;
+        let e = front_energy(
+            mesh,
+            front,
+            solution,
+            basis,
+            system,
+            scheduler.threads,
+            |x| initial_state(problem, initial, x),
+        );
+        let initial_j = rho * book.initial_energy;
+        let work = rho * book.totals.boundary_work;
+        let dissipation = rho * book.totals.dissipation;
+        let interface_work = rho * book.totals.interface_work;
+        let final_j = rho * e.total;
+        let energy = EnergySummary {
+            initial: initial_j,
+            final_kinetic: rho * e.kinetic,
+            final_strain: rho * e.strain,
+            r#final: final_j,
+            boundary_work: work,
+            dissipation,
+            interface_work,
+            friction_dissipation: rho * book.totals.friction_dissipation,
+            fracture_energy: rho * book.totals.fracture_work,
+            balance_residual_rel: (initial_j + work - final_j - dissipation - interface_work)
+                / (initial_j + work.abs()).max(f64::MIN_POSITIVE),
+        };
+        let interface = InterfaceSummary {
+            nonlinear_patches: book.nonlinear_patches,
+            newton_iterations_mean: book.newton_iterations as f64
+                / book.nonlinear_patches.max(1) as f64,
+            newton_iterations_max: book.newton_max,
+        };
+        let (crack_csv, crack) = self.crack_tips(mesh, &book).unzip();
+        let error = problem.exact.as_ref().map(|w| {
+            let e = slice_errors(mesh, solution, basis, system, t_end, w);
+            ErrorSummary {
+                velocity_l2_rel: e.velocity,
+                stress_l2_rel: e.stress,
+            }
+        });
+        let fracture = problem.fracture.as_ref().map(|fracture| {
+            let initial_tips = initial_tip_points(fracture, &problem.mesh);
+            let macro_length = config.fracture.as_ref().and_then(|f| f.macro_length);
+            records::summary(
+                &book.fracture_events,
+                (state, &front_cracks(problem, fracture, state)),
+                fracture,
+                (&initial_tips, macro_length),
+                &config.time,
+            )
+        });
+        let (min_edge, max_edge) = mesh.edge_length_range();
+        let mut summary = RunSummary {
+            command: "run",
+            config_file: problem.loaded.file.clone(),
+            vertices: mesh.vertices().len(),
+            triangles: mesh.triangles().len(),
+            order: config.solver.order,
+            patches: book.patches,
+            elements: book.elements,
+            dofs_per_patch: book.dofs as f64 / book.patches.max(1) as f64,
+            final_time: config.time.clock(front.min_time()),
+            max_slope_ratio: book.max_slope_ratio,
+            max_momentum_residual: momentum_residual(&book.totals),
+            mode: if scheduler.deterministic {
+                "deterministic"
+            } else {
+                "asynchronous"
+            },
+            state_hash: state_hash(front, solution, basis.len() * width),
+            wall_time_s,
+            patches_per_second: book.patches as f64 / wall_time_s.max(f64::MIN_POSITIVE),
+            threads: scheduler.threads,
+            peak_memory_bytes: estimate::peak_resident_bytes(),
+            estimate,
+            energy,
+            interface,
+            loading: problem.loading,
+            crack: crack.map(|crack| CrackSummary {
+                network: fracture.as_ref().map(|f| CrackNetwork {
+                    branches: f.branches,
+                    total_length: f.total_length,
+                    first_branching_time: f.first_branching_time,
+                    first_branching_distance: f.first_branching_distance,
+                }),
+                ..crack
+            }),
+            fracture,
+            error,
+            snapshots: book.snapshots.written().to_vec(),
+            refinements: book.refinements,
+            rejected_patches: book.rejected,
+            unresolved_patches: book.unresolved,
+            unresolved_max: book.unresolved_max,
+            coarsenings: book.coarsenings,
+            events: stats.events,
+            rounds: stats.rounds,
+            checkpoint: checkpoints,
+            timings: Timings {
+                events_s: stats.events_s,
+                waiting_s: stats.waiting_s,
+                ..book.timings
+            },
+            min_edge,
+            max_edge,
+        };
+        let mut written = vec![
+            snapshots,
+            write_atomic(dir, "history.csv", book.history.as_bytes()).map(drop),
+        ];
+        if config.output.png {
+            plot::write_history_png(dir, &book.history);
+        }
+        written.push(self.write_probes(dir, &mut book));
+        if let Some(csv) = crack_csv {
+            written.push(self.write_crack_tips(dir, &csv));
+        }
+        written.push(self.write_fracture(state, &book.fracture_events, dir));
+        written.push(self.write_trace(options));
+        let mut failures = written.into_iter().filter_map(Result::err);
+        if let Some(first) = failures.next() {
+            for e in failures {
+                tracing::error!("not written either: {e}");
+            }
+            return Err(first);
+        }
+        summary.timings.output_s += finishing.elapsed().as_secs_f64();
+        let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
+        write_atomic(dir, "summary.json", json.as_bytes())?;
+        Ok((summary, dir.to_path_buf()))
+    }
+}

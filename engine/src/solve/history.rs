@@ -1,0 +1,180 @@
+//! What each accepted patch adds to the bookkeeping: energy sums, snapshot slices, and the
+//! history rows that integrate over the whole front.
+
+use std::fmt::Write as _;
+
+use std::sync::atomic::Ordering;
+
+use sdg_mesh::TriangleId;
+use sdg_solver::element::{FrontSolution, Geometry, evaluate};
+use sdg_solver::norms::front_energy;
+use sdg_solver::patch::PatchReport;
+use sdg_solver::system::MAX_FIELDS;
+use sdg_solver::{Material, Plane};
+
+use super::book::Book;
+use super::context::{Solve, initial_state};
+use crate::frontier::Frontier;
+use crate::output::snapshot::PointValues;
+
+impl Solve<'_> {
+    /// Adds a solved patch to the totals.
+    pub(crate) fn add_patch(&self, book: &mut Book, report: &PatchReport) {
+        book.patches += 1;
+        book.timings.assembly_s += report.assembly_s;
+        book.timings.solve_s += report.solve_s;
+        book.timings.evaluation_s += report.evaluation_s;
+        book.elements += report.elements as u64;
+        book.dofs += report.dofs as u64;
+        book.totals.energy_in += report.energy_in;
+        book.totals.energy_out += report.energy_out;
+        book.totals.boundary_work += report.boundary_work;
+        book.totals.interface_work += report.interface_work;
+        book.totals.friction_dissipation += report.friction_dissipation;
+        book.totals.fracture_work += report.fracture_work;
+        book.totals.dissipation += report.dissipation;
+        if report.newton_iterations > 0 {
+            book.nonlinear_patches += 1;
+            book.newton_iterations += report.newton_iterations as u64;
+            book.newton_max = book.newton_max.max(report.newton_iterations);
+        }
+        let totals = &mut book.totals;
+        totals.momentum_imbalance = totals.momentum_imbalance.max(report.momentum_imbalance);
+        totals.momentum_flux = totals.momentum_flux.max(report.momentum_flux);
+        book.energy_max = book
+            .energy_max
+            .max(book.initial_energy + book.totals.boundary_work);
+        self.energy_reference
+            .store(book.energy_max.to_bits(), Ordering::Relaxed);
+    }
+
+    /// Cuts the elements under `triangles`, just solved, by the snapshot planes.
+    pub(crate) fn add_to_snapshots(
+        &self,
+        book: &mut Book,
+        solution: &FrontSolution,
+        triangles: &[TriangleId],
+    ) {
+        for &t in triangles {
+            if solution.load(t as usize, &mut book.geometry, &mut book.coefficients) {
+                let (phi, values, geometry, coefficients) = (
+                    &mut book.phi,
+                    &mut book.values,
+                    &book.geometry,
+                    &book.coefficients,
+                );
+                book.snapshots.add_element(&geometry.vertices(), |x| {
+                    point_values(
+                        &self.problem.material,
+                        self,
+                        geometry,
+                        coefficients,
+                        x,
+                        phi,
+                        values,
+                    )
+                });
+            }
+        }
+    }
+
+    /// Appends a `history.csv` row for the current front, unless the last row is of the same
+    /// front time and patch count: the front must not move meanwhile.
+    pub(crate) fn history_row(&self, state: &Frontier, book: &mut Book) {
+        let time = self
+            .problem
+            .loaded
+            .config
+            .time
+            .clock(state.front.min_time());
+        // The same front and books as the last row (the end's milestone and the final row):
+        // the row would repeat it.
+        let key = format!("{time:e},{},", book.patches);
+        let last = book.history.trim_end().lines().next_back().unwrap_or("");
+        if last.starts_with(&key) {
+            return;
+        }
+        let system = &self.problem.system;
+        let rho = self.problem.material.density();
+        let e = front_energy(
+            &state.mesh,
+            &state.front,
+            &state.solution,
+            &self.basis,
+            system,
+            self.threads,
+            |x| initial_state(self.problem, self.initial, x),
+        );
+        let totals = &book.totals;
+        let balance = book.initial_energy + totals.boundary_work
+            - e.total
+            - totals.dissipation
+            - totals.interface_work;
+        let _ = writeln!(
+            book.history,
+            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+            time,
+            book.patches,
+            rho * e.total,
+            rho * e.kinetic,
+            rho * e.strain,
+            rho * totals.boundary_work,
+            rho * totals.dissipation,
+            rho * totals.interface_work,
+            rho * totals.friction_dissipation,
+            rho * totals.fracture_work,
+            rho * balance
+        );
+        // Progress for batch jobs, which have no progress bar: one line per history row.
+        tracing::info!(
+            front_min_time_s = time,
+            patches = book.patches,
+            rejected = book.rejected,
+            vertices = state.mesh.vertices().len(),
+            crack_crossings = book.crossings.len(),
+            "progress"
+        );
+    }
+}
+
+/// Physical field values of an element at the scaled point `x` for snapshots.
+fn point_values(
+    material: &Material,
+    solve: &Solve<'_>,
+    geometry: &Geometry,
+    coefficients: &[f64],
+    x: [f64; 3],
+    phi: &mut [f64],
+    values: &mut [f64],
+) -> PointValues {
+    let system = &solve.problem.system;
+    evaluate(&solve.basis, geometry, coefficients, x, phi, values);
+    let fields = system.fields();
+    let mut q = [0.0; MAX_FIELDS];
+    q[..fields].copy_from_slice(&values[..fields]);
+    let strain_energy_density =
+        material.density() * (system.energy_density(&q) - system.kinetic_density(&q));
+    let p = system.to_physical(&q);
+    let u = &values[fields..];
+    match material.plane() {
+        Plane::Antiplane => PointValues {
+            velocity: [0.0, 0.0, p[0]],
+            stress: [0.0, 0.0, 0.0, 0.0, p[2], p[1]],
+            displacement: [0.0, 0.0, u[0]],
+            strain_energy_density,
+        },
+        plane => {
+            let szz = if plane == Plane::Strain {
+                material.poisson() * (p[2] + p[3])
+            } else {
+                0.0
+            };
+            PointValues {
+                velocity: [p[0], p[1], 0.0],
+                stress: [p[2], p[3], szz, p[4], 0.0, 0.0],
+                displacement: [u[0], u[1], 0.0],
+                strain_energy_density,
+            }
+        }
+    }
+}

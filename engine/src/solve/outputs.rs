@@ -1,0 +1,196 @@
+//! The files a run writes at its end, or as far as it got when it stops early.
+
+use std::path::Path;
+
+use sdg_mesh::Mesh;
+use sdg_solver::crack::Crossing;
+
+use crate::error::EngineError;
+use crate::frontier::Frontier;
+use crate::job::RunOptions;
+use crate::output::write_atomic;
+use crate::plot;
+use crate::problem::Problem;
+
+use super::book::Book;
+use super::context::Solve;
+use crate::fracture::picture;
+use crate::fracture::records;
+use crate::fracture::tips;
+use crate::fracture::tips::CrackSummary;
+use crate::output::interface;
+
+impl Solve<'_> {
+    /// Writes what a run that stops before the end has produced so far: the history up to now
+    /// (a row for the front as it is), the probes, the crack tips crossed so far and the
+    /// fracture outputs of the front as it is; complete snapshots are already written. Each
+    /// is tried whatever became of the others (the run is failing or stopping already: a
+    /// full disk may still take the small files); failures are logged.
+    pub(crate) fn write_partial_outputs(&self, state: &Frontier, dir: &Path) {
+        let config = &self.problem.loaded.config;
+        let mut book = self.book.lock();
+        book.progress.finish();
+        let warn = |what: &str, result: Result<(), EngineError>| {
+            if let Err(e) = result {
+                tracing::error!("{what} of the stopped run not written: {e}");
+            }
+        };
+        warn("a snapshot", book.snapshots.finish());
+        self.history_row(state, &mut book);
+        warn(
+            "history.csv",
+            write_atomic(dir, "history.csv", book.history.as_bytes()).map(drop),
+        );
+        if config.output.png {
+            plot::write_history_png(dir, &book.history);
+        }
+        if let Some((csv, _)) = self.crack_tips(&state.mesh, &book) {
+            warn("crack_tips.csv", self.write_crack_tips(dir, &csv));
+        }
+        warn(
+            "the crack files",
+            self.write_fracture(state, &book.fracture_events, dir),
+        );
+        warn("interface.csv", self.write_probes(dir, &mut book));
+    }
+
+    /// With `[fracture]`: `events.csv` (`events`), `cracks.csv` and, with `output.png`,
+    /// `crack_path.png` and `crack_zoom.png` of the crack edges on the front of `state`.
+    pub(crate) fn write_fracture(
+        &self,
+        state: &Frontier,
+        events: &[records::FractureEvent],
+        dir: &Path,
+    ) -> Result<(), EngineError> {
+        let Some(fracture) = &self.problem.fracture else {
+            return Ok(());
+        };
+        let config = &self.problem.loaded.config;
+        write_atomic(
+            dir,
+            "events.csv",
+            records::events_csv(events, &config.time).as_bytes(),
+        )?;
+        let cracks = front_cracks(self.problem, fracture, state);
+        if config.output.png {
+            let time = config.time.clock(state.front.min_time());
+            let fork = (config.fracture.as_ref())
+                .and_then(|f| f.macro_length)
+                .and_then(|length| {
+                    let tips = initial_tip_points(fracture, &self.problem.mesh);
+                    records::macro_fork(&state.mesh, fracture, events, &cracks, length, &tips)
+                });
+            picture::write_crack_path_png(
+                dir,
+                &state.mesh,
+                &cracks,
+                fracture.tag,
+                time,
+                fork.map(|f| f.point),
+            );
+        }
+        let csv = records::cracks_csv(&state.mesh, &cracks, events);
+        write_atomic(dir, "cracks.csv", csv.as_bytes())?;
+        Ok(())
+    }
+
+    /// `crack_tips.csv` and its summary from the tip crossings recorded so far: per crack
+    /// branch with `[fracture]` (the crossings of one tag would mix the tips of its branches),
+    /// else per cohesive or damage interface tag; `None` when the run tracks no crack tips.
+    pub(crate) fn crack_tips(&self, mesh: &Mesh, book: &Book) -> Option<(String, CrackSummary)> {
+        let c_r = self.problem.material.c_r();
+        let time = &self.problem.loaded.config.time;
+        if self.problem.fracture.is_some() {
+            let crossings: Vec<Crossing> = book.crossings.iter().map(|&(_, c)| c).collect();
+            let branches = records::branch_tips(&book.fracture_events, &crossings);
+            Some(tips::tips_csv("branch", &branches, c_r, time))
+        } else if self.problem.interfaces.any_cohesive() {
+            let names = mesh.tag_names();
+            let crossings: Vec<_> = book
+                .crossings
+                .iter()
+                .map(|(tag, c)| {
+                    let name = tag.map_or("untagged", |t| names[t as usize].as_str());
+                    (name.to_string(), *c)
+                })
+                .collect();
+            Some(tips::write(&crossings, c_r, time))
+        } else {
+            None
+        }
+    }
+
+    /// Writes `crack_tips.csv` (its text `csv`) and, with `output.png`, its picture: the branch
+    /// tips' speeds with `[fracture]`, else the tips against LEFM in the normalized units of
+    /// `[loading]` up to the end time.
+    pub(crate) fn write_crack_tips(&self, dir: &Path, csv: &str) -> Result<(), EngineError> {
+        let problem = self.problem;
+        let time = &problem.loaded.config.time;
+        write_atomic(dir, "crack_tips.csv", csv.as_bytes())?;
+        if problem.loaded.config.output.png && problem.fracture.is_some() {
+            plot::write_tip_speed_png(dir, csv, problem.material.c_r());
+        } else if problem.loaded.config.output.png {
+            let normalization = problem.loading.map(|l| plot::Normalization {
+                tau: l.scales.tau,
+                c_r: l.scales.c_r,
+                arrival: time.clock(l.arrival_time),
+                end: time.end,
+            });
+            plot::write_crack_png(dir, csv, normalization);
+        }
+        Ok(())
+    }
+
+    /// Writes the trace of `--trace`.
+    pub(crate) fn write_trace(&self, options: &RunOptions) -> Result<(), EngineError> {
+        match (&self.tracer, &options.trace) {
+            (Some(tracer), Some(path)) => tracer.write(path),
+            _ => Ok(()),
+        }
+    }
+
+    /// Writes `interface.csv` when probes are configured.
+    pub(crate) fn write_probes(
+        &self,
+        dir: &std::path::Path,
+        book: &mut Book,
+    ) -> Result<(), EngineError> {
+        let probes = &self.problem.probes;
+        if !probes.is_empty() {
+            let time = &self.problem.loaded.config.time;
+            let text = interface::csv(probes, &mut book.samples, time);
+            write_atomic(dir, "interface.csv", text.as_bytes())?;
+        }
+        Ok(())
+    }
+}
+
+/// The crack edges of `state` with their damage on the front (initial cracks without a face
+/// solved at their law's initial damage, 1 for other laws).
+pub(crate) fn front_cracks(
+    problem: &Problem,
+    fracture: &crate::fracture::criteria::Fracture,
+    state: &Frontier,
+) -> Vec<records::CrackEdge> {
+    records::crack_edges(
+        &state.mesh,
+        &state.solution,
+        fracture,
+        problem.loaded.config.solver.order,
+        |tag| match problem.interfaces.law(tag) {
+            sdg_solver::interface::Law::Damage(d) => d.initial,
+            _ => 1.0,
+        },
+    )
+}
+
+/// The positions (m) of the tips of the initial cracks on the initial `mesh`.
+pub(crate) fn initial_tip_points(
+    fracture: &crate::fracture::criteria::Fracture,
+    mesh: &Mesh,
+) -> Vec<[f64; 2]> {
+    (fracture.initial_tips(mesh).iter())
+        .zip(mesh.vertices())
+        .filter_map(|(tip, &p)| tip.as_ref().map(|_| p))
+        .collect()
+}
