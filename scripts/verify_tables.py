@@ -163,7 +163,7 @@ def conservation(runs):
             "patches",
             "energy balance residual",
             "largest element momentum residual",
-            "largest `c_max |grad tau|` (safety 0.9)",
+            "largest `c_max \\|grad tau\\|` (safety 0.9)",
             "wall time (s)",
         ],
         out,
@@ -477,7 +477,7 @@ def pitching(runs):
             "tents (stored)",
             "tetrahedra (stored)",
             "final time (s)",
-            "largest `c_max |grad tau|` (safety 0.9)",
+            "largest `c_max \\|grad tau\\|` (safety 0.9)",
         ],
         out,
     ) + "\n\nStored values: `tests/configs.rs` `pitching_configs_match_stored_results`."
@@ -695,6 +695,10 @@ def status(runs):
     return table(["case", "reference", "sdg", "checked by `cargo test --release --test`"], rows)
 
 
+def secs(x):
+    return f"{x:.3g} s" if x < 100 else f"{x:,.0f} s"
+
+
 def estimate(runs):
     out = []
     for name, _ in CONSERVATION:
@@ -710,8 +714,8 @@ def estimate(runs):
                 n(int(est["tents"])),
                 n(s["patches"]),
                 f"{s['patches'] / est['tents']:.2f}",
-                f"{est['wall_time_s']:.3g} s",
-                f"{s['wall_time_s']:.3g} s",
+                secs(est["wall_time_s"]),
+                secs(s["wall_time_s"]),
                 f"{s['wall_time_s'] / est['wall_time_s']:.2f}",
                 f"{est['memory_bytes'] / 2**20:.0f} / {mem / 2**20:.0f}" if mem else "",
             ]
