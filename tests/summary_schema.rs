@@ -1,5 +1,6 @@
-//! `summary.json` against its schema, the key table of `docs/summary.md`: every key a run writes
-//! is documented, and every key documented as always present is written (when its object is).
+//! `summary.json` against its schema, the key table of `docs/reference/summary.md`: every key a
+//! run writes is documented, and every key documented as always present is written (when its
+//! object is).
 
 mod common;
 
@@ -9,10 +10,10 @@ use std::path::Path;
 use serde_json::Value;
 
 /// The documented keys and those documented as always present: the first and fourth cells of
-/// the table rows of `docs/summary.md`.
+/// the table rows of `docs/reference/summary.md`.
 fn documented() -> (BTreeSet<String>, BTreeSet<String>) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/summary.md");
-    let text = std::fs::read_to_string(path).expect("docs/summary.md");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/reference/summary.md");
+    let text = std::fs::read_to_string(path).expect("docs/reference/summary.md");
     let (mut all, mut always) = (BTreeSet::new(), BTreeSet::new());
     for line in text.lines().filter(|l| l.starts_with("| `")) {
         let line = line.replace("\\|", "");
@@ -25,7 +26,7 @@ fn documented() -> (BTreeSet<String>, BTreeSet<String>) {
     }
     assert!(
         always.contains("state_hash"),
-        "no key table in docs/summary.md"
+        "no key table in docs/reference/summary.md"
     );
     (all, always)
 }
@@ -89,7 +90,7 @@ fn check(config: &str, sets: &[&str], sections: &[&str]) -> Value {
     let undocumented: Vec<_> = written.difference(&all).collect();
     assert!(
         undocumented.is_empty(),
-        "keys not in docs/summary.md: {undocumented:?}"
+        "keys not in docs/reference/summary.md: {undocumented:?}"
     );
     let missing: Vec<_> = always
         .iter()
@@ -98,7 +99,7 @@ fn check(config: &str, sets: &[&str], sections: &[&str]) -> Value {
         .collect();
     assert!(
         missing.is_empty(),
-        "always present in docs/summary.md, not written: {missing:?}"
+        "always present in docs/reference/summary.md, not written: {missing:?}"
     );
     for s in sections {
         assert!(written.contains(*s), "{s} not written: {text}");
