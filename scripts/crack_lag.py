@@ -11,7 +11,7 @@ run's clock) and prints:
   an initial crack's tip) and the state's distance and time from that start;
 - per branch with states above c_R, its extensions in time order with the gap to the previous
   one, the speed that gap lays the edge at, over c_R, and the tests the mesh refused at the
-  tip in that gap by reason (the `reason` column of events.csv, docs/config.md).
+  tip in that gap by reason (the `reason` column of events.csv, docs/reference/config.md).
 
 Usage: python3 scripts/crack_lag.py OUTPUT [TAU_S [C_R_M_S]]   (defaults 1e-8 s, 938 m/s: the
 main job's delay and PMMA's Rayleigh speed). Python 3 standard library only.

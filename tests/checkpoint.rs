@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 use common::{assert_same_outputs, outputs, stderr};
 
 /// The most a run may take from SIGTERM to its exit with a checkpoint (documented in the
-/// README's "Long runs" section), s.
+/// user guide's "Long runs on a cluster", `docs/guide.md`), s.
 const STOP_WITHIN: Duration = Duration::from_secs(10);
 
 /// `sdg run` on the shipped `config` with `args` and `overrides`, started.

@@ -69,6 +69,55 @@ fn expect_input_error(args: &[&str], needles: &[&str]) {
     }
 }
 
+/// A config that extends another runs as the merge of the two; a cycle in the chain and a
+/// missing base are bad input (exit 2) naming the chain.
+#[test]
+fn extends_builds_on_a_base_and_refuses_cycles_and_missing_files() {
+    let (dir, base) = config_file(CONFIG);
+    let folder = dir.path();
+    let write = |name: &str, text: &str| {
+        let path = folder.join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let finer = write("finer.toml", "extends = \"case.toml\"\n[mesh]\nnx = 16\n");
+    let summary = |config: &str, out: &str| {
+        let out_dir = folder.join(out);
+        let run = sdg(&["mesh", config, "--output", out_dir.to_str().unwrap()]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let text = std::fs::read_to_string(out_dir.join("summary.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+    };
+    let (coarse, fine) = (summary(&base, "base"), summary(&finer, "finer"));
+    let direct = {
+        let out_dir = folder.join("direct");
+        let run = sdg(&[
+            "mesh",
+            &base,
+            "--set",
+            "mesh.nx=16",
+            "--output",
+            out_dir.to_str().unwrap(),
+        ]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let text = std::fs::read_to_string(out_dir.join("summary.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+    };
+    assert_ne!(coarse["tents"], fine["tents"]);
+    assert_eq!(fine["tents"], direct["tents"]);
+    let a = write("a.toml", "extends = \"b.toml\"\n");
+    write("b.toml", "extends = \"a.toml\"\n");
+    expect_input_error(
+        &["validate", &a],
+        &["extends", "a.toml -> ", "b.toml -> ", "a cycle"],
+    );
+    let c = write("c.toml", "extends = \"gone.toml\"\n");
+    expect_input_error(
+        &["validate", &c],
+        &["extends", "c.toml -> ", "gone.toml", "cannot read"],
+    );
+}
+
 #[test]
 fn mesh_writes_summary_and_spacetime_mesh() {
     let (dir, config) = config_file(CONFIG);

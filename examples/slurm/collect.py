@@ -6,7 +6,7 @@
 
 Each argument is a run's output dir (with summary.json) or a dir whose subdirs are. One row
 per run: `dir`, `status`, the task's overrides (one column per key of its
-overrides.txt, written by sweep.sbatch), then the keys (dotted paths, docs/summary.md). Only
+overrides.txt, written by sweep.sbatch), then the keys (dotted paths, docs/reference/summary.md). Only
 documented keys are read; an optional key a run lacks (`crack`, `fracture`, `error`,
 `loading`, `peak_memory_bytes`) and a `null` give an empty cell. Keys a newer sdg adds are ignored.
 
@@ -22,7 +22,7 @@ import json
 import sys
 from pathlib import Path
 
-# Documented keys of summary.json (docs/summary.md) worth a column in a sweep.
+# Documented keys of summary.json (docs/reference/summary.md) worth a column in a sweep.
 DEFAULT_KEYS = [
     "final_time",
     "patches",

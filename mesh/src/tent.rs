@@ -104,7 +104,7 @@ impl Pitcher {
 
     /// The same pitcher with budgets scaled by `kappa` = [`Mesh::bisection_width_ratio`]
     /// (1/sqrt(2) on right isosceles meshes, at least 1/2 on any), so that every front triangle
-    /// within its budget may be bisected ([`Self::may_bisect`]); see `docs/pitching.md`.
+    /// within its budget may be bisected ([`Self::may_bisect`]); see `docs/theory/pitching.md`.
     pub fn for_refinement(mut self, mesh: &Mesh) -> Self {
         self.margin = mesh.bisection_width_ratio();
         self.update(mesh, 0..mesh.triangles().len() as TriangleId);

@@ -121,12 +121,11 @@ pub fn shipped(name: &str, overrides: &[&str]) -> Problem {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("configs")
         .join(name);
-    let text = std::fs::read_to_string(path).expect("shipped config");
     let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    let config = Config::parse(&text, name, &overrides).expect("valid config");
+    let loaded = LoadedConfig::load(&path, &overrides).expect("valid config");
     Problem::setup(LoadedConfig {
-        config,
         file: name.into(),
+        ..loaded
     })
     .expect("valid problem")
 }

@@ -1,4 +1,11 @@
-//! Reading a configuration: the file, the command line's overrides, and validation.
+//! Reading a configuration: the file and the files it extends, the command line's overrides,
+//! and validation.
+//!
+//! A config file may build on another with `extends = "base.toml"` (relative to its own folder):
+//! the base is read first (itself extending others, if it says so), then every key of the file
+//! replaces the base's, tables merging key by key and any other value (arrays of tables
+//! included) replacing whole. A chain that comes back to a file, or names a file that cannot be
+//! read, is refused naming the chain.
 
 use std::path::{Path, PathBuf};
 
@@ -16,15 +23,12 @@ pub struct LoadedConfig {
 }
 
 impl LoadedConfig {
-    /// Reads `file`, applies `overrides` (`key.path=value`, in order) and validates.
+    /// Reads `file` with the files it extends, applies `overrides` (`key.path=value`, in order)
+    /// and validates.
     pub fn load(file: &Path, overrides: &[String]) -> Result<Self, ConfigError> {
         let source = file.display().to_string();
-        let text = std::fs::read_to_string(file).map_err(|e| ConfigError {
-            file: source.clone(),
-            key: None,
-            reason: format!("cannot read: {e}"),
-        })?;
-        let config = Config::parse(&text, &source, overrides)?;
+        let table = read_extended(file, &mut Vec::new())?;
+        let config = Config::from_table(table, &source, overrides)?;
         Ok(Self {
             config,
             file: file.to_path_buf(),
@@ -41,16 +45,29 @@ impl LoadedConfig {
 }
 
 impl Config {
-    /// Parses TOML `text` (named `source` in errors), applies `overrides` and validates.
+    /// Parses TOML `text` (named `source` in errors), applies `overrides` and validates. Text
+    /// has no folder: a config that extends another is loaded from its file
+    /// ([`LoadedConfig::load`]).
     pub fn parse(text: &str, source: &str, overrides: &[String]) -> Result<Self, ConfigError> {
-        let table: toml::Table = toml::from_str(text).map_err(|e| ConfigError {
-            file: source.to_string(),
-            key: None,
-            reason: format!("invalid TOML: {}", e.message())
-                .trim_end()
-                .to_string()
-                + &line_of(text, e.span()),
-        })?;
+        let table = parse_table(text, source)?;
+        if table.contains_key(EXTENDS) {
+            return Err(ConfigError {
+                file: source.to_string(),
+                key: Some(EXTENDS.into()),
+                reason: "a config given as text cannot extend another: load it from its file"
+                    .into(),
+            });
+        }
+        Self::from_table(table, source, overrides)
+    }
+
+    /// The configuration of the TOML `table` (named `source` in errors) with `overrides`
+    /// applied, validated.
+    fn from_table(
+        table: toml::Table,
+        source: &str,
+        overrides: &[String],
+    ) -> Result<Self, ConfigError> {
         let mut root = toml::Value::Table(table);
         let mut added = Vec::new();
         for spec in overrides {
@@ -86,4 +103,151 @@ fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> String {
         format!(" (line {line})")
     })
     .unwrap_or_default()
+}
+
+/// The key by which a config file builds on another.
+const EXTENDS: &str = "extends";
+
+/// The TOML table of `text` (named `source` in errors).
+fn parse_table(text: &str, source: &str) -> Result<toml::Table, ConfigError> {
+    toml::from_str(text).map_err(|e| ConfigError {
+        file: source.to_string(),
+        key: None,
+        reason: format!("invalid TOML: {}", e.message())
+            .trim_end()
+            .to_string()
+            + &line_of(text, e.span()),
+    })
+}
+
+/// The table of `file` on top of the tables it extends; `chain` holds the files that led to it,
+/// the first one given first, and names them in errors (about the first).
+fn read_extended(file: &Path, chain: &mut Vec<PathBuf>) -> Result<toml::Table, ConfigError> {
+    let first = chain
+        .first()
+        .map_or(file, PathBuf::as_path)
+        .display()
+        .to_string();
+    let path_of = |chain: &[PathBuf], last: &Path| {
+        (chain.iter().map(|f| f.as_path()))
+            .chain(std::iter::once(last))
+            .map(|f| f.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" -> ")
+    };
+    let text = std::fs::read_to_string(file).map_err(|e| match chain.is_empty() {
+        true => ConfigError {
+            file: first.clone(),
+            key: None,
+            reason: format!("cannot read: {e}"),
+        },
+        false => ConfigError {
+            file: first.clone(),
+            key: Some(EXTENDS.into()),
+            reason: format!(
+                "{}: cannot read {}: {e}",
+                path_of(chain, file),
+                file.display()
+            ),
+        },
+    })?;
+    let mut table = parse_table(&text, &file.display().to_string())?;
+    let Some(base) = table.remove(EXTENDS) else {
+        return Ok(table);
+    };
+    let Some(base) = base.as_str() else {
+        return Err(ConfigError {
+            file: file.display().to_string(),
+            key: Some(EXTENDS.into()),
+            reason: "must be the name of a config file (a string)".into(),
+        });
+    };
+    let base = file.parent().unwrap_or(Path::new("")).join(base);
+    chain.push(file.to_path_buf());
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    };
+    if chain.iter().any(|f| same(f, &base)) {
+        return Err(ConfigError {
+            file: first,
+            key: Some(EXTENDS.into()),
+            reason: format!("{}: a cycle", path_of(chain, &base)),
+        });
+    }
+    let mut merged = read_extended(&base, chain)?;
+    merge(&mut merged, table);
+    Ok(merged)
+}
+
+/// `over`'s keys into `base`: tables merge key by key, any other value replaces.
+fn merge(base: &mut toml::Table, over: toml::Table) {
+    for (key, value) in over {
+        match (base.get_mut(&key), value) {
+            (Some(toml::Value::Table(inner)), toml::Value::Table(value)) => merge(inner, value),
+            (_, value) => {
+                base.insert(key, value);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::tests::BASE;
+
+    /// Writes `files` (name, text) into a fresh folder.
+    fn folder(files: &[(&str, &str)]) -> tempfile::TempDir {
+        let dir = tempfile::tempdir().expect("temporary folder");
+        for (name, text) in files {
+            std::fs::write(dir.path().join(name), text).expect("write");
+        }
+        dir
+    }
+
+    #[test]
+    fn a_config_overrides_what_it_extends_key_by_key() {
+        let dir = folder(&[
+            ("base.toml", BASE),
+            ("mid.toml", "extends = \"base.toml\"\n[time]\nend = 2e-6\n"),
+            ("top.toml", "extends = \"mid.toml\"\n[mesh]\nnx = 8\n"),
+        ]);
+        let base = LoadedConfig::load(&dir.path().join("base.toml"), &[]).unwrap();
+        let top = LoadedConfig::load(&dir.path().join("top.toml"), &[]).unwrap();
+        // Nested: the middle file's end time, the top file's nx, the rest from the base.
+        assert_eq!(top.config.time.end, 2e-6);
+        assert_eq!(top.config.mesh.nx, Some(8));
+        assert_eq!(top.config.mesh.ny, base.config.mesh.ny);
+        assert_eq!(top.config.material, base.config.material);
+        // The command line still has the last word.
+        let set = ["mesh.nx=4".to_string()];
+        let top = LoadedConfig::load(&dir.path().join("top.toml"), &set).unwrap();
+        assert_eq!(top.config.mesh.nx, Some(4));
+    }
+
+    #[test]
+    fn a_cycle_or_a_missing_base_is_refused_naming_the_chain() {
+        let dir = folder(&[
+            ("a.toml", "extends = \"b.toml\"\n"),
+            ("b.toml", "extends = \"a.toml\"\n"),
+            ("c.toml", "extends = \"nowhere.toml\"\n"),
+            ("d.toml", "extends = 3\n"),
+        ]);
+        let e = LoadedConfig::load(&dir.path().join("a.toml"), &[]).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("extends"));
+        assert!(e.reason.contains("a.toml -> ") && e.reason.contains("b.toml -> "));
+        assert!(e.reason.ends_with("a.toml: a cycle"), "{e}");
+        let e = LoadedConfig::load(&dir.path().join("c.toml"), &[]).unwrap_err();
+        assert!(e.file.ends_with("c.toml"), "{e}");
+        assert!(
+            e.reason.contains("c.toml -> ") && e.reason.contains("cannot read"),
+            "{e}"
+        );
+        let e = LoadedConfig::load(&dir.path().join("d.toml"), &[]).unwrap_err();
+        assert!(e.reason.contains("a string"), "{e}");
+        // Text has no folder to resolve a base in.
+        let e = Config::parse("extends = \"a.toml\"\n", "text", &[]).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("extends"));
+    }
 }

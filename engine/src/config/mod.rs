@@ -1,6 +1,6 @@
 //! The TOML run configuration: schema, command-line overrides and load-time validation.
 //!
-//! Every key is documented in `docs/config.md`. Units are SI. Unknown keys, wrong types and
+//! Every key is documented in `docs/reference/config.md`. Units are SI. Unknown keys, wrong types and
 //! unphysical values are rejected with an error naming the file and the key.
 
 mod conditions;
@@ -36,10 +36,10 @@ pub use overrides::attribute;
 pub use schema::Config;
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    pub(super) const BASE: &str = r#"
+    pub(crate) const BASE: &str = r#"
 [mesh]
 kind = "rectangle"
 width = 0.016

@@ -243,7 +243,7 @@ pub struct SchedulerConfig {
     pub deterministic: bool,
 }
 
-/// `[adapt]`: error-driven refinement of the front (see `docs/method.md`, "Adaptivity").
+/// `[adapt]`: error-driven refinement of the front (see `docs/theory/method.md`, "Adaptivity").
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct AdaptConfig {
@@ -251,7 +251,7 @@ pub struct AdaptConfig {
     #[serde(default)]
     pub enabled: bool,
     /// Upper tolerance of the dissipation indicator: a patch above it is rejected and the front
-    /// around its vertex refined. Dimensionless, see `docs/method.md`. Default 1e-3.
+    /// around its vertex refined. Dimensionless, see `docs/theory/method.md`. Default 1e-3.
     #[serde(default = "default_tol")]
     pub tol: f64,
     /// Lower tolerance = `tol / coarsen_ratio`: elements accepted below it may be coarsened
