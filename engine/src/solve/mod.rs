@@ -1021,7 +1021,7 @@ fn run_job(
         "estimate"
     );
     if options.progress {
-        eprintln!("estimate: {}", estimate.describe());
+        crate::progress::note(format_args!("estimate: {}", estimate.describe()));
     }
     if !options.force {
         estimate.check(problem)?;
