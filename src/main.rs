@@ -3,8 +3,12 @@
 //! Exit codes: 0 success; 2 invalid arguments, configuration, mesh or checkpoint, or an
 //! estimated cost above `[limits]`; 1 runtime failure (a panic included); 3 checkpointed and
 //! stopped by SIGTERM, SIGINT or the wall-time limit: resubmit with `--restart`.
+//!
+//! Output that cannot be written is dropped: a closed or broken stdout or stderr (EPIPE, a pipe
+//! whose reader is gone) or a terminal that went away neither ends a command nor changes its
+//! exit code, and signals keep working.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -152,6 +156,42 @@ enum LogFormat {
     Json,
 }
 
+/// Writes a line to stdout, or drops it if stdout cannot be written (`println!` panics then).
+macro_rules! say {
+    ($($arg:tt)*) => {
+        write_line(&mut std::io::stdout(), format_args!($($arg)*))
+    };
+}
+
+/// Writes a line to stderr, or drops it if stderr cannot be written (`eprintln!` panics then).
+macro_rules! note {
+    ($($arg:tt)*) => {
+        write_line(&mut std::io::stderr(), format_args!($($arg)*))
+    };
+}
+
+/// Writes `line` and a newline to `out`, ignoring errors: a run is never ended, nor a thread
+/// of it, by output that cannot be written.
+fn write_line(out: &mut impl Write, line: std::fmt::Arguments) {
+    let _ = writeln!(out, "{line}");
+}
+
+/// The log's writer: stderr, dropping what cannot be written. (tracing-subscriber reports a
+/// failed write with `eprintln!`, which panics on a broken stderr, in whatever thread logged.)
+#[derive(Debug)]
+struct LogWriter;
+
+impl Write for LogWriter {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let _ = std::io::stderr().write_all(buf);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let (level, format) = match &cli.command {
@@ -164,7 +204,8 @@ fn main() -> ExitCode {
     let logs = tracing_subscriber::fmt()
         .with_max_level(level)
         .with_ansi(std::io::stderr().is_terminal())
-        .with_writer(std::io::stderr);
+        .with_writer(|| LogWriter)
+        .log_internal_errors(false);
     match format {
         LogFormat::Text => logs.init(),
         LogFormat::Json => logs.json().init(),
@@ -182,15 +223,15 @@ fn main() -> ExitCode {
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e @ EngineError::Checkpointed { .. })) => {
-            eprintln!("stopped: {e}");
+            note!("stopped: {e}");
             ExitCode::from(e.exit_code())
         }
         Ok(Err(e)) => {
-            eprintln!("error: {e}");
+            note!("error: {e}");
             ExitCode::from(e.exit_code())
         }
         Err(_) => {
-            eprintln!("error: internal error (a bug, please report it with the message above)");
+            note!("error: internal error (a bug, please report it with the message above)");
             ExitCode::from(1)
         }
     }
@@ -221,53 +262,98 @@ fn options(job: &JobArgs) -> RunOptions {
 /// A second SIGTERM or SIGINT within this long of the first is taken as the same request.
 const SAME_REQUEST: std::time::Duration = std::time::Duration::from_secs(1);
 
+/// The environment variable that injects a fault for the tests (`tests/faults.rs`):
+/// `signal-listener` makes the signal listener panic when SIGUSR1 arrives.
+const FAULT: &str = "SDG_FAULT";
+
 /// Turns signals into requests to the run: SIGTERM and SIGINT checkpoint and stop (exit 3),
 /// SIGUSR1 checkpoints and goes on. A second SIGTERM or SIGINT, [`SAME_REQUEST`] or more after
-/// the first, ends the process at once with code 130, without waiting for the checkpoint (the one before it is left whole).
+/// the first, ends the process at once with code 130, without waiting for the checkpoint (the
+/// one before it is left whole).
+///
+/// Once listening, the process no longer dies of these signals: should the listener end, the
+/// run would go on deaf to them. Nothing in it may panic on output (its messages are dropped if
+/// stderr cannot be written), and should it panic all the same (a bug) the process exits at once
+/// with code 1, as after SIGKILL (files are written whole or not at all).
 fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError> {
     use tokio::signal::unix::{SignalKind, signal};
+    let failed = |e: std::io::Error| EngineError::Runtime(format!("signal handling: {e}"));
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_io()
         .build()
-        .map_err(|e| EngineError::Runtime(format!("signal handling: {e}")))?;
+        .map_err(failed)?;
     let listen = |kind| {
         let _guard = runtime.enter();
-        signal(kind).map_err(|e| EngineError::Runtime(format!("signal handling: {e}")))
+        signal(kind).map_err(failed)
     };
     let (mut term, mut int, mut usr1) = (
         listen(SignalKind::terminate())?,
         listen(SignalKind::interrupt())?,
         listen(SignalKind::user_defined1())?,
     );
-    std::thread::spawn(move || {
-        runtime.block_on(async move {
-            let mut stopping: Option<std::time::Instant> = None;
-            loop {
-                let name = tokio::select! {
-                    _ = term.recv() => "SIGTERM",
-                    _ = int.recv() => "SIGINT",
-                    _ = usr1.recv() => {
-                        tracing::info!("SIGUSR1: a checkpoint at the next quiescent point");
-                        control.checkpoint();
-                        continue;
+    let fault = std::env::var_os(FAULT).is_some_and(|f| f == "signal-listener");
+    let listener = async move {
+        let mut stopping: Option<std::time::Instant> = None;
+        loop {
+            let name = tokio::select! {
+                _ = term.recv() => "SIGTERM",
+                _ = int.recv() => "SIGINT",
+                _ = usr1.recv() => {
+                    if fault {
+                        panic!("{FAULT}=signal-listener: a panic on SIGUSR1");
                     }
-                };
-                if let Some(first) = stopping {
-                    // A batch system may signal both the job's shell and sdg, and the shell
-                    // pass its signal on: one within a second is the same request.
-                    if first.elapsed() < SAME_REQUEST {
-                        continue;
-                    }
-                    eprintln!("{name} again: exiting without waiting for the checkpoint");
-                    std::process::exit(130);
+                    control.checkpoint();
+                    aside(|| tracing::info!("SIGUSR1: a checkpoint at the next quiescent point"));
+                    continue;
                 }
-                stopping = Some(std::time::Instant::now());
-                eprintln!("{name}: writing a checkpoint, then stopping (again to exit at once)");
-                control.stop(format!("{name} received"));
+            };
+            if let Some(first) = stopping {
+                // A batch system may signal both the job's shell and sdg, and the shell
+                // pass its signal on: one within a second is the same request.
+                if first.elapsed() < SAME_REQUEST {
+                    continue;
+                }
+                let said = aside(move || {
+                    note!("{name} again: exiting without waiting for the checkpoint");
+                });
+                let _ = said.recv_timeout(std::time::Duration::from_millis(100));
+                std::process::exit(130);
             }
-        });
-    });
+            stopping = Some(std::time::Instant::now());
+            control.stop(format!("{name} received"));
+            aside(move || {
+                note!("{name}: writing a checkpoint, then stopping (again to exit at once)");
+            });
+        }
+    };
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || {
+            let listening = std::panic::AssertUnwindSafe(|| runtime.block_on(listener));
+            if std::panic::catch_unwind(listening).is_err() {
+                note!(
+                    "error: internal error: the signal listener failed (a bug, please report \
+                     it with the message above); exiting without a checkpoint"
+                );
+                std::process::exit(1);
+            }
+        })
+        .map_err(failed)?;
     Ok(())
+}
+
+/// Runs `write` on a thread of its own, so that the signal listener never waits for stderr (a
+/// pipe nobody reads, a terminal stopped by Ctrl-S): the receiver hears when it is done, or
+/// is disconnected if the thread could not start.
+fn aside(write: impl FnOnce() + Send + 'static) -> std::sync::mpsc::Receiver<()> {
+    let (done, said) = std::sync::mpsc::channel();
+    let _ = std::thread::Builder::new()
+        .name("signal message".into())
+        .spawn(move || {
+            write();
+            let _ = done.send(());
+        });
+    said
 }
 
 fn validate(args: &ValidateArgs) -> Result<(), EngineError> {
@@ -281,7 +367,7 @@ fn validate(args: &ValidateArgs) -> Result<(), EngineError> {
     let check = estimate.check(&problem);
     if !args.config.quiet {
         let m = &problem.material;
-        println!(
+        say!(
             "{}: {} ({} vertices, {} triangles)\n\
              wave speeds: c_d = {:.6e} m/s, c_s = {:.6e} m/s, c_R = {:.6e} m/s\n\
              estimate: {}",
@@ -306,7 +392,7 @@ fn validate(args: &ValidateArgs) -> Result<(), EngineError> {
 fn mesh(job: &JobArgs) -> Result<(), EngineError> {
     let (summary, dir) = sdg_engine::mesh_job(&setup(&job.config)?, &options(job))?;
     if !job.config.quiet {
-        println!(
+        say!(
             "{} tents, {} tetrahedra to t = {:e} s, max slope ratio {:.4} (safety {}), \
              {:.3} s; outputs in {}",
             summary.tents,
@@ -346,7 +432,7 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
                 e.velocity_l2_rel, e.stress_l2_rel
             )
         });
-        println!(
+        say!(
             "{} patches (order {}, {:.0} dofs each) to t = {:e} s in {:.3} s on {} \
              threads ({}){error}; energy balance residual {:.1e}; outputs in {}",
             summary.patches,
@@ -376,9 +462,12 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
                     arms.join(", ")
                 )
             });
-            println!(
+            say!(
                 "cracks: {} nucleations, {} extensions, {} branchings, {} branches{fork}",
-                f.nucleations, f.extensions, f.branchings, f.branches
+                f.nucleations,
+                f.extensions,
+                f.branchings,
+                f.branches
             );
         }
     }
@@ -399,17 +488,17 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
     let entries = sdg_engine::trace::read(&args.trace)?;
     let one = sdg_engine::trace::replay(&entries, 1, overhead_s).wall_time_s;
     match sdg_engine::trace::rounds(&entries) {
-        0 => println!(
+        0 => say!(
             "model: the asynchronous scheduler (a trace without rounds; its {} refinements, \
              coarsenings and crack extensions run beside the tents that hold none of their vertices)",
             sdg_engine::trace::regions(&entries)
         ),
-        n => println!("model: the deterministic scheduler's {n} rounds"),
+        n => say!("model: the deterministic scheduler's {n} rounds"),
     }
     print_predictions(&scaling.predictions, one);
     let critical = scaling.critical_s;
     let parts = sdg_engine::trace::critical_path_parts(&entries, overhead_s);
-    println!(
+    say!(
         "critical path {critical:.4} s: at most {:.2}x over one worker; tents {:.4} s, events \
          {:.4} s, the scheduler alone {:.4} s",
         one / critical,
@@ -422,9 +511,9 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
 
 /// Prints a table of predictions, with speedups over `one` (s, the 1-worker wall time).
 fn print_predictions(predictions: &[sdg_engine::trace::Prediction], one: f64) {
-    println!("workers  wall time (s)  speedup  mean ready tents");
+    say!("workers  wall time (s)  speedup  mean ready tents");
     for p in predictions {
-        println!(
+        say!(
             "{:>7}  {:>13.4}  {:>7.2}  {:>16.1}",
             p.workers,
             p.wall_time_s,
@@ -449,7 +538,7 @@ fn plot(args: &PlotArgs) -> Result<(), EngineError> {
         };
         sdg_engine::plot::plot_tips(&args.inputs, out)?;
         if !args.quiet {
-            println!("{}", out.display());
+            say!("{}", out.display());
         }
         return Ok(());
     }
@@ -464,7 +553,7 @@ fn plot(args: &PlotArgs) -> Result<(), EngineError> {
     };
     let path = sdg_engine::plot::plot_vtu(&request)?;
     if !args.quiet {
-        println!("{}", path.display());
+        say!("{}", path.display());
     }
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! A progress bar on a terminal: mean front time over end time, patches per second and ETA.
 //! Silent when stderr is not a terminal or with `--quiet`.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -73,4 +73,11 @@ impl Progress {
             bar.finish_and_clear();
         }
     }
+}
+
+/// Writes `line` and a newline to stderr, or drops it if stderr cannot be written (a closed or
+/// broken pipe, a terminal gone away), where `eprintln!` would panic: a message is never worth
+/// a run.
+pub fn note(line: std::fmt::Arguments) {
+    let _ = writeln!(std::io::stderr(), "{line}");
 }

@@ -110,7 +110,7 @@ fn announce(
         "estimate"
     );
     if options.progress {
-        eprintln!("estimate: {}", estimate.describe());
+        crate::progress::note(format_args!("estimate: {}", estimate.describe()));
     }
     if !options.force {
         estimate.check(problem)?;
