@@ -1,0 +1,132 @@
+//! The trace file: one entry per tent, event and round, and reading it back.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use sdg_mesh::VertexId;
+
+use crate::error::EngineError;
+
+/// What a traced item was.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A linear patch.
+    Patch,
+    /// A patch with interface faces solved by Newton iterations.
+    Newton,
+    /// A patch rejected by the error indicator or a failed Newton solve.
+    Rejected,
+    /// A coarsening patch.
+    Coarsen,
+    /// A scheduler event that holds the whole state.
+    Event,
+    /// A scheduler event that changes the mesh only around some vertices (refinement,
+    /// coarsening, crack extension); its dependencies are the tents and events there.
+    Region,
+    /// The end of a deterministic round: the time the scheduler spent on it alone (choosing its
+    /// vertices, recording its tents), after its tents and events.
+    Round,
+}
+
+impl Kind {
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            Self::Patch => "patch",
+            Self::Newton => "newton",
+            Self::Rejected => "rejected",
+            Self::Coarsen => "coarsen",
+            Self::Event => "event",
+            Self::Region => "region",
+            Self::Round => "round",
+        }
+    }
+
+    fn parse(name: &str) -> Option<Self> {
+        [
+            Self::Patch,
+            Self::Newton,
+            Self::Rejected,
+            Self::Coarsen,
+            Self::Event,
+            Self::Region,
+            Self::Round,
+        ]
+        .into_iter()
+        .find(|k| k.name() == name)
+    }
+}
+
+impl Kind {
+    /// Events of either kind: deterministic rounds run them alone, after the round's tents.
+    pub(super) fn is_event(self) -> bool {
+        matches!(self, Self::Event | Self::Region)
+    }
+
+    /// What the asynchronous scheduler runs alone: every event but the regional ones.
+    pub(super) fn runs_alone(self) -> bool {
+        matches!(self, Self::Event | Self::Round)
+    }
+}
+
+/// One traced tent or event.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entry {
+    /// Ids count up in the order items started.
+    pub id: u64,
+    pub kind: Kind,
+    /// The tent's vertex (ids as at the time; none for an event).
+    pub vertex: Option<VertexId>,
+    /// Start after the solve began, and duration, s.
+    pub start_s: f64,
+    pub duration_s: f64,
+    /// Earlier tents this one needs, by id.
+    pub deps: Vec<u64>,
+}
+
+/// Reads a trace written by `sdg run --trace`.
+pub fn read(path: &Path) -> Result<Vec<Entry>, EngineError> {
+    let text = std::fs::read_to_string(path).map_err(|e| EngineError::io(path, e))?;
+    let bad = |line: usize, reason: &str| {
+        EngineError::Input(format!("{}:{line}: {reason}", path.display()))
+    };
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, "id,kind,vertex,start_s,duration_s,deps")) => {}
+        _ => return Err(bad(1, "not a trace of `sdg run --trace` (header)")),
+    }
+    let mut entries = Vec::new();
+    for (i, line) in lines {
+        let fields: Vec<&str> = line.split(',').collect();
+        let [id, kind, vertex, start, duration, deps] = fields[..] else {
+            return Err(bad(i + 1, "expected 6 fields"));
+        };
+        let number = |s: &str, what: &str| {
+            s.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite() && *x >= 0.0)
+                .ok_or_else(|| bad(i + 1, &format!("{what} is not a time in s: {s:?}")))
+        };
+        let entry = Entry {
+            id: id.parse().map_err(|_| bad(i + 1, "bad id"))?,
+            kind: Kind::parse(kind).ok_or_else(|| bad(i + 1, "unknown kind"))?,
+            vertex: if vertex.is_empty() {
+                None
+            } else {
+                Some(vertex.parse().map_err(|_| bad(i + 1, "bad vertex"))?)
+            },
+            start_s: number(start, "start_s")?,
+            duration_s: number(duration, "duration_s")?,
+            deps: deps
+                .split(';')
+                .filter(|d| !d.is_empty())
+                .map(|d| d.parse().map_err(|_| bad(i + 1, "bad dependency")))
+                .collect::<Result<_, _>>()?,
+        };
+        if entry.deps.iter().any(|&d| d >= entry.id) {
+            return Err(bad(i + 1, "a dependency on a later tent"));
+        }
+        entries.push(entry);
+    }
+    entries.sort_by_key(|e| e.id);
+    Ok(entries)
+}
