@@ -5,9 +5,7 @@ use parking_lot::Mutex;
 
 use crate::basis::Basis;
 use crate::face::FaceState;
-
-/// A point `(x, y, tau)` in scaled spacetime, metres.
-pub type SpacePoint = [f64; 3];
+pub use crate::spacetime::SpacePoint;
 
 /// The affine map `X = P0 + J xi` of a tetrahedron from the reference tetrahedron.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]

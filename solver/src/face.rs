@@ -11,7 +11,7 @@
 //! (4.8), no flux along the edge, the previous face's trace as inflow on the bottom edge. A bisected edge hands each half the parent's face, whose
 //! polynomial restricts exactly: nothing is projected.
 
-use crate::element::SpacePoint;
+use crate::spacetime::SpacePoint;
 
 /// Largest number of face basis functions (degree 4).
 pub const MAX_FACE_BASIS: usize = 15;

@@ -19,6 +19,7 @@ pub mod patch;
 pub mod quadrature;
 pub mod riemann;
 pub mod ring;
+pub mod spacetime;
 pub mod system;
 
 pub use material::{Material, MaterialError, Plane};

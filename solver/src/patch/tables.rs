@@ -10,8 +10,8 @@
 //! element too: [`FaceTables::corners_in`] finds which.
 
 use crate::basis::Basis;
-use crate::element::SpacePoint;
 use crate::quadrature::{self, Rule};
+use crate::spacetime::SpacePoint;
 
 /// Ordered corner triples `(a, b, c)` of a tetrahedron, at `16 a + 4 b + c`.
 const TRIPLES: usize = 64;

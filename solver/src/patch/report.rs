@@ -1,0 +1,113 @@
+//! What a patch solve reports: per element and per patch energies, work and diagnostics, and
+//! the state of an interface at a point.
+
+use crate::interface::Mode;
+
+/// Energy terms and diagnostics of one solved element, in scaled units (physical: times the
+/// density; see [`crate::system`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ElementReport {
+    /// Energy entering through the inflow face.
+    pub energy_in: f64,
+    /// Energy leaving through the outflow face (now part of the front).
+    pub energy_out: f64,
+    /// `energy_out` split as `[kinetic, strain, flux]` (see `norms::FrontEnergy`).
+    pub energy_out_parts: [f64; 3],
+    /// Net power entering through the vertical faces, integrated over them.
+    pub vertical_work: f64,
+    /// Part of `vertical_work` through the domain boundary.
+    pub boundary_work: f64,
+    /// Energy taken out of the element by interface faces (minus their part of
+    /// `vertical_work`): summed over both sides of a face, the work absorbed by the interface.
+    pub interface_work: f64,
+    /// Part of `interface_work` done by tangential tractions on tangential velocity jumps of
+    /// contact faces: friction.
+    pub friction_dissipation: f64,
+    /// Part of `interface_work` done on cohesive faces: the work of separation spent so far
+    /// (fracture energy; for the reversible Xu-Needleman law, partly stored until the faces
+    /// separate fully).
+    pub fracture_work: f64,
+    /// Numerical dissipation from the jumps against the targets: a sum of non-negative terms.
+    pub dissipation: f64,
+    /// Dissipation from the energy balance `energy_in - energy_out + vertical_work`; equal to
+    /// `dissipation` to round-off when the element equations hold.
+    pub dissipation_balance: f64,
+    /// `|sum over faces of the momentum target flux|` (scaled units): zero to round-off when
+    /// the element balances linear momentum.
+    pub momentum_imbalance: f64,
+    /// Sum over faces of the magnitude of the momentum target flux (scaled units).
+    pub momentum_flux: f64,
+    /// `momentum_imbalance / momentum_flux`: zero to round-off when the element balances
+    /// linear momentum and its fluxes are not themselves round-off (an element at rest reads
+    /// anything up to 1).
+    pub momentum_residual: f64,
+}
+
+/// Totals over one patch.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct PatchReport {
+    /// Elements solved.
+    pub elements: usize,
+    /// Unknowns of the linear system.
+    pub dofs: usize,
+    /// Sum of the element reports' fields.
+    pub energy_in: f64,
+    /// See [`ElementReport::energy_out`].
+    pub energy_out: f64,
+    /// See [`ElementReport::boundary_work`].
+    pub boundary_work: f64,
+    /// See [`ElementReport::interface_work`].
+    pub interface_work: f64,
+    /// See [`ElementReport::friction_dissipation`].
+    pub friction_dissipation: f64,
+    /// See [`ElementReport::fracture_work`].
+    pub fracture_work: f64,
+    /// See [`ElementReport::dissipation`].
+    pub dissipation: f64,
+    /// Largest [`ElementReport::momentum_residual`] of its elements.
+    pub momentum_residual: f64,
+    /// Largest [`ElementReport::momentum_imbalance`] of its elements.
+    pub momentum_imbalance: f64,
+    /// Largest [`ElementReport::momentum_flux`] of its elements.
+    pub momentum_flux: f64,
+    /// Newton iterations (linear solves) of a patch with nonlinear faces; zero for a linear
+    /// patch.
+    pub newton_iterations: usize,
+    /// The cohesive indicator's measure: the work of the mismatch between the cohesive traction
+    /// of the faces' separation and of the elements' displacement jump (see
+    /// `ContactFaces::cohesive_mismatch`), scaled units like `dissipation`.
+    pub cohesive_mismatch: f64,
+    /// Wall time assembling the patch's system, s (measured: not the same from run to run).
+    pub assembly_s: f64,
+    /// Wall time solving it (the ring elimination, or the Newton iterations), s.
+    pub solve_s: f64,
+    /// Wall time evaluating the results (energies, displacements, interface states), s.
+    pub evaluation_s: f64,
+}
+
+/// The state of a contact interface at one point, physical units, in the frame of the face
+/// (normal, tangential; each value is the same whichever side the normal points from).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct InterfaceSample {
+    /// Time, s.
+    pub time: f64,
+    /// Target traction `s*`, Pa.
+    pub traction: [f64; 2],
+    /// Bonded Riemann traction `sI`, Pa.
+    pub bonded_traction: [f64; 2],
+    /// Normal separation, m.
+    pub delta: f64,
+    /// Tangential slip, m.
+    pub slip: f64,
+    /// Damage `D` in effect (the debonded fraction) with the damage law; 0 with other laws.
+    pub damage: f64,
+    /// Jump of the target velocities `[[v*]]`, m/s.
+    pub velocity_jump: [f64; 2],
+    /// Contact area fraction.
+    pub eta: f64,
+    /// Stick flag.
+    pub gamma: f64,
+    /// The mode with the largest area fraction.
+    pub mode: Mode,
+}
