@@ -1,6 +1,5 @@
 //! The trace file: one entry per tent, event and round, and reading it back.
 
-use std::fmt::Write as _;
 use std::path::Path;
 
 use sdg_mesh::VertexId;

@@ -1,6 +1,6 @@
 //! Assembly of a patch's linear system and its solve.
 //!
-//! Weak form (see `docs/method.md`): on every element `K` of the patch, for every test function
+//! Weak form (see `docs/theory/method.md`): on every element `K` of the patch, for every test function
 //! `phi` in the complete polynomials of degree `p`,
 //!
 //! `int_K phi . (A0 q_tau + Ax q_x + Ay q_y) + sum over faces F of int_F phi . (F* - A_n q) = 0`

@@ -107,7 +107,7 @@ impl ContactFace {
     /// the face's polynomials ([`Self::project_matrix`]), at every point (and with `slopes`
     /// its derivatives with respect to `d`). Testing the face's DG equation with the target
     /// traction gives its work as the law's potential gained over the face plus terms that
-    /// vanish for `Pi T` (docs/method.md): with the pointwise `T`, `-(2 / Z) |T - Pi T|^2`
+    /// vanish for `Pi T` (docs/theory/method.md): with the pointwise `T`, `-(2 / Z) |T - Pi T|^2`
     /// (an L2 projection removes it), and `-int_bottom (T - Pi T) (delta+ - delta-)` on the
     /// bottom's jump (the bottom moments remove it). Returns whether the face projects.
     fn project_traction(&mut self, nf: usize, d: &[f64], slopes: bool) -> bool {
