@@ -616,9 +616,10 @@ fn check_config(file: &Path, text: &str, overrides: &[String]) -> Outcome {
         Ok(_) => Outcome::Accepted,
         Err(EngineError::Config(e)) => named(&sdg_engine::config::attribute(e, overrides)),
         // `CONFIG: mesh.path: FILE[:LINE]: reason` of the mesh reader.
-        Err(EngineError::Mesh(m))
+        Err(e @ EngineError::Mesh { .. })
             if mesh_file.is_some_and(|f| {
-                m.strip_prefix(&format!("{}: mesh.path: ", file.display()))
+                e.to_string()
+                    .strip_prefix(&format!("{}: mesh.path: ", file.display()))
                     .and_then(|m| m.strip_prefix(&*f.to_string_lossy()))
                     .and_then(|rest| rest.split_once(": "))
                     .is_some_and(|(_, reason)| !reason.trim().is_empty())

@@ -11,9 +11,15 @@ pub enum EngineError {
     /// The configuration is invalid.
     #[error(transparent)]
     Config(#[from] ConfigError),
-    /// The mesh cannot be read or is not a valid triangulation.
-    #[error("{0}")]
-    Mesh(String),
+    /// The mesh file of `config` (its `mesh.path`) cannot be read or is not a valid
+    /// triangulation.
+    #[error("{}: mesh.path: {source}", config.display())]
+    Mesh {
+        /// The config file that names the mesh.
+        config: PathBuf,
+        /// What the mesh reader found, with the mesh file and line.
+        source: sdg_mesh::GmshError,
+    },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -54,7 +60,7 @@ impl EngineError {
     /// ("resubmit me").
     pub fn exit_code(&self) -> u8 {
         match self {
-            Self::Config(_) | Self::Mesh(_) | Self::Input(_) => 2,
+            Self::Config(_) | Self::Mesh { .. } | Self::Input(_) => 2,
             Self::Io { .. } | Self::Runtime(_) | Self::Plot(_) => 1,
             Self::Checkpointed { .. } => 3,
         }

@@ -95,8 +95,9 @@ impl Problem {
                     .path
                     .as_deref()
                     .expect("validated: gmsh has a path");
-                sdg_mesh::read_msh(&loaded.resolve(path)).map_err(|e| {
-                    EngineError::Mesh(format!("{}: mesh.path: {e}", loaded.file.display()))
+                sdg_mesh::read_msh(&loaded.resolve(path)).map_err(|source| EngineError::Mesh {
+                    config: loaded.file.clone(),
+                    source,
                 })?
             }
         };

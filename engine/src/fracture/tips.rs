@@ -16,7 +16,7 @@
 //!   speed (on `configs/damage_mode1.toml`, fits over nine successive states, about 10 ns,
 //!   scattered up to 1.13 c_R about a mean of 0.9 c_R); over two edges on each side it still
 //!   measured a tip that crosses each edge at once and then waits 8% off when the window cut
-//!   the crossings of an edge (until 2026-11-28); over whole edges, within 1%. A crack whose
+//!   the crossings of an edge; over whole edges, within 1%. A crack whose
 //!   states span less than one edge has no speed (NaN): its
 //!   crossings are the points of one face reaching the level, as the face's polynomial has it
 //!   (two points 1 um apart 3 ps apart on a nucleated branch of the branching plate), not a

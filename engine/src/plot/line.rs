@@ -364,8 +364,8 @@ mod tests {
     #[test]
     fn sharp_turns_draw_nothing_past_their_points() {
         // Tip speeds (m/s) against time (us) of a branch of the main job: a steep drop and
-        // rise within a pixel, drawn until 2026-11-29 as a spike past `c_R` (938.9 m/s) that
-        // no point reaches.
+        // rise within a pixel, which a mitered line would draw as a spike past `c_R` (938.9 m/s)
+        // that no point reaches.
         let speeds = [
             (1.75, 400.0),
             (2.899965, 797.346),
