@@ -24,9 +24,22 @@ for config in "${configs[@]}"; do
   if [[ ${FULL:-0} != 1 ]]; then
     # A tenth of the span past the start.
     end=$(python3 - "$config" <<'PY'
-import sys, tomllib
-c = tomllib.load(open(sys.argv[1], "rb"))
-t = c.get("time", {})
+import pathlib, sys, tomllib
+def load(path):
+    c = tomllib.load(open(path, "rb"))
+    base = c.pop("extends", None)
+    if base is None:
+        return c
+    merged = load(pathlib.Path(path).parent / base)
+    def merge(b, o):
+        for k, v in o.items():
+            if isinstance(b.get(k), dict) and isinstance(v, dict):
+                merge(b[k], v)
+            else:
+                b[k] = v
+    merge(merged, c)
+    return merged
+t = load(sys.argv[1]).get("time", {})
 start, end = t.get("start", 0.0), t["end"]
 span = end - start
 print(repr(start + 0.1 * span))
