@@ -4,33 +4,11 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{sdg, stderr};
+use common::{CONFIG, sdg, stderr};
 
 fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
 }
-
-const CONFIG: &str = r#"
-[mesh]
-kind = "rectangle"
-width = 0.004
-height = 0.002
-nx = 8
-ny = 4
-
-[material]
-young = 3.24e9
-poisson = 0.35
-density = 1190.0
-plane = "strain"
-
-[time]
-end = 1e-7
-
-[[boundary]]
-sides = ["left", "right", "bottom", "top"]
-kind = "free"
-"#;
 
 /// `CONFIG` with a 2 mm edge crack at mid-height in frictional contact.
 const CRACKED: &str = r#"

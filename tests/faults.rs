@@ -11,32 +11,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use common::CONFIG;
+
 /// How long a run may take from SIGTERM to its exit with a checkpoint here (a few ms on an idle
 /// machine; the test machine runs other builds), s.
 const STOP_WITHIN: Duration = Duration::from_secs(2);
-
-/// A small problem that solves in well under a second.
-const CONFIG: &str = r#"
-[mesh]
-kind = "rectangle"
-width = 0.004
-height = 0.002
-nx = 8
-ny = 4
-
-[material]
-young = 3.24e9
-poisson = 0.35
-density = 1190.0
-plane = "strain"
-
-[time]
-end = 1e-7
-
-[[boundary]]
-sides = ["left", "right", "bottom", "top"]
-kind = "free"
-"#;
 
 /// Overrides of `plane_wave.toml` for a run of minutes: it is stopped long before its end.
 const LONG: [&str; 3] = ["time.end=1e-3", "mesh.nx=32", "mesh.ny=32"];

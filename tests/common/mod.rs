@@ -311,3 +311,26 @@ pub fn sdg(args: &[&str]) -> Output {
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
+
+/// A small free plate (4 x 2 mm, 8 x 4 cells, to 0.1 us) that solves in well under a second.
+pub const CONFIG: &str = r#"
+[mesh]
+kind = "rectangle"
+width = 0.004
+height = 0.002
+nx = 8
+ny = 4
+
+[material]
+young = 3.24e9
+poisson = 0.35
+density = 1190.0
+plane = "strain"
+
+[time]
+end = 1e-7
+
+[[boundary]]
+sides = ["left", "right", "bottom", "top"]
+kind = "free"
+"#;
