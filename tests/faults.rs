@@ -62,6 +62,14 @@ impl Running {
             std::thread::sleep(Duration::from_millis(10));
         }
     }
+
+    /// What the exited process wrote to its piped standard error.
+    fn stderr(&mut self) -> String {
+        let mut err = String::new();
+        let pipe = self.0.stderr.as_mut().expect("standard error piped");
+        pipe.read_to_string(&mut err).unwrap();
+        err
+    }
 }
 
 impl Drop for Running {
@@ -237,14 +245,7 @@ fn a_panic_of_the_signal_listener_ends_the_run_with_exit_1() {
     let pid = listening_sdg(&mut child).to_string();
     signal(&pid, "USR1");
     assert_eq!(child.exit_within(STOP_WITHIN), 1);
-    let mut err = String::new();
-    child
-        .0
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut err)
-        .unwrap();
+    let err = child.stderr();
     assert!(
         err.contains("SDG_FAULT=signal-listener")
             && err.contains("error: internal error: the signal listener failed"),
@@ -397,14 +398,7 @@ fn sigterm_from_timeout_stops_with_exit_3() {
     let mut child = Running(command.spawn().unwrap());
     listening_sdg(&mut child);
     let code = child.exit_within(Duration::from_secs(5) + STOP_WITHIN);
-    let mut err = String::new();
-    child
-        .0
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut err)
-        .unwrap();
+    let err = child.stderr();
     assert_eq!(code, 3, "{err}");
     assert!(
         err.contains("SIGTERM") && err.contains("--restart"),
@@ -444,14 +438,7 @@ wait "$pid""#;
     );
     signal(&format!("-{shell}"), "TERM");
     let code = child.exit_within(STOP_WITHIN);
-    let mut err = String::new();
-    child
-        .0
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut err)
-        .unwrap();
+    let err = child.stderr();
     assert_eq!(code, 3, "{err}");
     assert!(!err.contains("SIGTERM again"), "one request: {err}");
     assert_eq!(checkpoints(&dir.path().join("checkpoints")).len(), 1);
