@@ -31,6 +31,7 @@ fn mesh() -> Mesh {
         ny: 12,
         diagonal: Diagonal::Right,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb: 0.0,
         seed: 0,
     }

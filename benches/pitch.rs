@@ -16,6 +16,7 @@ fn pitch_128(c: &mut Criterion) {
         ny: 128,
         diagonal: Diagonal::Alternate,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb: 0.1,
         seed: 1,
     }

@@ -50,6 +50,7 @@ fn schedule(c: &mut Criterion) {
         ny: 128,
         diagonal: Diagonal::Alternate,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb: 0.1,
         seed: 1,
     }

@@ -59,6 +59,7 @@ fn patch_solves_do_not_allocate() {
         ny: 8,
         diagonal: Diagonal::Alternate,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb: 0.1,
         seed: 5,
     }

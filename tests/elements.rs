@@ -22,6 +22,7 @@ fn square(nx: u32, perturb: f64) -> sdg_mesh::Mesh {
         ny: nx,
         diagonal: Diagonal::Alternate,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb,
         seed: 3,
     }

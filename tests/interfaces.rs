@@ -31,6 +31,7 @@ fn strip(n: u32, every_edge: bool) -> Mesh {
         ny: n,
         diagonal: Diagonal::Right,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb: 0.0,
         seed: 0,
     }

@@ -15,6 +15,7 @@ fn rectangle(nx: u32, diagonal: Diagonal, perturb: f64) -> Mesh {
         ny: nx,
         diagonal,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb,
         seed: 7,
     }

@@ -26,6 +26,7 @@ fn strip_mesh() -> sdg_mesh::Mesh {
         ny: 8,
         diagonal: Diagonal::Right,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb: 0.0,
         seed: 0,
     }

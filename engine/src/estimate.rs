@@ -465,6 +465,7 @@ mod tests {
             ny,
             diagonal: Diagonal::Alternate,
             interfaces: Vec::new(),
+            sides: Vec::new(),
             perturb,
             seed: 3,
         }

@@ -44,6 +44,9 @@ pub struct Rectangle {
     /// Interface segments on grid lines; segments may share a tag, and may overlap only where
     /// they share it.
     pub interfaces: Vec<GridSegment>,
+    /// Boundary segments on the rectangle's sides that get a tag of their own instead of their
+    /// side's (a load on part of a side); they may not overlap.
+    pub sides: Vec<GridSegment>,
     /// Random displacement of interior vertices as a fraction of the cell size in each
     /// direction, in `[0, 0.25)`. Vertices on the boundary or an interface do not move.
     pub perturb: f64,
@@ -55,7 +58,7 @@ pub struct Rectangle {
 #[derive(Debug, thiserror::Error)]
 #[error("{field}: {reason}")]
 pub struct RectangleError {
-    /// Parameter name (`width`, `nx`, `interfaces[k]` for the k-th segment, ...).
+    /// Parameter name (`width`, `nx`, `interfaces[k]` or `sides[k]` for the k-th segment, ...).
     pub field: String,
     /// What is wrong with it.
     pub reason: String,
@@ -74,7 +77,7 @@ pub const SIDES: [&str; 4] = ["left", "right", "bottom", "top"];
 impl Rectangle {
     /// Generates the triangulation. Boundary edges are tagged `left`, `right`, `bottom`, `top`
     /// (tag ids 0 to 3); interface edges get their segment's tag, with ids from 4 in order of
-    /// first appearance.
+    /// first appearance, and then boundary edges on a side segment get its tag.
     pub fn build(&self) -> Result<Mesh, RectangleError> {
         for (field, value) in [("width", self.width), ("height", self.height)] {
             if !(value.is_finite() && value > 0.0) {
@@ -145,18 +148,7 @@ impl Rectangle {
             if SIDES.contains(&seg.tag.as_str()) {
                 return Err(invalid(field, format!("tag `{}` is a side name", seg.tag)));
             }
-            let node = |p: Point| -> Result<(u32, u32), RectangleError> {
-                let (fi, fj) = (p[0] / dx, p[1] / dy);
-                let (i, j) = (fi.round(), fj.round());
-                let on_grid = (fi - i).abs() < 1e-9 && (fj - j).abs() < 1e-9;
-                if !on_grid || i < 0.0 || j < 0.0 || i > nx as f64 || j > ny as f64 {
-                    return Err(invalid(
-                        field.clone(),
-                        format!("end point {p:?} is not a grid node of the rectangle"),
-                    ));
-                }
-                Ok((i as u32, j as u32))
-            };
+            let node = |p: Point| self.grid_node(p, &field);
             let (a, b) = (node(seg.from)?, node(seg.to)?);
             let steps: Vec<(u32, u32)> = if a == b {
                 return Err(invalid(field, "the segment has zero length"));
@@ -204,6 +196,8 @@ impl Rectangle {
             }
         }
 
+        self.tag_sides(&mut tagged, &mut tag_names, &id)?;
+
         if self.perturb > 0.0 {
             for j in 1..ny {
                 for i in 1..nx {
@@ -228,6 +222,81 @@ impl Rectangle {
         Mesh::new(vertices, triangles, tag_names, &tagged).map_err(|e: MeshError| {
             invalid("mesh", format!("generated an invalid triangulation: {e}"))
         })
+    }
+}
+
+impl Rectangle {
+    /// The grid node `(i, j)` at `p`, m; `field` names the segment in the error.
+    fn grid_node(&self, p: Point, field: &str) -> Result<(u32, u32), RectangleError> {
+        let (fi, fj) = (
+            p[0] * self.nx as f64 / self.width,
+            p[1] * self.ny as f64 / self.height,
+        );
+        let (i, j) = (fi.round(), fj.round());
+        let on_grid = (fi - i).abs() < 1e-9 && (fj - j).abs() < 1e-9;
+        if !on_grid || i < 0.0 || j < 0.0 || i > self.nx as f64 || j > self.ny as f64 {
+            return Err(invalid(
+                field,
+                format!("end point {p:?} is not a grid node of the rectangle"),
+            ));
+        }
+        Ok((i as u32, j as u32))
+    }
+
+    /// Gives the boundary edges of each of [`Self::sides`] its tag (new names get the next
+    /// ids). A side segment must lie on one side, and its tag must not be a side's or an
+    /// interface's.
+    fn tag_sides(
+        &self,
+        tagged: &mut [([VertexId; 2], TagId)],
+        tag_names: &mut Vec<String>,
+        id: &impl Fn(u32, u32) -> VertexId,
+    ) -> Result<(), RectangleError> {
+        let (nx, ny) = (self.nx, self.ny);
+        let interface_tags = tag_names.len();
+        let mut claimed: HashMap<[VertexId; 2], usize> = HashMap::new();
+        for (k, seg) in self.sides.iter().enumerate() {
+            let field = format!("sides[{k}]");
+            if tag_names[..interface_tags].contains(&seg.tag) {
+                return Err(invalid(
+                    field,
+                    format!("tag `{}` already names a side or an interface", seg.tag),
+                ));
+            }
+            let (a, b) = (
+                self.grid_node(seg.from, &field)?,
+                self.grid_node(seg.to, &field)?,
+            );
+            let steps: Vec<(u32, u32)> = if a == b {
+                return Err(invalid(field, "the segment has zero length"));
+            } else if a.1 == b.1 && (a.1 == 0 || a.1 == ny) {
+                (a.0.min(b.0)..=a.0.max(b.0)).map(|i| (i, a.1)).collect()
+            } else if a.0 == b.0 && (a.0 == 0 || a.0 == nx) {
+                (a.1.min(b.1)..=a.1.max(b.1)).map(|j| (a.0, j)).collect()
+            } else {
+                return Err(invalid(
+                    field,
+                    "the segment must lie on one side of the rectangle",
+                ));
+            };
+            let tag = match tag_names.iter().position(|n| *n == seg.tag) {
+                Some(t) => t as TagId,
+                None => {
+                    tag_names.push(seg.tag.clone());
+                    (tag_names.len() - 1) as TagId
+                }
+            };
+            for w in steps.windows(2) {
+                let ends = [id(w[0].0, w[0].1), id(w[1].0, w[1].1)];
+                if let Some(other) = claimed.insert(ends, k) {
+                    return Err(invalid(field, format!("overlaps sides[{other}]")));
+                }
+                if let Some(edge) = tagged.iter_mut().find(|(e, _)| *e == ends) {
+                    edge.1 = tag;
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -269,6 +338,7 @@ mod tests {
             ny: 3,
             diagonal,
             interfaces: Vec::new(),
+            sides: Vec::new(),
             perturb: 0.0,
             seed: 1,
         }
@@ -315,6 +385,66 @@ mod tests {
                 assert!((m.vertex(v)[1] - 2.0 / 3.0).abs() < 1e-12);
             }
         }
+    }
+
+    #[test]
+    fn side_segments_retag_parts_of_sides() {
+        let seg = |from, to, tag: &str| GridSegment {
+            from,
+            to,
+            tag: tag.into(),
+        };
+        let mut r = rect(Diagonal::Alternate);
+        r.interfaces = vec![seg([0.0, 1.0 / 3.0], [2.0, 1.0 / 3.0], "crack")];
+        // The upper two thirds of the left side and the lower third of the right side.
+        r.sides = vec![
+            seg([0.0, 1.0 / 3.0], [0.0, 1.0], "push"),
+            seg([2.0, 0.0], [2.0, 1.0 / 3.0], "pull"),
+        ];
+        let m = r.build().unwrap();
+        assert_eq!(
+            m.tag_names(),
+            ["left", "right", "bottom", "top", "crack", "push", "pull"]
+        );
+        let on = |tag: TagId| -> Vec<[f64; 2]> {
+            m.edges()
+                .iter()
+                .filter(|e| e.tag == Some(tag))
+                .map(|e| {
+                    let [a, b] = e.vertices.map(|v| m.vertex(v));
+                    [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
+                })
+                .collect()
+        };
+        assert_eq!(on(0), [[0.0, 1.0 / 6.0]]);
+        assert_eq!(on(1).len(), 2);
+        assert!(on(1).iter().all(|p| p[1] > 1.0 / 3.0));
+        assert_eq!(on(5).len(), 2);
+        assert!(on(5).iter().all(|p| p[0] == 0.0 && p[1] > 1.0 / 3.0));
+        assert_eq!(on(6), [[2.0, 1.0 / 6.0]]);
+        assert!(
+            m.edges()
+                .iter()
+                .filter(|e| e.tag >= Some(5))
+                .all(|e| e.is_boundary())
+        );
+
+        let fails = |sides: Vec<GridSegment>| {
+            let e = Rectangle { sides, ..r.clone() }.build().unwrap_err();
+            (e.field, e.reason)
+        };
+        let (field, reason) = fails(vec![seg([0.5, 0.0], [0.5, 1.0], "x")]);
+        assert_eq!(field, "sides[0]");
+        assert!(reason.contains("one side"), "{reason}");
+        let (field, reason) = fails(vec![seg([0.0, 0.0], [0.0, 1.0], "crack")]);
+        assert_eq!(field, "sides[0]");
+        assert!(reason.contains("`crack`"), "{reason}");
+        let (field, reason) = fails(vec![
+            seg([0.0, 0.0], [0.0, 2.0 / 3.0], "a"),
+            seg([0.0, 1.0 / 3.0], [0.0, 1.0], "b"),
+        ]);
+        assert_eq!(field, "sides[1]");
+        assert!(reason.contains("overlaps sides[0]"), "{reason}");
     }
 
     #[test]

@@ -315,6 +315,7 @@ mod tests {
             ny: 2,
             diagonal: Diagonal::Right,
             interfaces: Vec::new(),
+            sides: Vec::new(),
             perturb: 0.0,
             seed: 0,
         }

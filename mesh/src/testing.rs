@@ -13,6 +13,7 @@ pub(crate) fn square(n: u32, diagonal: Diagonal, perturb: f64) -> Rectangle {
         ny: n,
         diagonal,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb,
         seed: 7,
     }

@@ -23,6 +23,7 @@ fn perturbed(n: u32) -> Mesh {
         ny: n,
         diagonal: Diagonal::Alternate,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb: 0.2,
         seed: 11,
     }

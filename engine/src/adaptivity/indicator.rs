@@ -156,6 +156,7 @@ mod tests {
             ny: n,
             diagonal: Diagonal::Right,
             interfaces: Vec::new(),
+            sides: Vec::new(),
             perturb: 0.0,
             seed: 0,
         }

@@ -447,6 +447,7 @@ mod tests {
             ny: 4,
             diagonal: Diagonal::Alternate,
             interfaces: Vec::new(),
+            sides: Vec::new(),
             perturb: 0.1,
             seed: 3,
         }

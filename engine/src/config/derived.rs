@@ -70,6 +70,15 @@ impl Config {
                     tag: i.tag.clone(),
                 })
                 .collect(),
+            sides: m
+                .side
+                .iter()
+                .map(|s| sdg_mesh::GridSegment {
+                    from: s.from,
+                    to: s.to,
+                    tag: s.tag.clone(),
+                })
+                .collect(),
             perturb: m.perturb.unwrap_or(0.0),
             seed: m.seed.unwrap_or(0),
         }

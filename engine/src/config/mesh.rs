@@ -1,4 +1,5 @@
-//! `[mesh]`: the space triangulation, and the interface segments on a rectangle's grid lines.
+//! `[mesh]`: the space triangulation, the interface segments on a rectangle's grid lines and
+//! the parts of its sides tagged apart.
 
 use std::path::PathBuf;
 
@@ -65,6 +66,14 @@ pub struct MeshConfig {
         skip_serializing_if = "Vec::is_empty"
     )]
     pub interface: Vec<SegmentConfig>,
+    /// Parts of a rectangle's sides tagged apart (a load on part of a side): `[[mesh.side]]`,
+    /// or one `[mesh.side]` table.
+    #[serde(
+        default,
+        deserialize_with = "one_or_many",
+        skip_serializing_if = "Vec::is_empty"
+    )]
+    pub side: Vec<SideConfig>,
 }
 
 /// `[[mesh.interface]]`: a straight interior segment on grid lines, tagged as an interface.
@@ -80,37 +89,51 @@ pub struct SegmentConfig {
     pub tag: String,
 }
 
+/// `[[mesh.side]]`: a straight segment of a rectangle's side on grid nodes, whose boundary
+/// edges get `tag` instead of their side's name.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SideConfig {
+    /// One end `[x, y]`, m.
+    pub from: [f64; 2],
+    /// The other end `[x, y]`, m.
+    pub to: [f64; 2],
+    /// Tag name, for `[[boundary]]` `sides`.
+    pub tag: String,
+}
+
 fn default_interface_tag() -> String {
     "interface".into()
 }
 
-/// Reads one `[mesh.interface]` table or an `[[mesh.interface]]` array of tables. Errors keep
-/// the key path (`mesh.interface.from`, `mesh.interface[1].from`).
-fn one_or_many<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<SegmentConfig>, D::Error> {
+/// Reads one `[mesh.interface]` (or `[mesh.side]`) table or an array of such tables. Errors
+/// keep the key path (`mesh.interface.from`, `mesh.interface[1].from`).
+fn one_or_many<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Vec<T>, D::Error> {
     use serde::de::value::{MapAccessDeserializer, SeqAccessDeserializer};
     use serde::de::{MapAccess, SeqAccess, Visitor};
 
-    struct OneOrMany;
-    impl<'de> Visitor<'de> for OneOrMany {
-        type Value = Vec<SegmentConfig>;
+    struct OneOrMany<T>(std::marker::PhantomData<T>);
+    impl<'de, T: Deserialize<'de>> Visitor<'de> for OneOrMany<T> {
+        type Value = Vec<T>;
 
         fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
             f.write_str("a table or an array of tables")
         }
 
         fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
-            SegmentConfig::deserialize(MapAccessDeserializer::new(map)).map(|s| vec![s])
+            T::deserialize(MapAccessDeserializer::new(map)).map(|s| vec![s])
         }
 
         fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
             Vec::deserialize(SeqAccessDeserializer::new(seq))
         }
     }
-    d.deserialize_any(OneOrMany)
+    d.deserialize_any(OneOrMany(std::marker::PhantomData))
 }
 
-/// The config key of a rectangle generator error: `mesh.nx`, or `mesh.interface[k]` for the
-/// k-th interface segment.
+/// The config key of a rectangle generator error: `mesh.nx`, `mesh.interface[k]` for the
+/// k-th interface segment, `mesh.side[k]` for the k-th side segment.
 pub(crate) fn rectangle_key(e: &sdg_mesh::RectangleError) -> String {
-    format!("mesh.{}", e.field.replacen("interfaces", "interface", 1))
+    let field = e.field.replacen("interfaces", "interface", 1);
+    format!("mesh.{}", field.replacen("sides", "side", 1))
 }

@@ -109,6 +109,7 @@ impl Config {
             ("mesh.perturb", m.perturb.is_some()),
             ("mesh.seed", m.seed.is_some()),
             ("mesh.interface", !m.interface.is_empty()),
+            ("mesh.side", !m.side.is_empty()),
         ];
         match m.kind {
             MeshKind::Rectangle => {
@@ -503,6 +504,12 @@ mod tests {
                 "mesh.interface.1.from=[0.008, 0.0001]",
                 "mesh.interface[1]",
                 "grid node",
+            ),
+            (
+                "mesh.side=[{from=[0.0, 0.0], to=[0.0, 0.001], tag=\"a\"}, \
+                 {from=[0.0, 0.0], to=[0.0, 0.001], tag=\"left\"}]",
+                "mesh.side[1]",
+                "already names a side",
             ),
         ] {
             let (k, reason) = error(&[set]);

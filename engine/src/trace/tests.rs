@@ -118,6 +118,7 @@ fn a_written_trace_reads_back_and_bad_ones_are_refused() {
         ny: 2,
         diagonal: sdg_mesh::Diagonal::Right,
         interfaces: Vec::new(),
+        sides: Vec::new(),
         perturb: 0.0,
         seed: 0,
     }

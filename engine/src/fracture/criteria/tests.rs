@@ -14,6 +14,7 @@ pub(crate) fn notched() -> (Mesh, Fracture) {
             to: [0.5, 0.5],
             tag: "notch".into(),
         }],
+        sides: Vec::new(),
         perturb: 0.0,
         seed: 1,
     }
