@@ -1,0 +1,447 @@
+//! Asynchronous tent pitching over ranks: each rank pitches its owned vertices on its own view
+//! and tells the ranks that hold them as ghosts.
+//!
+//! # Rule
+//! A rank pitches an owned vertex `v` when `v` is below the end time and comes first in the
+//! order of `(time, global id)` among its neighbours, as the rank sees them: owned neighbours
+//! exactly, ghosts as the last [`Update`] received. After the tent it sends `v`'s new time and
+//! generation (tents so far at `v`) to every rank holding `v` as a ghost; a receiver applies an
+//! update only if its generation is newer than its copy's.
+//!
+//! # Why this is the serial order's front, for any partition and timing
+//! Front times only grow and a ghost copy is some earlier time of its vertex, so a copy is
+//! never ahead. Suppose `v` passes the rule with ghost `w` seen at `t'_w` but `w` has already
+//! been pitched from `t'_w`. That tent needed `(t'_w, w)` first among `w`'s neighbours as `w`'s
+//! owner saw them, and its copy of `v` was at most `v`'s time then, at most `t_v` now: so
+//! `(t'_w, w) < (t_v, v)`, against the rule `v` passed. Hence a vertex that passes reads
+//! exactly the current times of its whole star, and tents at neighbouring vertices happen in
+//! the order of their `(t_old, id)`, as in the serial reference order (always the earliest
+//! vertex, ties to the smaller id, `sdg_scheduler::run_serial`). Each tent's inputs are thus
+//! the serial run's, bitwise: the per-vertex tent sequences are the same for every partition
+//! and message timing. A rank whose candidate waits behind a stale ghost is woken by the
+//! update that ghost's owner sends, so no wake-up is lost.
+//!
+//! # Termination
+//! A rank with no owned vertex below the end time sends [`Message::Done`] with the number of
+//! messages it sent each neighbour rank; it stops when every neighbour rank has said done and
+//! it received as many messages from each as announced. No global poll; messages may arrive in
+//! any order (FIFO per pair is not needed). An error on a rank sends [`Message::Abort`] to
+//! every other rank, which stop with [`PitchingError::Aborted`].
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::time::{Duration, Instant};
+
+use sdg_mesh::{Front, Mesh, PitchError, Pitcher, Tent, VertexId};
+
+use crate::partition::{Partition, Rank};
+use crate::rng::SplitMix64;
+use crate::transport::{Loopback, LoopbackOptions, Message, Transport, TransportError, Update};
+use crate::view::{LocalView, ViewError};
+
+/// How a rank runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Options {
+    /// Seed of the order in which a rank tries its candidates (any order gives the same front).
+    pub seed: u64,
+    /// Longest wait for a message while something is left to do; then the rank reports a stall.
+    pub idle_limit: Duration,
+}
+
+/// The causality parameters every rank builds its [`Pitcher`] from, on its own view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Causality {
+    /// Fastest wave speed, m/s.
+    pub c_max: f64,
+    /// Safety factor in (0, 1).
+    pub safety: f64,
+    /// End time, s.
+    pub t_end: f64,
+}
+
+/// Why distributed pitching failed.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PitchingError {
+    #[error("rank {rank}: {source}")]
+    Transport { rank: Rank, source: TransportError },
+    #[error(transparent)]
+    View(#[from] ViewError),
+    #[error(transparent)]
+    Pitch(#[from] PitchError),
+    #[error("the start front has {front} vertices, but the mesh has {mesh}")]
+    FrontLength { front: usize, mesh: usize },
+    #[error(
+        "rank {rank}: no progress for {waited:?}: {remaining} owned vertices are below the end \
+         time and no message came"
+    )]
+    Stalled {
+        rank: Rank,
+        remaining: usize,
+        waited: Duration,
+    },
+    #[error("rank {rank}: an update of vertex {vertex} from rank {from}, which does not own it")]
+    Stray {
+        rank: Rank,
+        from: Rank,
+        vertex: VertexId,
+    },
+    #[error("rank {rank}: the tent at vertex {vertex} (time {time} s) did not advance it")]
+    NoAdvance {
+        rank: Rank,
+        vertex: VertexId,
+        time: f64,
+    },
+    #[error("rank {rank} stopped because rank {by} failed")]
+    Aborted { rank: Rank, by: Rank },
+    #[error("rank {rank}: internal error (a bug, please report it): {message}")]
+    Panic { rank: Rank, message: String },
+}
+
+/// What a rank did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RankReport {
+    /// The rank.
+    pub rank: Rank,
+    /// Its tents in the order it pitched them, with global vertex ids.
+    pub tents: Vec<Tent>,
+    /// Update messages sent (one per tent and ghost-holding rank).
+    pub updates_sent: u64,
+    /// Bytes of the updates sent, as [`Message::encode`] writes them.
+    pub update_bytes: u64,
+    /// Updates applied to ghost copies.
+    pub updates_applied: u64,
+    /// Updates ignored because the copy was as new already.
+    pub updates_stale: u64,
+    /// Owned vertices that another rank holds as a ghost.
+    pub boundary_vertices: usize,
+    /// Time spent waiting for messages with nothing to pitch.
+    pub waited: Duration,
+}
+
+/// A rank's running state.
+struct Runner<'v, T> {
+    view: &'v LocalView,
+    pitcher: &'v Pitcher,
+    front: &'v Front,
+    transport: &'v mut T,
+    /// Per local vertex, tents pitched at it (owned) or as last heard (ghost).
+    generation: Vec<u32>,
+    /// Candidates to try, and whether each local vertex is one.
+    candidates: Vec<VertexId>,
+    queued: Vec<bool>,
+    order: SplitMix64,
+    /// Owned vertices below the end time.
+    below: usize,
+    /// Per rank, messages sent to it and received from it, and its done count if it said so.
+    sent: Vec<u64>,
+    received: Vec<u64>,
+    done: Vec<Option<u64>>,
+    report: RankReport,
+}
+
+impl<T: Transport> Runner<'_, T> {
+    fn rank(&self) -> Rank {
+        self.view.rank()
+    }
+
+    fn offer(&mut self, v: VertexId) {
+        let t_end = self.pitcher.t_end();
+        if self.view.is_owned(v) && !self.queued[v as usize] && self.front.time(v) < t_end {
+            self.queued[v as usize] = true;
+            self.candidates.push(v);
+        }
+    }
+
+    fn offer_neighbours(&mut self, v: VertexId) {
+        for &w in self.view.mesh().vertex_neighbors(v) {
+            self.offer(w);
+        }
+    }
+
+    /// True when owned `v` is below the end time and first in `(time, global id)` among its
+    /// neighbours on this rank's view.
+    fn is_first(&self, v: VertexId) -> bool {
+        let (t, g) = (self.front.time(v), self.view.global(v));
+        t < self.pitcher.t_end()
+            && self.view.mesh().vertex_neighbors(v).iter().all(|&w| {
+                let tw = self.front.time(w);
+                tw > t || (tw == t && self.view.global(w) > g)
+            })
+    }
+
+    /// A candidate that passes the rule, in seeded random order; drops those that do not (what
+    /// blocks them offers them again when it moves).
+    fn next_ready(&mut self) -> Option<VertexId> {
+        while !self.candidates.is_empty() {
+            let v = self
+                .candidates
+                .swap_remove(self.order.below(self.candidates.len()));
+            self.queued[v as usize] = false;
+            if self.is_first(v) {
+                return Some(v);
+            }
+        }
+        None
+    }
+
+    fn send(&mut self, to: Rank, message: Message) -> Result<(), PitchingError> {
+        self.sent[to as usize] += 1;
+        let rank = self.rank();
+        self.transport
+            .send(to, message)
+            .map_err(|source| PitchingError::Transport { rank, source })
+    }
+
+    fn pitch(&mut self, v: VertexId) -> Result<(), PitchingError> {
+        let rank = self.rank();
+        let t_old = self.front.time(v);
+        let tent = self
+            .pitcher
+            .pitch(self.view.mesh(), self.front, v)
+            .filter(|tent| tent.t_new > t_old);
+        let Some(tent) = tent else {
+            return Err(PitchingError::NoAdvance {
+                rank,
+                vertex: self.view.global(v),
+                time: t_old,
+            });
+        };
+        self.generation[v as usize] += 1;
+        if tent.t_new >= self.pitcher.t_end() {
+            self.below -= 1;
+        }
+        let update = Update {
+            vertex: self.view.global(v),
+            time: tent.t_new,
+            generation: self.generation[v as usize],
+        };
+        for i in 0..self.view.sharers(v).len() {
+            self.send(self.view.sharers(v)[i], Message::Update(update))?;
+            self.report.updates_sent += 1;
+            self.report.update_bytes += crate::transport::UPDATE_BYTES as u64;
+        }
+        self.report.tents.push(Tent {
+            vertex: update.vertex,
+            ..tent
+        });
+        self.offer(v);
+        self.offer_neighbours(v);
+        Ok(())
+    }
+
+    fn handle(&mut self, from: Rank, message: Message) -> Result<(), PitchingError> {
+        let rank = self.rank();
+        match message {
+            Message::Update(u) => {
+                self.received[from as usize] += 1;
+                let w = self
+                    .view
+                    .local(u.vertex)
+                    .filter(|&w| self.view.owner(w) == from)
+                    .ok_or(PitchingError::Stray {
+                        rank,
+                        from,
+                        vertex: u.vertex,
+                    })?;
+                if u.generation > self.generation[w as usize] {
+                    self.generation[w as usize] = u.generation;
+                    self.front.set_time(w, u.time);
+                    self.report.updates_applied += 1;
+                    self.offer_neighbours(w);
+                } else {
+                    self.report.updates_stale += 1;
+                }
+            }
+            Message::Done { sent } => self.done[from as usize] = Some(sent),
+            Message::Abort => return Err(PitchingError::Aborted { rank, by: from }),
+        }
+        Ok(())
+    }
+
+    /// True when this rank is done and has heard all its neighbour ranks say so, with every
+    /// message they announced received.
+    fn finished(&self) -> bool {
+        self.below == 0
+            && self
+                .view
+                .neighbour_ranks()
+                .iter()
+                .all(|&r| self.done[r as usize] == Some(self.received[r as usize]))
+    }
+
+    fn run(&mut self, idle_limit: Duration) -> Result<(), PitchingError> {
+        let rank = self.rank();
+        let transport_error = |source| PitchingError::Transport { rank, source };
+        let mut said_done = false;
+        loop {
+            while let Some((from, message)) =
+                self.transport.receive(Duration::ZERO).map_err(transport_error)?
+            {
+                self.handle(from, message)?;
+            }
+            if let Some(v) = self.next_ready() {
+                self.pitch(v)?;
+                continue;
+            }
+            if self.below == 0 && !said_done {
+                said_done = true;
+                for i in 0..self.view.neighbour_ranks().len() {
+                    let r = self.view.neighbour_ranks()[i];
+                    let sent = self.sent[r as usize];
+                    self.send(r, Message::Done { sent })?;
+                }
+            }
+            if self.finished() {
+                return Ok(());
+            }
+            let start = Instant::now();
+            let message = self.transport.receive(idle_limit).map_err(transport_error)?;
+            self.report.waited += start.elapsed();
+            match message {
+                Some((from, message)) => self.handle(from, message)?,
+                None => {
+                    return Err(PitchingError::Stalled {
+                        rank,
+                        remaining: self.below,
+                        waited: idle_limit,
+                    });
+                }
+            }
+        }
+    }
+}
+
+/// Pitches the owned vertices of `view` to `pitcher`'s end time on `front` (the view's local
+/// front, ghosts included), exchanging updates through `transport`, until this rank and its
+/// neighbour ranks are done. On an error, tells every other rank to stop ([`Message::Abort`]).
+pub fn pitch_rank<T: Transport>(
+    view: &LocalView,
+    pitcher: &Pitcher,
+    front: &Front,
+    transport: &mut T,
+    options: &Options,
+) -> Result<RankReport, PitchingError> {
+    let n = view.mesh().vertices().len();
+    let ranks = transport.ranks();
+    let mut state = Runner {
+        view,
+        pitcher,
+        front,
+        transport,
+        generation: vec![0; n],
+        candidates: Vec::new(),
+        queued: vec![false; n],
+        order: SplitMix64::new(options.seed ^ u64::from(view.rank())),
+        below: view.owned().filter(|&v| front.time(v) < pitcher.t_end()).count(),
+        sent: vec![0; ranks],
+        received: vec![0; ranks],
+        done: vec![None; ranks],
+        report: RankReport {
+            rank: view.rank(),
+            boundary_vertices: view.boundary_vertices(),
+            ..RankReport::default()
+        },
+    };
+    for v in view.owned() {
+        state.offer(v);
+    }
+    match state.run(options.idle_limit) {
+        Ok(()) => Ok(state.report),
+        Err(e) => {
+            abort_others(state.transport);
+            Err(e)
+        }
+    }
+}
+
+/// Runs [`pitch_rank`] for every rank of `partition` on threads of this process, connected by
+/// [`Loopback`] with `delays`, from the global front `start` (s, one time per vertex). Returns
+/// the reports by rank, or the first error by rank that is not an [`PitchingError::Aborted`]
+/// (a rank stopped by another's failure).
+pub fn run_threads(
+    mesh: &Mesh,
+    partition: &Partition,
+    start: &[f64],
+    causality: Causality,
+    delays: LoopbackOptions,
+    options: &Options,
+) -> Result<Vec<RankReport>, PitchingError> {
+    if start.len() != mesh.vertices().len() {
+        return Err(PitchingError::FrontLength {
+            front: start.len(),
+            mesh: mesh.vertices().len(),
+        });
+    }
+    let views = LocalView::all(mesh, partition)?;
+    let mut ranks = Vec::with_capacity(views.len());
+    for view in &views {
+        let pitcher = Pitcher::new(
+            view.mesh(),
+            causality.c_max,
+            causality.safety,
+            causality.t_end,
+        )?;
+        let front = Front::flat(view.mesh().vertices().len(), 0.0);
+        for v in 0..front.len() as VertexId {
+            front.set_time(v, start[view.global(v) as usize]);
+        }
+        ranks.push((view, pitcher, front));
+    }
+    let ends = Loopback::connect(views.len(), delays);
+    let results: Vec<Result<RankReport, PitchingError>> = std::thread::scope(|s| {
+        let handles: Vec<_> = ranks
+            .iter()
+            .zip(ends)
+            .map(|((view, pitcher, front), mut end)| {
+                s.spawn(move || {
+                    catch_unwind(AssertUnwindSafe(|| {
+                        pitch_rank(view, pitcher, front, &mut end, options)
+                    }))
+                    .unwrap_or_else(|payload| {
+                        abort_others(&mut end);
+                        Err(PitchingError::Panic {
+                            rank: view.rank(),
+                            message: panic_message(payload),
+                        })
+                    })
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .enumerate()
+            .map(|(rank, handle)| {
+                handle.join().unwrap_or_else(|payload| {
+                    Err(PitchingError::Panic {
+                        rank: rank as Rank,
+                        message: panic_message(payload),
+                    })
+                })
+            })
+            .collect()
+    });
+    let failure = results
+        .iter()
+        .position(|r| matches!(r, Err(e) if !matches!(e, PitchingError::Aborted { .. })))
+        .or_else(|| results.iter().position(Result::is_err));
+    match failure {
+        Some(i) => Err(results.into_iter().nth(i).expect("found").unwrap_err()),
+        None => Ok(results.into_iter().map(|r| r.expect("no error")).collect()),
+    }
+}
+
+/// Tells every other rank to stop, as far as the transport still can: the error at hand is
+/// what the caller needs to see.
+fn abort_others<T: Transport>(transport: &mut T) {
+    let rank = transport.rank();
+    for r in (0..transport.ranks() as Rank).filter(|&r| r != rank) {
+        let _ = transport.send(r, Message::Abort);
+    }
+}
+
+fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic without a message".to_string())
+}
