@@ -15,11 +15,12 @@ use std::path::{Path, PathBuf};
 const MAX_LINES: usize = 800;
 
 /// The crates' source folders, relative to the workspace root.
-const CRATES: [&str; 5] = [
+const CRATES: [&str; 6] = [
     "mesh/src",
     "solver/src",
     "scheduler/src",
     "engine/src",
+    "distributed/src",
     "src",
 ];
 

@@ -30,5 +30,6 @@ pub mod view;
 
 pub use partition::{Partition, PartitionError, Rank};
 pub use pitching::{Causality, Options, PitchingError, RankReport, pitch_rank, run_threads};
-pub use transport::{Loopback, LoopbackOptions, Message, Transport, TransportError, Update};
+pub use transport::loopback::{Loopback, LoopbackOptions};
+pub use transport::{Message, Transport, TransportError, Update};
 pub use view::{LocalView, ViewError};

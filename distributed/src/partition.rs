@@ -50,7 +50,11 @@ enum Cut {
 
 impl Partition {
     /// A partition of `mesh` (its vertex count) from an owner rank per vertex.
-    pub fn from_owners(mesh: &Mesh, owner: Vec<Rank>, ranks: usize) -> Result<Self, PartitionError> {
+    pub fn from_owners(
+        mesh: &Mesh,
+        owner: Vec<Rank>,
+        ranks: usize,
+    ) -> Result<Self, PartitionError> {
         check_sizes(mesh, ranks)?;
         let vertices = mesh.vertices().len();
         if owner.len() != vertices {
@@ -201,7 +205,11 @@ fn bisect(
     // Prefix weight goal: total * left / ranks, compared exactly as prefix * ranks vs total * left.
     let goal = u128::from(total) * left as u128;
     let (mut prefix, mut best, mut best_miss) = (0u128, left, u128::MAX);
-    for (k, &v) in vertices.iter().enumerate().take(vertices.len() - (ranks - left) + 1) {
+    for (k, &v) in vertices
+        .iter()
+        .enumerate()
+        .take(vertices.len() - (ranks - left) + 1)
+    {
         if k >= left {
             let miss = (prefix * ranks as u128).abs_diff(goal);
             if miss < best_miss {
@@ -212,7 +220,15 @@ fn bisect(
     }
     let (a, b) = vertices.split_at_mut(best);
     bisect(mesh, weights, a, first, left, cut, owner);
-    bisect(mesh, weights, b, first + left as Rank, ranks - left, cut, owner);
+    bisect(
+        mesh,
+        weights,
+        b,
+        first + left as Rank,
+        ranks - left,
+        cut,
+        owner,
+    );
 }
 
 #[cfg(test)]
@@ -227,7 +243,10 @@ mod tests {
             let p = Partition::coordinate(&mesh, ranks).unwrap();
             let imbalance = p.imbalance(&mesh);
             assert!(imbalance <= 1.005, "{ranks} ranks: {imbalance}");
-            assert_eq!(Partition::from_owners(&mesh, p.owners().to_vec(), ranks), Ok(p));
+            assert_eq!(
+                Partition::from_owners(&mesh, p.owners().to_vec(), ranks),
+                Ok(p)
+            );
         }
     }
 
@@ -270,7 +289,10 @@ mod tests {
     #[test]
     fn rejects_bad_partitions() {
         let mesh = rectangle(1, 1, 0.0, 0);
-        assert_eq!(Partition::coordinate(&mesh, 0), Err(PartitionError::NoRanks));
+        assert_eq!(
+            Partition::coordinate(&mesh, 0),
+            Err(PartitionError::NoRanks)
+        );
         assert_eq!(
             Partition::striped(&mesh, 5),
             Err(PartitionError::TooFewVertices {

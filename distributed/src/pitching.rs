@@ -35,7 +35,8 @@ use sdg_mesh::{Front, Mesh, PitchError, Pitcher, Tent, VertexId};
 
 use crate::partition::{Partition, Rank};
 use crate::rng::SplitMix64;
-use crate::transport::{Loopback, LoopbackOptions, Message, Transport, TransportError, Update};
+use crate::transport::loopback::{Loopback, LoopbackOptions};
+use crate::transport::{Message, Transport, TransportError, Update};
 use crate::view::{LocalView, ViewError};
 
 /// How a rank runs.
@@ -273,8 +274,10 @@ impl<T: Transport> Runner<'_, T> {
         let transport_error = |source| PitchingError::Transport { rank, source };
         let mut said_done = false;
         loop {
-            while let Some((from, message)) =
-                self.transport.receive(Duration::ZERO).map_err(transport_error)?
+            while let Some((from, message)) = self
+                .transport
+                .receive(Duration::ZERO)
+                .map_err(transport_error)?
             {
                 self.handle(from, message)?;
             }
@@ -294,7 +297,10 @@ impl<T: Transport> Runner<'_, T> {
                 return Ok(());
             }
             let start = Instant::now();
-            let message = self.transport.receive(idle_limit).map_err(transport_error)?;
+            let message = self
+                .transport
+                .receive(idle_limit)
+                .map_err(transport_error)?;
             self.report.waited += start.elapsed();
             match message {
                 Some((from, message)) => self.handle(from, message)?,
@@ -331,7 +337,10 @@ pub fn pitch_rank<T: Transport>(
         candidates: Vec::new(),
         queued: vec![false; n],
         order: SplitMix64::new(options.seed ^ u64::from(view.rank())),
-        below: view.owned().filter(|&v| front.time(v) < pitcher.t_end()).count(),
+        below: view
+            .owned()
+            .filter(|&v| front.time(v) < pitcher.t_end())
+            .count(),
         sent: vec![0; ranks],
         received: vec![0; ranks],
         done: vec![None; ranks],

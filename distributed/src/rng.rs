@@ -43,6 +43,9 @@ mod tests {
             c[d] += 1;
             c
         });
-        assert!(counts.iter().all(|&c| (100..190).contains(&c)), "{counts:?}");
+        assert!(
+            counts.iter().all(|&c| (100..190).contains(&c)),
+            "{counts:?}"
+        );
     }
 }

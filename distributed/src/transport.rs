@@ -5,19 +5,17 @@
 //! newer one), "I am done" with the count of messages sent before it ([`Message::Done`], so that
 //! termination needs no ordering between messages), and "stop, I failed"
 //! ([`Message::Abort`]). A [`Transport`] sends them without blocking and receives them with a
-//! timeout. [`Loopback`] carries them between threads of one process, with seeded random
+//! timeout. [`loopback::Loopback`] carries them between threads of one process, with seeded random
 //! delays; an MPI transport (one communication thread per rank calling MPI) is not built yet
 //! and would implement the same trait over [`Message::encode`]'s bytes.
 
-mod loopback;
+pub mod loopback;
 
 use std::time::Duration;
 
 use sdg_mesh::VertexId;
 
 use crate::partition::Rank;
-
-pub use loopback::{Loopback, LoopbackOptions};
 
 /// A vertex's front time after a tent at it, sent by its owner to the ranks that hold it as a
 /// ghost.

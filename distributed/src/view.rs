@@ -190,7 +190,9 @@ impl LocalView {
 
     /// Owned vertices that another rank holds as a ghost.
     pub fn boundary_vertices(&self) -> usize {
-        self.owned().filter(|&v| !self.sharers(v).is_empty()).count()
+        self.owned()
+            .filter(|&v| !self.sharers(v).is_empty())
+            .count()
     }
 }
 
