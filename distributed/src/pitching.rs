@@ -319,6 +319,10 @@ impl<T: Transport> Runner<'_, T> {
 /// Pitches the owned vertices of `view` to `pitcher`'s end time on `front` (the view's local
 /// front, ghosts included), exchanging updates through `transport`, until this rank and its
 /// neighbour ranks are done. On an error, tells every other rank to stop ([`Message::Abort`]).
+///
+/// `pitcher` is [`Pitcher::new`] on `view.mesh()`: its budgets are then bitwise the whole
+/// mesh's. Not [`Pitcher::for_refinement`] on the view, whose margin is a minimum over the mesh
+/// it is given (it must be the same on every rank).
 pub fn pitch_rank<T: Transport>(
     view: &LocalView,
     pitcher: &Pitcher,
