@@ -562,7 +562,7 @@ fn study(args: &StudyArgs) -> Result<(), EngineError> {
                 "{:>4}  {:<10}  {}",
                 case.index,
                 status.name(),
-                case.label(&plan)
+                case.label(&plan.axes)
             );
         }
         return Ok(());

@@ -3,8 +3,19 @@
 
 use std::path::{Path, PathBuf};
 
-use super::file::{Axis, Study};
 use crate::config::Config;
+
+/// One axis of a study: a config key and its values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Axis {
+    /// The dotted config key, as `--set` takes it.
+    pub key: String,
+    /// Its values, in order.
+    pub values: Vec<toml::Value>,
+    /// True for a `{ draws = N, first = F }` axis (the integers `F`, ..., `F + N - 1`): the
+    /// statistics are taken over it.
+    pub draws: bool,
+}
 
 /// One case of a study: a value of every axis.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,9 +34,10 @@ pub struct Case {
 }
 
 impl Case {
-    /// `key=value` of each axis, comma-separated (`adapt.min_edge=5e-6, fracture.seed=3`).
-    pub fn label(&self, study: &Study) -> String {
-        label(&study.axes, &self.values)
+    /// `key=value` of each of the study's `axes`, comma-separated (`adapt.min_edge=5e-6,
+    /// fracture.seed=3`).
+    pub fn label(&self, axes: &[Axis]) -> String {
+        label(axes, &self.values)
     }
 }
 
@@ -35,6 +47,34 @@ pub(super) fn label(axes: &[Axis], values: &[toml::Value]) -> String {
         .map(|(a, v)| format!("{}={}", a.key, value_text(v)))
         .collect();
     parts.join(", ")
+}
+
+/// A group of cases: those with the same values of the axes other than the draws.
+#[derive(Debug)]
+pub(super) struct Group {
+    /// The non-draws axes' values (in the order of the axes; the draws' places skipped).
+    pub values: Vec<toml::Value>,
+    /// The cases in the group.
+    pub cases: Vec<usize>,
+}
+
+/// The groups of `cases` of a study with `axes` by their non-draws axis values, in the order they first appear.
+pub(super) fn groups(axes: &[Axis], cases: &[Case]) -> Vec<Group> {
+    let mut groups: Vec<Group> = Vec::new();
+    for case in cases {
+        let values: Vec<toml::Value> = (axes.iter().zip(&case.values))
+            .filter(|(a, _)| !a.draws)
+            .map(|(_, v)| v.clone())
+            .collect();
+        match groups.iter_mut().find(|g| g.values == values) {
+            Some(g) => g.cases.push(case.index),
+            None => groups.push(Group {
+                values,
+                cases: vec![case.index],
+            }),
+        }
+    }
+    groups
 }
 
 /// The value combinations of the product of `axes`, in case order: the first axis outermost,
@@ -57,11 +97,15 @@ pub(super) fn product(axes: &[Axis]) -> Vec<Vec<toml::Value>> {
     combos
 }
 
-/// The overrides of a case with axis values `values`, and the study key behind each.
-pub(super) fn overrides(study: &Study, values: &[toml::Value]) -> (Vec<String>, Vec<String>) {
-    let set = (study.set.iter()).map(|(k, v)| (k, v, format!("set.\"{k}\"")));
-    let axes =
-        (study.axes.iter().zip(values)).map(|(a, v)| (&a.key, v, format!("axes.\"{}\"", a.key)));
+/// The overrides of a case of a study with overrides `set` and `axes` whose axis values are
+/// `values`, and the study key behind each.
+pub(super) fn overrides(
+    set: &[(String, toml::Value)],
+    axes: &[Axis],
+    values: &[toml::Value],
+) -> (Vec<String>, Vec<String>) {
+    let set = set.iter().map(|(k, v)| (k, v, format!("set.\"{k}\"")));
+    let axes = (axes.iter().zip(values)).map(|(a, v)| (&a.key, v, format!("axes.\"{}\"", a.key)));
     set.chain(axes)
         .map(|(key, value, source)| (format!("{key}={}", toml_text(value)), source))
         .unzip()
@@ -146,17 +190,12 @@ mod tests {
         ]);
         assert_eq!(toml_text(&list), "[4e7, 0.0, 0.25, inf]");
         // Overrides in TOML syntax: strings quoted, floats exact.
-        let study = Study {
-            file: "s.toml".into(),
-            base: "b.toml".into(),
-            metrics: vec!["patches".into()],
-            axes: vec![
-                axis("mesh.diagonal", &[Text("right".into())]),
-                axis("x", &[Float(0.1)]),
-            ],
-            set: vec![("output.png".into(), Boolean(false))],
-        };
-        let (specs, sources) = overrides(&study, &[Text("right".into()), Float(0.1)]);
+        let axes = [
+            axis("mesh.diagonal", &[Text("right".into())]),
+            axis("x", &[Float(0.1)]),
+        ];
+        let set = [("output.png".to_string(), Boolean(false))];
+        let (specs, sources) = overrides(&set, &axes, &[Text("right".into()), Float(0.1)]);
         assert_eq!(
             specs,
             ["output.png=false", "mesh.diagonal=\"right\"", "x=0.1"]

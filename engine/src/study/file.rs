@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::cases::{self, Case};
+use super::cases::{self, Axis, Case};
 use super::error::StudyError;
 use super::metrics::check_metric;
 use crate::config::LoadedConfig;
@@ -22,18 +22,6 @@ struct Raw {
     axes: BTreeMap<Spanned<String>, toml::Value>,
     #[serde(default)]
     set: BTreeMap<Spanned<String>, toml::Value>,
-}
-
-/// One axis of a study: a config key and its values.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Axis {
-    /// The dotted config key, as `--set` takes it.
-    pub key: String,
-    /// Its values, in order.
-    pub values: Vec<toml::Value>,
-    /// True for a `{ draws = N, first = F }` axis (the integers `F`, ..., `F + N - 1`): the
-    /// statistics are taken over it.
-    pub draws: bool,
 }
 
 /// A checked study file.
@@ -125,7 +113,7 @@ impl Study {
     pub fn prepare(&self) -> Result<Vec<Case>, StudyError> {
         let mut out = Vec::new();
         for (index, values) in cases::product(&self.axes).into_iter().enumerate() {
-            let (overrides, sources) = cases::overrides(self, &values);
+            let (overrides, sources) = cases::overrides(&self.set, &self.axes, &values);
             let loaded = LoadedConfig::load(&self.base, &overrides).map_err(|e| {
                 let key = (sources.iter().zip(&overrides))
                     .find(|(_, spec)| e.file == format!("--set {spec}"))

@@ -19,12 +19,12 @@ mod slurm;
 mod stats;
 mod table;
 
-pub use cases::{Case, case_dir, config_hash};
+pub use cases::{Axis, Case, case_dir, config_hash};
 pub use error::StudyError;
-pub use file::{Axis, Study};
+pub use file::Study;
 pub use metrics::{metric_keys, metric_value};
-pub use record::{CaseStatus, case_status};
+pub use record::{CaseStatus, Collected, case_status};
 pub use runner::{PARENT_ENV, RunPlan, Tally, run_cases};
 pub use slurm::write_slurm;
 pub use stats::{Stats, t_975};
-pub use table::{Collected, collect};
+pub use table::collect;

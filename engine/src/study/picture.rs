@@ -6,11 +6,10 @@
 
 use std::path::Path;
 
-use super::cases::{Case, value_text};
+use super::cases::{Case, Group, value_text};
 use super::file::Study;
-use super::record::CaseStatus;
+use super::record::{CaseStatus, Collected};
 use super::stats::Stats;
-use super::table::{Collected, Group};
 use crate::error::EngineError;
 use crate::plot::{LineChart, LineStyle};
 

@@ -52,6 +52,23 @@ impl CaseStatus {
     }
 }
 
+/// What the case folders hold, case by case.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Collected {
+    /// The state of each case.
+    pub statuses: Vec<CaseStatus>,
+    /// Each case's value of each metric (in the study's order): `None` where the case is not
+    /// done or its summary has no value.
+    pub values: Vec<Vec<Option<f64>>>,
+}
+
+impl Collected {
+    /// Cases in `status`.
+    pub fn count(&self, status: fn(&CaseStatus) -> bool) -> usize {
+        self.statuses.iter().filter(|s| status(s)).count()
+    }
+}
+
 /// The file a case's record is kept in.
 pub(super) const RECORD: &str = "case.json";
 /// The summary a finished run writes.

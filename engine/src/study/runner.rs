@@ -145,7 +145,7 @@ pub fn run_cases(
                 say(format_args!(
                     "case {} ({}): {} in {}; {ended} of {} run, {} failed, {} elapsed{left}",
                     case.index,
-                    case.label(study),
+                    case.label(&study.axes),
                     if code == 0 { "finished" } else { "failed" },
                     duration(seconds),
                     todo.len(),
@@ -216,7 +216,7 @@ fn report_failure(study: &Study, case: &Case, dir: &Path, code: i32) {
     say(format_args!(
         "case {} ({}) failed: sdg run exited {code}; log {}{}",
         case.index,
-        case.label(study),
+        case.label(&study.axes),
         log.display(),
         if tail.is_empty() {
             String::new()

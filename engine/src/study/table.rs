@@ -5,59 +5,14 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
-use super::cases::{self, Case, case_dir};
+use super::cases::{self, Case, Group, case_dir, groups};
 use super::file::Study;
 use super::metrics::metric_value;
 use super::picture;
-use super::record::{self, CaseStatus, SUMMARY};
+use super::record::{self, CaseStatus, Collected, SUMMARY};
 use super::stats::Stats;
 use crate::error::EngineError;
 use crate::output::write_atomic;
-
-/// What the case folders hold, case by case.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Collected {
-    /// The state of each case.
-    pub statuses: Vec<CaseStatus>,
-    /// Each case's value of each metric (in the study's order): `None` where the case is not
-    /// done or its summary has no value.
-    pub values: Vec<Vec<Option<f64>>>,
-}
-
-impl Collected {
-    /// Cases in `status`.
-    pub fn count(&self, status: fn(&CaseStatus) -> bool) -> usize {
-        self.statuses.iter().filter(|s| status(s)).count()
-    }
-}
-
-/// A group of cases: those with the same values of the axes other than the draws.
-#[derive(Debug)]
-pub(super) struct Group {
-    /// The non-draws axes' values (in the order of the axes; the draws' places skipped).
-    pub values: Vec<toml::Value>,
-    /// The cases in the group.
-    pub cases: Vec<usize>,
-}
-
-/// The groups of `cases` by their non-draws axis values, in the order they first appear.
-pub(super) fn groups(study: &Study, cases: &[Case]) -> Vec<Group> {
-    let mut groups: Vec<Group> = Vec::new();
-    for case in cases {
-        let values: Vec<toml::Value> = (study.axes.iter().zip(&case.values))
-            .filter(|(a, _)| !a.draws)
-            .map(|(_, v)| v.clone())
-            .collect();
-        match groups.iter_mut().find(|g| g.values == values) {
-            Some(g) => g.cases.push(case.index),
-            None => groups.push(Group {
-                values,
-                cases: vec![case.index],
-            }),
-        }
-    }
-    groups
-}
 
 /// Reads every case's folder under `out` and writes `study.csv`, `study.json` and `study.png`
 /// there. Nothing runs; cases not done have empty metrics.
@@ -80,7 +35,7 @@ pub fn collect(study: &Study, cases: &[Case], out: &Path) -> Result<Collected, E
         collected.values.push(values);
     }
     write_atomic(out, "study.csv", csv(study, cases, &collected).as_bytes())?;
-    let groups = groups(study, cases);
+    let groups = groups(&study.axes, cases);
     let json = summary_json(study, &groups, &collected);
     let text = serde_json::to_string_pretty(&json).expect("JSON serializes") + "\n";
     write_atomic(out, "study.json", text.as_bytes())?;
