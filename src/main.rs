@@ -40,6 +40,41 @@ enum Command {
     Plot(PlotArgs),
     /// Predict the speedup on more workers by replaying a trace of `sdg run --trace`.
     Scaling(ScalingArgs),
+    /// Run a study: a base config over the product of axes of config values, each case an
+    /// `sdg run`; then gather their metrics into study.csv, study.json and study.png.
+    Study(StudyArgs),
+}
+
+// `study`: a study file, where its cases go and how they run.
+#[derive(Debug, Args)]
+struct StudyArgs {
+    /// The study file (TOML: base, metrics, [axes], [set]).
+    study: PathBuf,
+    /// Output folder [default: out/studies/STEM, STEM the study file's name without .toml].
+    #[arg(long, value_name = "DIR")]
+    output: Option<PathBuf>,
+    /// Cases run at once.
+    #[arg(long, value_name = "J", default_value = "1")]
+    jobs: NonZeroUsize,
+    /// Worker threads of each case [default: the available cores over --jobs; 1 with --slurm].
+    #[arg(long, value_name = "N")]
+    threads: Option<NonZeroUsize>,
+    /// Run only case K (from 0, as `--dry-run` lists them; a Slurm array task id) and gather
+    /// nothing; the exit code is that case's.
+    #[arg(long, value_name = "K", conflicts_with_all = ["slurm", "collect", "dry_run"])]
+    case: Option<usize>,
+    /// Write DIR/study.slurm, a Slurm array job whose task K runs case K; submit nothing.
+    #[arg(long, conflicts_with_all = ["collect", "dry_run"])]
+    slurm: bool,
+    /// Run nothing: gather the finished cases into study.csv, study.json and study.png.
+    #[arg(long, conflicts_with = "dry_run")]
+    collect: bool,
+    /// Run nothing: list the cases, their overrides and their state.
+    #[arg(long)]
+    dry_run: bool,
+    /// Print nothing but errors (failed cases included).
+    #[arg(long)]
+    quiet: bool,
 }
 
 // `scaling`: a trace and the worker counts to replay it on.
@@ -197,7 +232,7 @@ fn main() -> ExitCode {
     let (level, format) = match &cli.command {
         Command::Run(RunArgs { job, .. }) | Command::Mesh(job) => (job.log_level, job.log_format),
         // No log options: warnings as text, should there be any.
-        Command::Validate(_) | Command::Plot(_) | Command::Scaling(_) => {
+        Command::Validate(_) | Command::Plot(_) | Command::Scaling(_) | Command::Study(_) => {
             (tracing::Level::WARN, LogFormat::Text)
         }
     };
@@ -219,6 +254,7 @@ fn main() -> ExitCode {
         Command::Validate(args) => validate(args),
         Command::Plot(args) => plot(args),
         Command::Scaling(args) => scaling(args),
+        Command::Study(args) => study(args),
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
@@ -417,6 +453,7 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
     }
     let control = Arc::new(Control::default());
     listen_to_signals(control.clone())?;
+    exit_with_study()?;
     let options = RunOptions {
         restart: args.restart.clone(),
         max_wall_time_s: args.max_wall_time,
@@ -472,6 +509,183 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
         }
     }
     Ok(())
+}
+
+/// A case of `sdg study` (the study's process id in [`sdg_engine::study::PARENT_ENV`]) exits
+/// at once when the study is gone: a study killed outright leaves no runs behind. Files are
+/// written whole or not at all, so what the run leaves is as after SIGKILL.
+fn exit_with_study() -> Result<(), EngineError> {
+    let Some(parent) = std::env::var(sdg_engine::study::PARENT_ENV)
+        .ok()
+        .and_then(|p| p.parse::<u32>().ok())
+    else {
+        return Ok(());
+    };
+    std::thread::Builder::new()
+        .name("study watch".into())
+        .spawn(move || {
+            while std::os::unix::process::parent_id() == parent {
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+            note!("error: the study that started this run is gone; exiting");
+            std::process::exit(1);
+        })
+        .map_err(|e| EngineError::Runtime(format!("watching the study: {e}")))?;
+    Ok(())
+}
+
+fn study(args: &StudyArgs) -> Result<(), EngineError> {
+    use sdg_engine::study::{self, CaseStatus, RunPlan};
+    let plan = study::Study::load(&args.study)?;
+    let cases = plan.prepare()?;
+    let out =
+        (args.output.clone()).unwrap_or_else(|| PathBuf::from("out/studies").join(plan.stem()));
+    let program = std::env::current_exe()
+        .map_err(|e| EngineError::Runtime(format!("cannot find the sdg binary: {e}")))?;
+    if args.dry_run {
+        let common = &cases[0].overrides[..plan.set.len()];
+        say!(
+            "{}: {} cases of {} in {}{}",
+            args.study.display(),
+            cases.len(),
+            plan.base.display(),
+            out.display(),
+            match common.is_empty() {
+                true => String::new(),
+                false => format!(", each with --set {}", common.join(" --set ")),
+            }
+        );
+        for case in &cases {
+            let dir = study::case_dir(&out, case.index, cases.len());
+            let status = study::case_status(case, &dir)?;
+            say!(
+                "{:>4}  {:<10}  {}",
+                case.index,
+                status.name(),
+                case.label(&plan.axes)
+            );
+        }
+        return Ok(());
+    }
+    if args.slurm {
+        let threads = args.threads.map_or(1, NonZeroUsize::get);
+        let script = study::write_slurm(&plan, cases.len(), &program, &out, threads)?;
+        if !args.quiet {
+            say!(
+                "{}: {} cases, task K runs case K. Submit with
+  sbatch {}
+then gather                  them with
+  sdg study {} --collect --output {}",
+                script.display(),
+                cases.len(),
+                script.display(),
+                args.study.display(),
+                out.display()
+            );
+        }
+        return Ok(());
+    }
+    if !args.collect {
+        let selected: Vec<usize> = match args.case {
+            Some(k) if k >= cases.len() => {
+                return Err(EngineError::Input(format!(
+                    "--case {k}: {} has {} cases, 0 to {}",
+                    args.study.display(),
+                    cases.len(),
+                    cases.len() - 1
+                )));
+            }
+            Some(k) => vec![k],
+            None => (0..cases.len()).collect(),
+        };
+        sdg_engine::output::check_writable(&out, &format!("--output {}", out.display()))?;
+        let threads = args.threads.map_or_else(
+            || {
+                let cores = std::thread::available_parallelism().map_or(1, NonZeroUsize::get);
+                (cores / args.jobs.get()).max(1)
+            },
+            NonZeroUsize::get,
+        );
+        let progress = !args.quiet && args.case.is_none();
+        let estimate_s = first_case_estimate(&plan, &cases[selected[0]], threads, progress)?;
+        let run_plan = RunPlan {
+            program,
+            out: out.clone(),
+            jobs: args.jobs.get(),
+            threads,
+            progress,
+            estimate_s,
+        };
+        let tally = study::run_cases(&plan, &cases, &selected, &run_plan)?;
+        if args.case.is_some() {
+            return match tally.failed.first() {
+                Some(&(k, code)) => Err(EngineError::CasesFailed {
+                    message: format!("case {k} failed: sdg run exited {code}"),
+                    code: u8::try_from(code).unwrap_or(1),
+                }),
+                None => Ok(()),
+            };
+        }
+        if !tally.failed.is_empty() {
+            // Gather what finished, then fail.
+            study::collect(&plan, &cases, &out)?;
+            let list: Vec<String> = (tally.failed.iter())
+                .map(|(k, code)| format!("{k} (exit {code})"))
+                .collect();
+            return Err(EngineError::CasesFailed {
+                message: format!(
+                    "{} of {} cases failed: {}; the others are gathered in {}",
+                    list.len(),
+                    cases.len(),
+                    list.join(", "),
+                    out.join("study.csv").display()
+                ),
+                code: 1,
+            });
+        }
+    }
+    let collected = study::collect(&plan, &cases, &out)?;
+    if !args.quiet {
+        let done = collected.count(|s| *s == CaseStatus::Done);
+        say!(
+            "{done} of {} cases finished; {}, study.json and study.png in {}",
+            cases.len(),
+            "study.csv",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Sets up the problem of `case` (checking its mesh, boundaries and probes, as `sdg validate`
+/// does: a base config that does not set up is refused before anything runs) and, when
+/// `estimate`, returns the estimated wall time of its run on `threads` threads, s.
+fn first_case_estimate(
+    plan: &sdg_engine::Study,
+    case: &sdg_engine::study::Case,
+    threads: usize,
+    estimate: bool,
+) -> Result<Option<f64>, EngineError> {
+    let loaded = LoadedConfig::load(&plan.base, &case.overrides)?;
+    let refused = |e: EngineError| match e.exit_code() {
+        2 => EngineError::Study(sdg_engine::StudyError {
+            file: plan.file.display().to_string(),
+            key: Some("base".into()),
+            reason: format!("case {}: {e}", case.index),
+        }),
+        _ => e,
+    };
+    let problem = Problem::setup(loaded).map_err(refused)?;
+    if !estimate {
+        return Ok(None);
+    }
+    let options = RunOptions {
+        threads: Some(threads),
+        ..RunOptions::default()
+    };
+    Ok(sdg_engine::estimate_job(&problem, &options)
+        .ok()
+        .map(|e| e.wall_time_s))
 }
 
 fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {

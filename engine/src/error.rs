@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use crate::config::ConfigError;
+use crate::study::StudyError;
 
 /// Why a command failed.
 #[derive(Debug, thiserror::Error)]
@@ -11,6 +12,9 @@ pub enum EngineError {
     /// The configuration is invalid.
     #[error(transparent)]
     Config(#[from] ConfigError),
+    /// The study file is invalid, or a case's config is.
+    #[error(transparent)]
+    Study(#[from] StudyError),
     /// The mesh file of `config` (its `mesh.path`) cannot be read or is not a valid
     /// triangulation.
     #[error("{}: mesh.path: {source}", config.display())]
@@ -52,17 +56,26 @@ pub enum EngineError {
         /// The checkpoint file.
         checkpoint: PathBuf,
     },
+    /// Cases of a study failed (each reported with the end of its log as it ended).
+    #[error("{message}")]
+    CasesFailed {
+        /// Which cases and how.
+        message: String,
+        /// The exit code: that of the only case run (`sdg study --case K`), else 1.
+        code: u8,
+    },
 }
 
 impl EngineError {
-    /// Process exit code: 2 for invalid input (config, mesh, input file, a checkpoint that
-    /// cannot be restarted from), 1 for a runtime failure, 3 for a run checkpointed and stopped
-    /// ("resubmit me").
+    /// Process exit code: 2 for invalid input (config, study, mesh, input file, a checkpoint
+    /// that cannot be restarted from), 1 for a runtime failure, 3 for a run checkpointed and
+    /// stopped ("resubmit me"); a study's failed cases: that of `sdg study --case K`'s case.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Self::Config(_) | Self::Mesh { .. } | Self::Input(_) => 2,
+            Self::Config(_) | Self::Study(_) | Self::Mesh { .. } | Self::Input(_) => 2,
             Self::Io { .. } | Self::Runtime(_) | Self::Plot(_) => 1,
             Self::Checkpointed { .. } => 3,
+            Self::CasesFailed { code, .. } => *code,
         }
     }
 

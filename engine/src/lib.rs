@@ -14,6 +14,7 @@ pub mod plot;
 pub mod problem;
 pub mod progress;
 pub mod solve;
+pub mod study;
 pub mod trace;
 
 pub use config::{Config, ConfigError, LoadedConfig};
@@ -26,3 +27,4 @@ pub use problem::Problem;
 pub use solve::{Control, RunSummary, estimate_job, solve_job};
 #[doc(hidden)]
 pub use solve::{Live, solve_job_with};
+pub use study::{Study, StudyError};

@@ -20,6 +20,8 @@ pub enum LineStyle {
     /// A thin grey line that takes no colour of the palette: context behind the coloured series
     /// (e.g. the many short branches of a crack network).
     Faint,
+    /// A dot at each point, no line (values of separate runs).
+    Markers,
 }
 
 /// The colour of [`LineStyle::Faint`] series.
@@ -65,6 +67,7 @@ pub struct LineChart {
     x_label: String,
     y_label: String,
     series: Vec<Series>,
+    x_range: Option<(f64, f64)>,
     y_range: Option<(f64, f64)>,
 }
 
@@ -76,8 +79,16 @@ impl LineChart {
             x_label: x_label.into(),
             y_label: y_label.into(),
             series: Vec::new(),
+            x_range: None,
             y_range: None,
         }
+    }
+
+    /// Fixes the x axis to `[lo, hi]` (`lo < hi`, both finite) instead of the range of the
+    /// points (e.g. with a margin, so that dots at the ends are not on the frame).
+    pub fn x_range(mut self, lo: f64, hi: f64) -> Self {
+        self.x_range = (lo.is_finite() && hi.is_finite() && lo < hi).then_some((lo, hi));
+        self
     }
 
     /// Fixes the y axis to `[lo, hi]` (`lo < hi`, both finite) instead of the range of the
@@ -109,7 +120,9 @@ impl LineChart {
                 .flat_map(|s| &s.points)
                 .filter(|p| p.0.is_finite() && p.1.is_finite())
         };
-        let (x0, x1) = widen(finite_range(finite().map(|p| p.0)).unwrap_or((0.0, 1.0)));
+        let (x0, x1) = self
+            .x_range
+            .unwrap_or_else(|| widen(finite_range(finite().map(|p| p.0)).unwrap_or((0.0, 1.0))));
         let (y0, y1) = self
             .y_range
             .unwrap_or_else(|| widen(finite_range(finite().map(|p| p.1)).unwrap_or((0.0, 1.0))));
@@ -162,6 +175,10 @@ impl LineChart {
                             run.windows(2)
                                 .map(|w| PathElement::new([w[0], w[1]], style)),
                         ),
+                        LineStyle::Markers => chart.draw_series(
+                            run.iter()
+                                .map(|&p| Circle::new(p, width + 2, style.filled())),
+                        ),
                         LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(
                             run,
                             (0.8 * f) as u32,
@@ -172,11 +189,18 @@ impl LineChart {
                     .map_err(plot_error)?;
                     if !labelled {
                         labelled = true;
-                        let dashed = s.style == LineStyle::Dashed;
-                        drawn.label(s.name.as_str()).legend(move |(x, y)| {
-                            let end = if dashed { x + 8 } else { x + 20 };
-                            PathElement::new([(x, y), (end, y)], style)
-                        });
+                        let kind = s.style;
+                        drawn
+                            .label(s.name.as_str())
+                            .legend(move |(x, y)| match kind {
+                                LineStyle::Markers => {
+                                    Circle::new((x + 10, y), width + 2, style.filled()).into_dyn()
+                                }
+                                LineStyle::Dashed => {
+                                    PathElement::new([(x, y), (x + 8, y)], style).into_dyn()
+                                }
+                                _ => PathElement::new([(x, y), (x + 20, y)], style).into_dyn(),
+                            });
                     }
                 }
             }
@@ -310,6 +334,22 @@ mod tests {
         assert!(a > 1000, "{a}");
         // Dashed: fewer pixels than a solid line of the same length would have.
         assert!(b > 300 && b < a, "{b} {a}");
+    }
+
+    #[test]
+    fn markers_are_dots_even_alone() {
+        let image = LineChart::new("draws", "seed", "t (us)")
+            .series(
+                "draws",
+                &[(1.0, 2.0), (2.0, 2.5), (3.0, f64::NAN)],
+                LineStyle::Markers,
+            )
+            .series("one", &[(2.0, 2.2)], LineStyle::Markers)
+            .render((600, 400))
+            .unwrap();
+        let (a, b) = (count(&image, PALETTE[0]), count(&image, PALETTE[1]));
+        assert!(a > 40 && a < 400, "{a}");
+        assert!(b > 20 && b < 200, "{b}");
     }
 
     #[test]
