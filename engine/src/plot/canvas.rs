@@ -88,7 +88,7 @@ impl Image {
         Ok(bytes)
     }
 
-    /// Writes the image as PNG to `path`, atomically (see [`write_atomic`]).
+    /// Writes the image as PNG to `path`, atomically (see [`write_atomic`]); its folder must exist.
     pub fn write_png(&self, path: &Path) -> Result<(), EngineError> {
         let name = path
             .file_name()
@@ -99,6 +99,14 @@ impl Image {
             _ => Path::new("."),
         };
         write_atomic(dir, name, &self.to_png()?).map(drop)
+    }
+}
+
+/// Makes the folder of `path`, a picture `sdg plot` is asked to write (`--out`).
+pub(super) fn make_folder(path: &Path) -> Result<(), EngineError> {
+    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(dir) => std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e)),
+        None => Ok(()),
     }
 }
 
