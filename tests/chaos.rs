@@ -47,7 +47,10 @@ impl Case {
 
     /// The same run without periodic checkpoints.
     fn without_checkpoints(&self) -> Self {
-        let kept = self.overrides.iter().filter(|o| !o.starts_with("checkpoint."));
+        let kept = self
+            .overrides
+            .iter()
+            .filter(|o| !o.starts_with("checkpoint."));
         Self {
             config: self.config,
             overrides: kept.cloned().collect(),
@@ -72,7 +75,9 @@ impl Case {
         restart: Option<&Path>,
         fault: Option<&str>,
     ) -> Command {
-        let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(self.config);
+        let config = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("configs")
+            .join(self.config);
         let mut command = Command::new(env!("CARGO_BIN_EXE_sdg"));
         command
             .arg("run")
@@ -242,7 +247,10 @@ fn chaos(case: &Case, k: u64, kills: usize) -> (usize, usize) {
             _ => panic!("{}: {what} ({log:?}): {err}", case.config),
         }
     }
-    eprintln!("{}: {made} kills, {restarts} restarts: {log:?}", case.config);
+    eprintln!(
+        "{}: {made} kills, {restarts} restarts: {log:?}",
+        case.config
+    );
     assert_eq!(
         state_hash(out),
         state_hash(reference.path()),
@@ -270,7 +278,10 @@ fn killed_and_restarted_runs_end_as_uninterrupted_ones() {
         let (made, restarted) = chaos(&Case::new(config), k as u64, 2);
         (kills, restarts) = (kills + made, restarts + restarted);
     }
-    assert!(kills >= 5 && restarts >= 3, "{kills} kills, {restarts} restarts");
+    assert!(
+        kills >= 5 && restarts >= 3,
+        "{kills} kills, {restarts} restarts"
+    );
 }
 
 /// The long variant: eight configs (adaptivity and friction too), four kills each.
@@ -292,7 +303,10 @@ fn killed_and_restarted_runs_end_as_uninterrupted_ones_many_times() {
         let (made, restarted) = chaos(&Case::new(config), 100 + k as u64, 4);
         (kills, restarts) = (kills + made, restarts + restarted);
     }
-    assert!(kills >= 20 && restarts >= 10, "{kills} kills, {restarts} restarts");
+    assert!(
+        kills >= 20 && restarts >= 10,
+        "{kills} kills, {restarts} restarts"
+    );
 }
 
 /// SIGTERM as soon as sdg listens (first thing), during set-up: on a 128 x 128 mesh set-up
@@ -312,7 +326,10 @@ fn sigterm_during_set_up_stops_with_a_checkpoint() {
         let folder = dir.path().join("checkpoints");
         assert_eq!(checkpoints(&folder).len(), 1);
         if first {
-            assert!(err.contains("stopped at t = 0e0 s with checkpoint"), "{err}");
+            assert!(
+                err.contains("stopped at t = 0e0 s with checkpoint"),
+                "{err}"
+            );
             continue;
         }
         let reference = tempfile::tempdir().unwrap();

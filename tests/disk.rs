@@ -103,7 +103,10 @@ fn a_full_disk_during_a_checkpoint_keeps_the_previous_one_usable() {
         names(&folder),
         ["checkpoint_000000.sdgc", "checkpoint_000001.sdgc"]
     );
-    assert!(!out.join("summary.json").exists(), "a failed run has no summary");
+    assert!(
+        !out.join("summary.json").exists(),
+        "a failed run has no summary"
+    );
     restart_ends_as(&out, &folder, &dir.path().join("more"), &expected);
 }
 
@@ -129,7 +132,9 @@ fn an_output_file_that_cannot_be_written_ends_the_run_with_exit_1() {
         );
         let left = names(&out);
         assert!(
-            !left.iter().any(|n| n == "summary.json" || n.ends_with(".tmp")),
+            !left
+                .iter()
+                .any(|n| n == "summary.json" || n.ends_with(".tmp")),
             "{fault}: {left:?}"
         );
         let folder = out.join("checkpoints");
