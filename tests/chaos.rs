@@ -224,7 +224,7 @@ fn chaos(case: &Case, k: u64, kills: usize) -> (usize, usize) {
             assert_eq!(code, 0, "{}: the last run ({log:?}): {err}", case.config);
             break;
         }
-        let sigkill = draws.next() % 2 == 0;
+        let sigkill = draws.next().is_multiple_of(2);
         // Anywhere in the first half of an uninterrupted run's time: most segments die.
         let after = wall.mul_f64(0.5 * draws.unit());
         if !sigkill {

@@ -30,7 +30,8 @@ impl Slurm {
             ("squeue", r#"cat "$FAKE_SLURM/left""#),
             (
                 "sbatch",
-                r#"echo "SDG_RESUBMIT=${SDG_RESUBMIT:-} $*" >>"$FAKE_SLURM/sbatch.log"; echo "Submitted batch job 999""#,
+                r#"echo "SDG_RESUBMIT=${SDG_RESUBMIT:-} $*" >>"$FAKE_SLURM/sbatch.log"
+echo "Submitted batch job 999""#,
             ),
             ("scontrol", r#"echo "$*" >>"$FAKE_SLURM/scontrol.log""#),
         ];

@@ -96,10 +96,7 @@ mod tests {
             Fault::parse(snapshots, "snapshot_0003.vtu"),
             Some(Fault::ReadOnly)
         );
-        assert_eq!(
-            Fault::parse(snapshots, "snapshots.pvd"),
-            Some(Fault::ReadOnly)
-        );
+        assert_eq!(Fault::parse(snapshots, "snapshots.pvd"), None);
         assert_eq!(Fault::parse(snapshots, "history.csv"), None);
         assert_eq!(Fault::parse("slow-write:*", "a.csv"), Some(Fault::Slow));
         assert_eq!(Fault::parse("signal-listener", "a.csv"), None);

@@ -10,14 +10,20 @@ use crate::error::EngineError;
 use super::fault::Fault;
 
 /// Writes `bytes` to `dir/name` through a temporary file and a rename, so that a failed or
-/// interrupted write never leaves a truncated file in place of an earlier complete one. The
-/// folder must exist: one removed under a running job is an error naming the file, not made
-/// again empty. An error names the file and the I/O error; the temporary file is removed.
+/// interrupted write never leaves a truncated file in place of an earlier complete one; makes
+/// the folder first. An error names the file and the I/O error; the temporary file is removed.
 pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineError> {
+    std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e))?;
     write_whole(dir, name, bytes, false)
 }
 
-/// [`write_atomic`], with the file synced before the rename and the folder after it, so that a
+/// [`write_atomic`] into a run's output folder, which must exist: one removed under the
+/// running job is an error naming the file, not made again empty.
+pub(crate) fn write_output(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineError> {
+    write_whole(dir, name, bytes, false)
+}
+
+/// [`write_output`], with the file synced before the rename and the folder after it, so that a
 /// crash of the machine leaves the earlier file or the new one, whole (checkpoints).
 pub(crate) fn write_synced(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineError> {
     let path = write_whole(dir, name, bytes, true)?;

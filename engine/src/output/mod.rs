@@ -9,5 +9,5 @@ pub(crate) mod interface;
 pub(crate) mod snapshot;
 pub mod spacetime;
 
-pub(crate) use files::write_synced;
 pub use files::{CellType, Field, UnstructuredGrid, check_writable, write_atomic};
+pub(crate) use files::{write_output, write_synced};

@@ -226,7 +226,6 @@ impl Tracer {
             );
         }
         let (dir, name) = split(path)?;
-        std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e))?;
         write_atomic(dir, name, text.as_bytes()).map(drop)
     }
 }
