@@ -1,8 +1,9 @@
 //! `sdg`: adaptive spacetime discontinuous Galerkin simulation of dynamic fracture.
 //!
 //! Exit codes: 0 success; 2 invalid arguments, configuration, mesh or checkpoint, or an
-//! estimated cost above `[limits]`; 1 runtime failure (a panic included); 3 checkpointed and
-//! stopped by SIGTERM, SIGINT or the wall-time limit: resubmit with `--restart`.
+//! estimated cost above `[limits]`; 1 runtime failure (a panic included, or an output file
+//! that cannot be written); 3 checkpointed and stopped by SIGTERM, SIGINT, SIGHUP or the
+//! wall-time limit: resubmit with `--restart`.
 //!
 //! Output that cannot be written is dropped: a closed or broken stdout or stderr (EPIPE, a pipe
 //! whose reader is gone) or a terminal that went away neither ends a command nor changes its
@@ -299,13 +300,16 @@ fn options(job: &JobArgs) -> RunOptions {
 const SAME_REQUEST: std::time::Duration = std::time::Duration::from_secs(1);
 
 /// The environment variable that injects a fault for the tests (`tests/faults.rs`):
-/// `signal-listener` makes the signal listener panic when SIGUSR1 arrives.
+/// `signal-listener` makes the signal listener panic when SIGUSR1 arrives. (The engine reads
+/// it too, for faults of file writes: `engine/src/output/fault.rs`.)
 const FAULT: &str = "SDG_FAULT";
 
-/// Turns signals into requests to the run: SIGTERM and SIGINT checkpoint and stop (exit 3),
-/// SIGUSR1 checkpoints and goes on. A second SIGTERM or SIGINT, [`SAME_REQUEST`] or more after
-/// the first, ends the process at once with code 130, without waiting for the checkpoint (the
-/// one before it is left whole).
+/// Turns signals into requests to the run: SIGTERM, SIGINT and SIGHUP (the terminal or the
+/// job's session gone) checkpoint and stop (exit 3), SIGUSR1 checkpoints and goes on. A second
+/// SIGTERM, SIGINT or SIGHUP, [`SAME_REQUEST`] or more after the first, ends the process at
+/// once with code 130, without waiting for the checkpoint (the one before it is left whole).
+/// Started first thing in `sdg run`, so that a signal during set-up stops the run the same
+/// way, with a checkpoint of the initial state.
 ///
 /// Once listening, the process no longer dies of these signals: should the listener end, the
 /// run would go on deaf to them. Nothing in it may panic on output (its messages are dropped if
@@ -322,9 +326,10 @@ fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError> {
         let _guard = runtime.enter();
         signal(kind).map_err(failed)
     };
-    let (mut term, mut int, mut usr1) = (
+    let (mut term, mut int, mut hup, mut usr1) = (
         listen(SignalKind::terminate())?,
         listen(SignalKind::interrupt())?,
+        listen(SignalKind::hangup())?,
         listen(SignalKind::user_defined1())?,
     );
     let fault = std::env::var_os(FAULT).is_some_and(|f| f == "signal-listener");
@@ -334,6 +339,7 @@ fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError> {
             let name = tokio::select! {
                 _ = term.recv() => "SIGTERM",
                 _ = int.recv() => "SIGINT",
+                _ = hup.recv() => "SIGHUP",
                 _ = usr1.recv() => {
                     if fault {
                         panic!("{FAULT}=signal-listener: a panic on SIGUSR1");
@@ -444,6 +450,10 @@ fn mesh(job: &JobArgs) -> Result<(), EngineError> {
 }
 
 fn run(args: &RunArgs) -> Result<(), EngineError> {
+    // Before anything else: a signal during set-up is a request like any other.
+    let control = Arc::new(Control::default());
+    listen_to_signals(control.clone())?;
+    exit_with_study()?;
     let job = &args.job;
     let problem = setup(&job.config)?;
     if let Some(s) = args.max_wall_time.filter(|s| !(s.is_finite() && *s > 0.0)) {
@@ -451,9 +461,6 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
             "--max-wall-time: must be a positive number of seconds, got {s}"
         )));
     }
-    let control = Arc::new(Control::default());
-    listen_to_signals(control.clone())?;
-    exit_with_study()?;
     let options = RunOptions {
         restart: args.restart.clone(),
         max_wall_time_s: args.max_wall_time,

@@ -1,8 +1,10 @@
 //! Faults a batch job meets (issue 69), through the `sdg` binary: output that cannot be written
 //! (a closed stdout or stderr, a pipe whose reader has gone) never ends a command nor changes
 //! its exit code, and never stops SIGTERM, SIGINT or SIGUSR1 from working; a panic of the signal
-//! listener ends the run with exit 1 instead of leaving it deaf; signals reach sdg through
-//! `timeout` and a shell that passes them on.
+//! listener ends the run with exit 1 instead of leaving it deaf; SIGHUP stops a run as SIGTERM
+//! does; signals reach sdg through `timeout` and a shell that passes them on. Disk faults are
+//! in `tests/disk.rs`, kills and restarts in `tests/chaos.rs`, the Slurm scripts in
+//! `tests/slurm.rs`.
 
 mod common;
 
@@ -231,6 +233,23 @@ fn signals_work_with_stdout_and_stderr_closed() {
     assert_eq!(checkpoints(&folder).len(), 2, "USR1's and TERM's");
 }
 
+/// SIGHUP (the terminal or the job's session gone) stops a run as SIGTERM does: a checkpoint
+/// and exit 3.
+#[test]
+fn sighup_stops_with_a_checkpoint_and_exit_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut command = long_run(dir.path(), &[]);
+    command.stdout(Stdio::null()).stderr(Stdio::piped());
+    let mut child = Running(command.spawn().unwrap());
+    let pid = listening_sdg(&mut child).to_string();
+    std::thread::sleep(Duration::from_millis(200));
+    signal(&pid, "HUP");
+    assert_eq!(child.exit_within(STOP_WITHIN), 3);
+    let err = child.stderr();
+    assert!(err.contains("SIGHUP received: stopped at t ="), "{err}");
+    assert_eq!(checkpoints(&dir.path().join("checkpoints")).len(), 1);
+}
+
 /// Should the signal listener panic all the same (injected here), the run ends at once with
 /// exit 1 and says so, instead of going on deaf to signals.
 #[test]
@@ -302,7 +321,8 @@ fn expect_with_closed_outputs(make: impl Fn() -> Vec<String>, code: i32, needle:
 }
 
 /// `sdg run`, `mesh`, `validate`, `plot` and `scaling` with stdout, stderr or both closed
-/// finish with their documented exit codes: 0, 2 on bad input, 1 on a failure while running.
+/// finish with their documented exit codes: 0, 2 on bad input (a trace that is not there
+/// included), 1 on a failure while running.
 #[test]
 fn commands_keep_their_exit_codes_with_stdout_or_stderr_closed() {
     let dir = tempfile::tempdir().unwrap();
@@ -379,7 +399,7 @@ fn commands_keep_their_exit_codes_with_stdout_or_stderr_closed() {
     std::fs::write(&bogus, "not xml").unwrap();
     expect_with_closed_outputs(|| args(&["plot", &bogus]), 2, "bogus.vtu");
 
-    expect_with_closed_outputs(|| args(&["scaling", &path("no_trace.csv")]), 1, "no_trace");
+    expect_with_closed_outputs(|| args(&["scaling", &path("no_trace.csv")]), 2, "no_trace");
 }
 
 /// `timeout -s TERM` signals sdg (and its process group): one request, a checkpoint and exit 3

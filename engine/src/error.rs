@@ -32,6 +32,16 @@ pub enum EngineError {
         /// The I/O error.
         source: std::io::Error,
     },
+    /// An output file (or the folder it goes in) could not be written: a full disk, a
+    /// read-only file system, a folder removed under the running job. A file written before is
+    /// left as it was (writes go through a temporary file and a rename).
+    #[error("{}: cannot write: {source}", path.display())]
+    Write {
+        /// The file or folder.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
     /// An input file other than the config and its mesh (a VTU file to plot) cannot be read,
     /// is not in a supported format or lacks what was asked for; the message names the file.
     #[error("{0}")]
@@ -73,7 +83,7 @@ impl EngineError {
     pub fn exit_code(&self) -> u8 {
         match self {
             Self::Config(_) | Self::Study(_) | Self::Mesh { .. } | Self::Input(_) => 2,
-            Self::Io { .. } | Self::Runtime(_) | Self::Plot(_) => 1,
+            Self::Io { .. } | Self::Write { .. } | Self::Runtime(_) | Self::Plot(_) => 1,
             Self::Checkpointed { .. } => 3,
             Self::CasesFailed { code, .. } => *code,
         }

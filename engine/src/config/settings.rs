@@ -101,7 +101,8 @@ impl Default for LimitsConfig {
 }
 
 /// `[checkpoint]`: when a run saves its whole state, so that `sdg run --restart` can go on
-/// from it. Whatever is set here, SIGTERM, SIGINT, SIGUSR1 and `--max-wall-time` write one.
+/// from it. Whatever is set here, SIGTERM, SIGINT, SIGHUP, SIGUSR1 and `--max-wall-time`
+/// write one.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CheckpointConfig {

@@ -1,20 +1,58 @@
 //! Output files: atomic writes, JSON summaries and VTK XML unstructured grids.
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::config::VtuFormat;
 use crate::error::EngineError;
 
+use super::fault::Fault;
+
 /// Writes `bytes` to `dir/name` through a temporary file and a rename, so that a failed or
-/// interrupted write never leaves a truncated file in place of an earlier complete one.
+/// interrupted write never leaves a truncated file in place of an earlier complete one; makes
+/// the folder first. An error names the file and the I/O error; the temporary file is removed.
 pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineError> {
     std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e))?;
+    write_whole(dir, name, bytes, false)
+}
+
+/// [`write_atomic`] into a run's output folder, which must exist: one removed under the
+/// running job is an error naming the file, not made again empty.
+pub(crate) fn write_output(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineError> {
+    write_whole(dir, name, bytes, false)
+}
+
+/// [`write_output`], with the file synced before the rename and the folder after it, so that a
+/// crash of the machine leaves the earlier file or the new one, whole (checkpoints).
+pub(crate) fn write_synced(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineError> {
+    let path = write_whole(dir, name, bytes, true)?;
+    if let Ok(folder) = std::fs::File::open(dir) {
+        // Not every file system syncs folders; the rename itself is atomic either way.
+        let _ = folder.sync_all();
+    }
+    Ok(path)
+}
+
+/// Writes `bytes` to the temporary file `dir/.name.tmp`, syncs it if `sync`, and renames it to
+/// `dir/name`; a fault of `SDG_FAULT` (see [`Fault`]) strikes on the way.
+fn write_whole(dir: &Path, name: &str, bytes: &[u8], sync: bool) -> Result<PathBuf, EngineError> {
     let path = dir.join(name);
     let tmp = dir.join(format!(".{name}.tmp"));
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, &path))
-        .map_err(|e| discard(&path, &tmp, e))?;
+    let fault = Fault::injected(name);
+    let write = || -> std::io::Result<()> {
+        fault.map_or(Ok(()), Fault::at_create)?;
+        let mut file = std::fs::File::create(&tmp)?;
+        let (head, tail) = bytes.split_at(bytes.len() / 2);
+        file.write_all(head)?;
+        fault.map_or(Ok(()), Fault::halfway)?;
+        file.write_all(tail)?;
+        if sync {
+            file.sync_all()?;
+        }
+        std::fs::rename(&tmp, &path)
+    };
+    write().map_err(|e| discard(&path, &tmp, e))?;
     Ok(path)
 }
 
@@ -52,9 +90,12 @@ pub fn check_writable(dir: &Path, named: &str) -> Result<(), EngineError> {
 
 /// The error of a failed write of `path` through the temporary file `tmp`, which is removed so
 /// that it holds no space (a full disk is the usual cause).
-pub(crate) fn discard(path: &Path, tmp: &Path, e: std::io::Error) -> EngineError {
+fn discard(path: &Path, tmp: &Path, e: std::io::Error) -> EngineError {
     let _ = std::fs::remove_file(tmp);
-    EngineError::io(path, e)
+    EngineError::Write {
+        path: path.into(),
+        source: e,
+    }
 }
 
 /// VTK cell types used here.

@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 use plotters::style::FontStyle;
 
 use crate::error::EngineError;
-use crate::output::write_atomic;
+use crate::output::write_output;
 
 /// The font family name under which the bundled font is registered with plotters.
 const FAMILY: &str = "sdg-sans";
@@ -88,7 +88,8 @@ impl Image {
         Ok(bytes)
     }
 
-    /// Writes the image as PNG to `path`, atomically (see [`write_atomic`]).
+    /// Writes the image as PNG to `path` through a temporary file and a rename; the folder must
+    /// exist (a run's folder removed under it is an error, not made again).
     pub fn write_png(&self, path: &Path) -> Result<(), EngineError> {
         let name = path
             .file_name()
@@ -98,7 +99,15 @@ impl Image {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
-        write_atomic(dir, name, &self.to_png()?).map(drop)
+        write_output(dir, name, &self.to_png()?).map(drop)
+    }
+}
+
+/// Makes the folder of `path`, a picture `sdg plot` is asked to write (`--out`).
+pub(super) fn make_folder(path: &Path) -> Result<(), EngineError> {
+    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(dir) => std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e)),
+        None => Ok(()),
     }
 }
 

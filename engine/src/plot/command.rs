@@ -226,6 +226,7 @@ pub fn plot_vtu(request: &PlotRequest) -> Result<PathBuf, EngineError> {
         .out
         .clone()
         .unwrap_or_else(|| request.vtu.with_extension("png"));
+    super::canvas::make_folder(&out)?;
     image.write_png(&out)?;
     Ok(out)
 }

@@ -250,6 +250,7 @@ pub fn plot_tips(files: &[PathBuf], out: &Path) -> Result<(), EngineError> {
             .map_or_else(|| source.clone(), |n| n.to_string_lossy().into_owned());
         tip_series((&label, &source), &text, None, &mut tips)?;
     }
+    super::canvas::make_folder(out)?;
     render(&tips, None, None)?.write_png(out)
 }
 

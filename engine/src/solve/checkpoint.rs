@@ -15,7 +15,6 @@
 //! whole checkpoint or none. A file with another magic, version, length or checksum, or written
 //! by another configuration, is refused with the reason.
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -186,7 +185,15 @@ impl Folder {
         bytes.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
         bytes.extend_from_slice(&payload);
         let name = format!("checkpoint_{:06}.sdgc", counts.written);
-        let path = write_synced(&self.dir, &name, &bytes)?;
+        // Made here, not with its parents: an output folder removed under the job is an error.
+        match std::fs::create_dir(&self.dir) {
+            Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => {
+                let (path, source) = (self.dir.clone(), e);
+                return Err(EngineError::Write { path, source });
+            }
+            _ => {}
+        }
+        let path = crate::output::write_synced(&self.dir, &name, &bytes)?;
         let mut files = list(&self.dir);
         files.truncate(files.len().saturating_sub(self.keep));
         for old in files {
@@ -196,23 +203,6 @@ impl Folder {
         }
         Ok(path)
     }
-}
-
-/// Writes `bytes` to `dir/name` whole or not at all: a temporary file, synced, renamed, and
-/// the folder synced so that the rename survives a crash.
-fn write_synced(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf, EngineError> {
-    std::fs::create_dir_all(dir).map_err(|e| EngineError::io(dir, e))?;
-    let path = dir.join(name);
-    let tmp = dir.join(format!(".{name}.tmp"));
-    std::fs::File::create(&tmp)
-        .and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()))
-        .and_then(|()| std::fs::rename(&tmp, &path))
-        .map_err(|e| crate::output::discard(&path, &tmp, e))?;
-    if let Ok(folder) = std::fs::File::open(dir) {
-        // Not every file system syncs folders; the rename itself is atomic either way.
-        let _ = folder.sync_all();
-    }
-    Ok(path)
 }
 
 /// The checkpoint files in `dir`, oldest first (by number).

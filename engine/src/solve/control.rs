@@ -31,7 +31,7 @@ impl Control {
         self.pending.store(true, Ordering::Release);
     }
 
-    /// Asks for a checkpoint and a stop with exit code 3 (SIGTERM, SIGINT, the wall-time
+    /// Asks for a checkpoint and a stop with exit code 3 (SIGTERM, SIGINT, SIGHUP, the wall-time
     /// limit); `reason` says why. The first reason given is kept.
     pub fn stop(&self, reason: impl Into<String>) {
         self.request

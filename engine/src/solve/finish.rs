@@ -10,7 +10,7 @@ use crate::error::EngineError;
 use crate::estimate::{self, Estimate};
 use crate::frontier::Frontier;
 use crate::job::RunOptions;
-use crate::output::write_atomic;
+use crate::output::write_output;
 use crate::plot;
 
 use super::checkpoint::Counts;
@@ -185,7 +185,7 @@ impl Solve<'_> {
         };
         let mut written = vec![
             snapshots,
-            write_atomic(dir, "history.csv", book.history.as_bytes()).map(drop),
+            write_output(dir, "history.csv", book.history.as_bytes()).map(drop),
         ];
         if config.output.png {
             plot::write_history_png(dir, &book.history);
@@ -205,7 +205,7 @@ impl Solve<'_> {
         }
         summary.timings.output_s += finishing.elapsed().as_secs_f64();
         let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
-        write_atomic(dir, "summary.json", json.as_bytes())?;
+        write_output(dir, "summary.json", json.as_bytes())?;
         Ok((summary, dir.to_path_buf()))
     }
 }

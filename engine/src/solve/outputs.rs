@@ -8,7 +8,7 @@ use sdg_solver::crack::Crossing;
 use crate::error::EngineError;
 use crate::frontier::Frontier;
 use crate::job::RunOptions;
-use crate::output::write_atomic;
+use crate::output::write_output;
 use crate::plot;
 use crate::problem::Problem;
 
@@ -39,7 +39,7 @@ impl Solve<'_> {
         self.history_row(state, &mut book);
         warn(
             "history.csv",
-            write_atomic(dir, "history.csv", book.history.as_bytes()).map(drop),
+            write_output(dir, "history.csv", book.history.as_bytes()).map(drop),
         );
         if config.output.png {
             plot::write_history_png(dir, &book.history);
@@ -66,7 +66,7 @@ impl Solve<'_> {
             return Ok(());
         };
         let config = &self.problem.loaded.config;
-        write_atomic(
+        write_output(
             dir,
             "events.csv",
             records::events_csv(events, &config.time).as_bytes(),
@@ -90,7 +90,7 @@ impl Solve<'_> {
             );
         }
         let csv = records::cracks_csv(&state.mesh, &cracks, events);
-        write_atomic(dir, "cracks.csv", csv.as_bytes())?;
+        write_output(dir, "cracks.csv", csv.as_bytes())?;
         Ok(())
     }
 
@@ -126,7 +126,7 @@ impl Solve<'_> {
     pub(crate) fn write_crack_tips(&self, dir: &Path, csv: &str) -> Result<(), EngineError> {
         let problem = self.problem;
         let time = &problem.loaded.config.time;
-        write_atomic(dir, "crack_tips.csv", csv.as_bytes())?;
+        write_output(dir, "crack_tips.csv", csv.as_bytes())?;
         if problem.loaded.config.output.png && problem.fracture.is_some() {
             plot::write_tip_speed_png(dir, csv, problem.material.c_r());
         } else if problem.loaded.config.output.png {
@@ -159,7 +159,7 @@ impl Solve<'_> {
         if !probes.is_empty() {
             let time = &self.problem.loaded.config.time;
             let text = interface::csv(probes, &mut book.samples, time);
-            write_atomic(dir, "interface.csv", text.as_bytes())?;
+            write_output(dir, "interface.csv", text.as_bytes())?;
         }
         Ok(())
     }

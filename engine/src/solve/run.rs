@@ -132,6 +132,12 @@ fn prepare_folder(
     if config.checkpoint.dir.is_some() {
         let named = format!("checkpoint.dir {}", folder.dir.display());
         crate::output::check_writable(&folder.dir, &named)?;
+        // The folder itself is made by the first checkpoint, in a parent that exists.
+        if let Some(parent) = folder.dir.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).map_err(|e| {
+                EngineError::Input(format!("{named}: cannot make {}: {e}", parent.display()))
+            })?;
+        }
     }
     if let Some(trace) = &options.trace {
         crate::trace::check_path(trace)?;

@@ -84,7 +84,10 @@ pub struct Entry {
 
 /// Reads a trace written by `sdg run --trace`.
 pub fn read(path: &Path) -> Result<Vec<Entry>, EngineError> {
-    let text = std::fs::read_to_string(path).map_err(|e| EngineError::io(path, e))?;
+    // The trace is the command's input: one that cannot be read is bad input (exit 2).
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        EngineError::Input(format!("{}: cannot read the trace: {e}", path.display()))
+    })?;
     let bad = |line: usize, reason: &str| {
         EngineError::Input(format!("{}:{line}: {reason}", path.display()))
     };

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use crate::config::VtuFormat;
 use crate::error::EngineError;
-use crate::output::write_atomic;
+use crate::output::write_output;
 
 use super::files::{Job, Writer, draw_png, segments_grid, triangles_grid};
 use super::slicing::{InterfaceValues, PointValues, Rule, Segment, Triangle, slice};
@@ -398,7 +398,7 @@ impl Snapshots {
             }
             let (dir, vtu, png) = (self.dir.clone(), self.vtu, self.png);
             self.submit(Box::new(move || {
-                write_atomic(
+                write_output(
                     &dir,
                     &name,
                     triangles_grid(&triangles).to_vtu(vtu).as_bytes(),
@@ -412,7 +412,7 @@ impl Snapshots {
                 }
                 if !segments.is_empty() {
                     let grid = segments_grid(&segments);
-                    write_atomic(&dir, &cracks, grid.to_vtu(vtu).as_bytes())?;
+                    write_output(&dir, &cracks, grid.to_vtu(vtu).as_bytes())?;
                 }
                 Ok(())
             }));
@@ -422,7 +422,7 @@ impl Snapshots {
         if count > 0 {
             let (dir, pvd) = (self.dir.clone(), self.pvd());
             self.submit(Box::new(move || {
-                write_atomic(&dir, "snapshots.pvd", pvd.as_bytes()).map(drop)
+                write_output(&dir, "snapshots.pvd", pvd.as_bytes()).map(drop)
             }));
         }
         Ok(count)
