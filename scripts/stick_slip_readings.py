@@ -60,43 +60,32 @@ def traction(side, value):
 
 
 PI = 1e8
-# name: (what the reading is, its mesh sides, its lateral loads). Tractions are (x, y) in Pa;
-# `left` and `right` are what is left of those sides after the halves are tagged apart.
+# name: (what the reading is, the lateral tractions (x, y), Pa, on the halves of the vertical
+# sides: left above and below the interface, right above and below). The halves are tagged
+# `left_upper`, `left` (what is left of it), `right` and `right_lower` by HALVES.
 READINGS = {
     "shear_whole": (
         "shear on the whole vertical sides, down on the left and up on the right "
         "(the traction of a shear stress sigma_xy = pi)",
-        "",
-        traction("left", (0, -PI)) + traction("right", (0, PI)),
+        [(0, -PI), (0, -PI), (0, PI), (0, PI)],
     ),
     "shear_halves": (
         "shear on the halves in opposite senses: above the interface down on the left and up "
         "on the right, below it the reverse",
-        HALVES,
-        traction("left_upper", (0, -PI))
-        + traction("right", (0, PI))
-        + traction("left", (0, PI))
-        + traction("right_lower", (0, -PI)),
+        [(0, -PI), (0, PI), (0, PI), (0, -PI)],
     ),
     "normal_halves": (
         "normal pressure on opposite halves: the upper block pushed to the right on its left "
         "side, the lower block to the left on its right side; the other halves free",
-        HALVES,
-        traction("left_upper", (PI, 0))
-        + traction("right_lower", (-PI, 0))
-        + traction("left", (0, 0))
-        + traction("right", (0, 0)),
+        [(PI, 0), (0, 0), (0, 0), (-PI, 0)],
     ),
     "normal_blocks": (
         "normal traction on every half: the upper block pushed on its left and pulled on its "
         "right side to the right, the lower block the reverse",
-        HALVES,
-        traction("left_upper", (PI, 0))
-        + traction("right", (PI, 0))
-        + traction("left", (-PI, 0))
-        + traction("right_lower", (-PI, 0)),
+        [(PI, 0), (-PI, 0), (PI, 0), (-PI, 0)],
     ),
 }
+SIDES = ["left_upper", "left", "right", "right_lower"]
 
 # The dissertation's numbers (section 3.4.2): friction 2.04e-2 J, 30.6% of the inflow;
 # numerical dissipation 0.02% of it.
@@ -105,10 +94,11 @@ SEED_NUMERICAL_SHARE = 0.02
 
 
 def config_text(reading, bottom):
-    _, sides, loads = READINGS[reading]
+    _, tractions = READINGS[reading]
+    loads = "".join(traction(side, value) for side, value in zip(SIDES, tractions))
     return (
         f"# stick_slip reading `{reading}`, bottom {bottom} (scripts/stick_slip_readings.py)\n"
-        f'extends = "{BASE}"\n\n{sides}\n{TOP}\n{BOTTOM[bottom]}\n{loads}'
+        f'extends = "{BASE}"\n\n{HALVES}\n{TOP}\n{BOTTOM[bottom]}\n{loads}'
     )
 
 
@@ -124,14 +114,16 @@ def run(sdg, out, reading, bottom, cells, threads):
         "--set", "output.png=false", "--set", "output.snapshot_times=[]",
         "--output", str(folder),
     ]
+    # The command and the config it ran: a reading changed here runs again.
+    record = " ".join(command[1:]) + "\n" + config.read_text()
     stamp = folder / "command.txt"
     done = (folder / "summary.json").exists() and stamp.exists()
-    if done and stamp.read_text() == " ".join(command[1:]) + "\n":
+    if done and stamp.read_text() == record:
         return folder
     result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode != 0:
         raise RuntimeError(f"{name}: exit {result.returncode}: {result.stderr[-2000:]}")
-    stamp.write_text(" ".join(command[1:]) + "\n")
+    stamp.write_text(record)
     return folder
 
 

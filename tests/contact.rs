@@ -206,41 +206,73 @@ fn contact_separation_follows_the_1d_reference() {
     }
 }
 
+/// The slip (m) of the interface probe at `x` (m) of `interface.csv` in `dir`, at the row
+/// nearest to each of `times` (s).
+fn slips_at(dir: &Path, x: f64, times: &[f64]) -> Vec<f64> {
+    let text = std::fs::read_to_string(dir.join("interface.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (t, px, slip) = (col("t_s"), col("x_m"), col("slip_m"));
+    let rows: Vec<(f64, f64)> = lines
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|f| (f[px].parse::<f64>().unwrap() - x).abs() < 1e-9)
+        .map(|f| (f[t].parse().unwrap(), f[slip].parse().unwrap()))
+        .collect();
+    assert!(!rows.is_empty(), "no probe at x = {x}");
+    times
+        .iter()
+        .map(|&at| {
+            let nearest = rows
+                .iter()
+                .min_by(|a, b| (a.0 - at).abs().total_cmp(&(b.0 - at).abs()))
+                .unwrap();
+            nearest.1.abs()
+        })
+        .collect()
+}
+
 #[test]
-fn stick_slip_balances_energy_with_friction() {
-    // The shipped run is to 12 us at p = 3 (docs/verification.md); here p = 2 to 8 us, past the
-    // first slip events.
-    let problem = common::shipped(
-        "stick_slip.toml",
-        &[
-            "time.end=8e-6",
-            "solver.order=2",
-            "output.snapshot_times=[]",
-        ],
-    );
+fn stick_slip_balances_energy_and_slips_as_the_seed_describes() {
+    // The shipped run as shipped (p = 3, 16 cells a side, to 12 us); its reading of the seed's
+    // loads and the other readings are compared in docs/verification.md
+    // (scripts/stick_slip_readings.py).
+    let problem = common::shipped("stick_slip.toml", &["output.snapshot_times=[]"]);
     let (summary, dir) = common::solve(&problem, 2, true);
     let e = summary.energy;
-    let rows = interface_rows(dir.path());
-    let slipping = rows.iter().filter(|r| r.3 == "slip").count();
+    let friction = 100.0 * e.friction_dissipation / e.boundary_work;
+    let numerical = 100.0 * e.dissipation / e.boundary_work;
+    let times = [3e-6, 7e-6, 9e-6, 12e-6];
+    let (end, centre) = (
+        slips_at(dir.path(), 1.25e-4, &times),
+        slips_at(dir.path(), 2.125e-3, &times),
+    );
     eprintln!(
-        "stick-slip to 8 us: inflow {:.4e} J/m, friction {:.4e} J/m ({:.3}%), interface work \
-         {:.4e} J/m, numerical dissipation {:.3}% of the inflow, balance {:.1e}; {} patches ({} \
-         nonlinear, {:.2} solves each, at most {}); {slipping} of {} probe rows in slip",
+        "stick-slip: inflow {:.4e} J/m, friction {friction:.3}%, numerical dissipation \
+         {numerical:.4}%, balance {:.1e}; slip (m) at 3, 7, 9, 12 us: near the left end \
+         {end:?}, at the centre {centre:?}; {} patches ({} nonlinear, {:.2} solves each, \
+         at most {})",
         e.boundary_work,
-        e.friction_dissipation,
-        100.0 * e.friction_dissipation / e.boundary_work,
-        e.interface_work,
-        100.0 * e.dissipation / e.boundary_work,
         e.balance_residual_rel,
         summary.patches,
         summary.interface.nonlinear_patches,
         summary.interface.newton_iterations_mean,
         summary.interface.newton_iterations_max,
-        rows.len()
     );
     assert!(e.balance_residual_rel.abs() < 1e-8);
-    assert!(e.friction_dissipation > 1e-3 * e.boundary_work);
     assert!(e.interface_work >= e.friction_dissipation);
-    assert!(e.dissipation < 2e-3 * e.boundary_work);
-    assert!(slipping > 0 && slipping < rows.len());
+    // The converged share of this reading (docs/verification.md: 13.57% on 16 cells, the same
+    // to 0.1 point on 32); the seed's 30.6% is not reproduced by any reading its words allow.
+    assert!((friction - 13.57).abs() < 0.1, "friction {friction}%");
+    // The seed: 0.02%; ours falls with the mesh (0.034% here).
+    assert!(numerical < 0.05, "numerical dissipation {numerical}%");
+    // The seed's account (3.4.2): slip before the waves arrive is negligible; at 7 us small slip
+    // near the ends of the interface only; much larger at 9 and 12 us.
+    assert!(end[0] < 1e-5 && end[1] < 1e-5, "{end:?}");
+    assert!(
+        centre[1] < 1e-7,
+        "the centre still sticks at 7 us: {centre:?}"
+    );
+    assert!(end[2] > 2.0 * end[1] && end[3] > 10.0 * end[1], "{end:?}");
+    assert!(centre[3] > 1e-5, "the centre slips by 12 us: {centre:?}");
 }

@@ -10,8 +10,9 @@ use std::time::{Duration, Instant};
 
 use common::{CONFIG, sdg, stderr};
 
-/// Study files shipped in configs/studies/, each run by a test here.
-const SHIPPED: [&str; 1] = ["plate_draws.toml"];
+/// Study files shipped in configs/studies/, each run by a test here (the branching
+/// convergence study, hours on 2 cores, is checked and listed only).
+const SHIPPED: [&str; 2] = ["branching_convergence.toml", "plate_draws.toml"];
 
 fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
@@ -61,6 +62,33 @@ fn every_shipped_study_is_run_here() {
         .collect();
     shipped.sort();
     assert_eq!(shipped, SHIPPED);
+}
+
+/// The branching convergence study (docs/verification.md): every case's config is valid and
+/// the cases are the three resolutions by eight draws, coarsest first.
+#[test]
+fn the_branching_convergence_study_is_valid_and_lists_its_cases() {
+    let file = repo("configs/studies/branching_convergence.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = sdg(&[
+        "study",
+        file.to_str().unwrap(),
+        "--dry-run",
+        "--output",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let listing = String::from_utf8(out.stdout).unwrap();
+    let cases: Vec<&str> = listing.lines().filter(|l| l.contains("pending")).collect();
+    assert_eq!(cases.len(), 24, "{listing}");
+    assert!(
+        cases[0].contains("adapt.min_edge=5e-6, fracture.seed=1"),
+        "{listing}"
+    );
+    assert!(
+        cases[23].contains("adapt.min_edge=1.5e-6, fracture.seed=8"),
+        "{listing}"
+    );
 }
 
 /// The shipped example: 2 loads by 3 draws of the defects, its table and its statistics.
