@@ -1,13 +1,22 @@
-//! Patch solves per second on one core for p = 1..4, and a dense LU of the same size.
+//! Patch solves per second on one core for p = 1..4, the patch kinds of the branching problem,
+//! and a dense LU of the same size.
 //!
-//! Run: `cargo bench --bench patch`. The mesh is a 12 x 12 right-diagonal mesh, plane strain,
+//! Run: `cargo bench --bench patch`; `PATCH_TABLE=1 cargo bench --bench patch` prints instead the
+//! table of time per stage against the arithmetic of the branching patch kinds
+//! (`scripts/patch_table.sh`). The mesh is a 12 x 12 right-diagonal mesh, plane strain,
 //! with a plane wave as initial data. One iteration pitches and solves 25 interior tents from a
 //! flat front at pairwise non-adjacent vertices: each patch has 6 tetrahedra and
 //! `N = 6 x 5 x (p+1)(p+2)(p+3)/6` unknowns (120, 300, 600, 1050 for p = 1..4); criterion reports
 //! patches per second. `lu/N` factors and solves a random diagonally dominant `N x N` system
 //! with faer's in-place partial-pivoting LU, for comparison at the same size.
+//!
+//! `branching/KIND` solves one p = 1 patch of each kind the branching problem solves, on a
+//! 12 x 12 mesh with damage interfaces along `y = 1/2` (see [`Branching`]): `bulk4` and `bulk8`
+//! (no interface face, 4 and 8 elements), `damage1` and `damage2` (one and two intact damage faces loaded past the threshold, so
+//! the damage grows inside the tent: Newton), `tip` (the end of a debonded crack: one contact
+//! face opening).
 
-use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{BatchSize, Criterion, Throughput, criterion_group};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::{MatMut, MatRef, Par};
@@ -130,5 +139,31 @@ fn dense_lu(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, patches, dense_lu);
-criterion_main!(benches);
+#[path = "patch/branching.rs"]
+mod branching;
+
+use branching::Branching;
+
+fn branching_kinds(c: &mut Criterion) {
+    let mut setup = Branching::new();
+    let mut group = c.benchmark_group("branching");
+    group.sample_size(20);
+    group.measurement_time(std::time::Duration::from_secs(2));
+    group.warm_up_time(std::time::Duration::from_millis(500));
+    group.throughput(Throughput::Elements(1));
+    for kind in &branching::KINDS {
+        group.bench_function(kind.name, |b| b.iter(|| setup.solve(kind)));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, patches, branching_kinds, dense_lu);
+
+fn main() {
+    if std::env::var_os("PATCH_TABLE").is_some() {
+        branching::table();
+    } else {
+        benches();
+        Criterion::default().configure_from_args().final_summary();
+    }
+}
