@@ -98,6 +98,7 @@ impl Branching {
                 segment(0.0, 4.0 / 12.0, "crack"),
                 segment(8.0 / 12.0, 1.0, "intact"),
             ],
+            sides: Vec::new(),
             perturb: 0.0,
             seed: 0,
         }
