@@ -657,6 +657,13 @@ def status(runs):
     add("energy balance of the shipped runs", "0", f"at most {e(worst, 0)}", "`elements`, `adaptivity`")
     opens, _ = contact_changes(runs)
     add("contact and separation: the faces open", "2.46 us (dissertation)", f"{opens[0] * 1e6:.2f} us", "`contact`")
+    en = runs.summary("stick_slip")["energy"]
+    add(
+        "stick-slip: friction share of the inflow",
+        "30.6% (dissertation)",
+        f"{100 * en['friction_dissipation'] / en['boundary_work']:.1f}% (not reproduced: its loads' readings)",
+        "`contact`",
+    )
     s = runs.summary("decohesion")
     add(
         "decohesion: work of separation",
