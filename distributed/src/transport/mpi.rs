@@ -99,9 +99,17 @@ pub enum MpiError {
 /// What a worker asks the communication thread to do.
 #[derive(Debug)]
 enum Command {
-    Send { to: Rank, message: Message },
-    Sum { values: Vec<u64>, reply: Sender<Vec<u64>> },
-    Abort { code: i32 },
+    Send {
+        to: Rank,
+        message: Message,
+    },
+    Sum {
+        values: Vec<u64>,
+        reply: Sender<Vec<u64>>,
+    },
+    Abort {
+        code: i32,
+    },
 }
 
 /// An incoming message (or why its bytes were not one) and its sender.
