@@ -1,6 +1,7 @@
 //! `examples/mpi_pitch.rs` under `mpirun` on 1 to 4 ranks (3 and 4 oversubscribed on small
 //! machines), over loopback: every rank's tents are the serial order's. Built only with the
-//! feature `mpi`; needs OpenMPI's `mpirun` on the PATH.
+//! feature `mpi`; needs OpenMPI's `mpirun` on the PATH and the example built (plain `cargo test`
+//! builds it, `--test mpirun` alone does not).
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -13,7 +14,13 @@ fn example() -> PathBuf {
         .and_then(|deps| deps.parent())
         .expect("target/<profile>/deps/<test>");
     let path = profile.join("examples").join("mpi_pitch");
-    assert!(path.exists(), "{} is not built", path.display());
+    assert!(
+        path.exists(),
+        "{} is not built: `cargo test` builds the examples, `cargo test --test mpirun` alone \
+         does not (build it with `cargo build --release -p sdg-distributed --features mpi \
+         --example mpi_pitch`)",
+        path.display()
+    );
     path
 }
 
