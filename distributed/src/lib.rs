@@ -9,15 +9,15 @@
 //!   global ids kept;
 //! - [`transport`]: the messages between ranks and the [`Transport`] trait that carries them,
 //!   with an in-process implementation ([`Loopback`]: threads as ranks, seeded random delays,
-//!   optional per-pair FIFO);
+//!   optional per-pair FIFO), and with the cargo feature `mpi` the MPI one (`MpiTransport`:
+//!   one communication thread per process makes the MPI calls);
 //! - [`pitching`]: asynchronous tent pitching over ranks under the `(time, id)`-first rule, with
 //!   termination by done messages (no global poll), whose tents are bitwise the serial
 //!   reference order's for every partition and message timing (the argument is in the module
 //!   docs; the tests check it).
 //!
 //! Not built yet: solving patches (messages carrying the elements under a star and interface
-//! states), the MPI transport (the `mpi` crate behind an off-by-default feature), METIS (the
-//! `metis` crate behind a feature), mesh-changing events across ranks, deterministic rounds
+//! states), METIS (the `metis` crate behind a feature), mesh-changing events across ranks, deterministic rounds
 //! over ranks, outputs and checkpoints per rank. See `distributed/README.md`.
 
 pub mod partition;
@@ -31,5 +31,7 @@ pub mod view;
 pub use partition::{Partition, PartitionError, Rank};
 pub use pitching::{Causality, Options, PitchingError, RankReport, pitch_rank, run_threads};
 pub use transport::loopback::{Loopback, LoopbackOptions};
+#[cfg(feature = "mpi")]
+pub use transport::mpi::{MpiError, MpiOptions, MpiTransport};
 pub use transport::{Message, Transport, TransportError, Update};
 pub use view::{LocalView, ViewError};

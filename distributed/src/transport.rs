@@ -6,10 +6,12 @@
 //! termination needs no ordering between messages), and "stop, I failed"
 //! ([`Message::Abort`]). A [`Transport`] sends them without blocking and receives them with a
 //! timeout. [`loopback::Loopback`] carries them between threads of one process, with seeded random
-//! delays; an MPI transport (one communication thread per rank calling MPI) is not built yet
-//! and would implement the same trait over [`Message::encode`]'s bytes.
+//! delays; `mpi::MpiTransport` (with the cargo feature `mpi`) carries them between MPI
+//! processes as [`Message::encode`]'s bytes, through one communication thread per process.
 
 pub mod loopback;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 
 use std::time::Duration;
 
@@ -55,6 +57,8 @@ pub enum TransportError {
     NoSuchRank { to: Rank, ranks: usize },
     #[error("a message of {len} bytes starting with kind {kind} is not a valid message")]
     Malformed { kind: u8, len: usize },
+    #[error("the transport's communication thread has ended")]
+    Closed,
 }
 
 /// Carries [`Message`]s between the ranks of one run. One value per rank; sends never wait for

@@ -1,0 +1,102 @@
+//! `examples/mpi_pitch.rs` under `mpirun` on 1 to 4 ranks (3 and 4 oversubscribed on small
+//! machines), over loopback: every rank's tents are the serial order's. Built only with the
+//! feature `mpi`; needs OpenMPI's `mpirun` on the PATH and the example built (plain `cargo test`
+//! builds it, `--test mpirun` alone does not).
+
+use std::path::PathBuf;
+use std::process::Command;
+
+/// The example's binary, which `cargo test` builds beside the test binaries' folder.
+fn example() -> PathBuf {
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let profile = exe
+        .parent()
+        .and_then(|deps| deps.parent())
+        .expect("target/<profile>/deps/<test>");
+    let path = profile.join("examples").join("mpi_pitch");
+    assert!(
+        path.exists(),
+        "{} is not built: `cargo test` builds the examples, `cargo test --test mpirun` alone \
+         does not (build it with `cargo build --release -p sdg-distributed --features mpi \
+         --example mpi_pitch`)",
+        path.display()
+    );
+    path
+}
+
+/// Runs the example on `ranks` ranks and returns rank 0's summary line.
+fn mpirun(ranks: usize, args: &[&str]) -> String {
+    let output = Command::new("mpirun")
+        .arg("-n")
+        .arg(ranks.to_string())
+        .arg(example())
+        .args(args)
+        // As root (containers, CI), on more ranks than cores, and over loopback only.
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .env("OMPI_MCA_btl", "self,vader")
+        .env("OMPI_MCA_oob_tcp_if_include", "lo")
+        .output()
+        .expect("mpirun runs (OpenMPI installed: openmpi-bin)");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        output.status.success(),
+        "mpirun -n {ranks} mpi_pitch {args:?}: {}\n{stdout}\n{stderr}",
+        output.status
+    );
+    assert_eq!(
+        stdout.lines().filter(|l| l.starts_with("rank ")).count(),
+        ranks,
+        "one line per rank:\n{stdout}"
+    );
+    let summary = stdout
+        .lines()
+        .find(|l| l.starts_with(&format!("{ranks} ranks")))
+        .unwrap_or_else(|| panic!("no summary line:\n{stdout}"));
+    assert!(
+        summary.ends_with("tents bitwise the serial order's"),
+        "{summary}"
+    );
+    summary.to_string()
+}
+
+/// The update messages per tent in a summary line.
+fn per_tent(summary: &str) -> f64 {
+    let (before, _) = summary.split_once(" per tent,").expect("messages per tent");
+    let number = before.rsplit('(').next().expect("an opening parenthesis");
+    number.parse().expect("a number")
+}
+
+#[test]
+fn pitching_over_mpi_gives_the_serial_tents_on_1_to_4_ranks() {
+    let mut previous = 0.0;
+    for ranks in 1..=4 {
+        let summary = mpirun(ranks, &[]);
+        println!("{summary}");
+        let messages = per_tent(&summary);
+        match ranks {
+            1 => assert_eq!(messages, 0.0, "one rank sends nothing"),
+            _ => assert!(
+                messages > previous && messages < 0.2,
+                "more ranks, more boundary: {messages} after {previous}"
+            ),
+        }
+        previous = messages;
+    }
+}
+
+#[test]
+fn a_random_partition_sends_an_update_for_most_tents() {
+    let summary = mpirun(3, &["24", "random"]);
+    println!("{summary}");
+    assert!(per_tent(&summary) > 1.0, "{summary}");
+}
+
+#[test]
+fn bad_arguments_exit_2() {
+    let output = Command::new(example()).arg("4").output().expect("runs");
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("CELLS: `4`"));
+}
