@@ -49,7 +49,7 @@ enum Command {
 // `study`: a study file, where its cases go and how they run.
 #[derive(Debug, Args)]
 struct StudyArgs {
-    /// The study file (TOML: base, metrics, [axes], [set]).
+    /// The study file (TOML: `base`, `metrics`, `[axes]`, `[set]`).
     study: PathBuf,
     /// Output folder [default: out/studies/STEM, STEM the study file's name without .toml].
     #[arg(long, value_name = "DIR")]

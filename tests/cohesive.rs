@@ -398,6 +398,39 @@ fn mode1_crack_follows_lefm() {
     assert!(worst < 0.05, "{worst}");
     assert!(crack.max_speed_over_c_r < 1.0);
     assert!((per_area / phi - 1.0).abs() < 0.1, "{per_area}");
+    let zone = process_zone_ratios(dir.path(), (tau, t0));
+    eprintln!(
+        "process zone over the steady-state estimate (2.54), zeta = 9/16, for t' >= 3: median \
+         {:.3}, from {:.3} to {:.3} over {} tip states",
+        zone[zone.len() / 2],
+        zone[0],
+        zone[zone.len() - 1],
+        zone.len()
+    );
+}
+
+/// The process zone of each tip state of the run in `dir` from `t' = 3` on (after the initial
+/// acceleration) over the seed's steady-state estimate (2.54) at that state's speed, with its
+/// `zeta = 9/16`: `Lambda_0 / A_I(v)`, `Lambda_0 = zeta pi mu / (1 - nu) phi / sigma_c^2`
+/// (11 um); sorted.
+fn process_zone_ratios(dir: &Path, (tau, t0): (f64, f64)) -> Vec<f64> {
+    let (e, nu, rho): (f64, f64, f64) = (3.24e9, 0.35, 1190.0);
+    let mu = e / (2.0 * (1.0 + nu));
+    let (c_d, _) = p_wave();
+    let c_s = (mu / rho).sqrt();
+    let rest = 9.0 / 16.0 * std::f64::consts::PI * mu / (1.0 - nu) * phi() / SIGMA_C.powi(2);
+    let rows = common::csv_columns(
+        &dir.join("crack_tips.csv"),
+        &["t_s", "speed_m_s", "process_zone_length_m"],
+    );
+    let mut ratios: Vec<f64> = rows
+        .iter()
+        .filter(|r| (r[0] - t0) / tau >= 3.0 && r[1].is_finite() && r[1] > 0.0)
+        .map(|r| r[2] / (rest / lefm::universal_a(r[1], c_d, c_s, nu)))
+        .collect();
+    assert!(!ratios.is_empty(), "tip states after t' = 3");
+    ratios.sort_by(f64::total_cmp);
+    ratios
 }
 
 /// `configs/mode1_lefm_high.toml`'s scales: sigma' = 10^(-1/128), crack plane 0.5 mm from the

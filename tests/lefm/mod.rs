@@ -67,6 +67,36 @@ pub fn rayleigh_speed(c_d: f64, c_s: f64) -> f64 {
     c_s * (0.5 * (lo + hi)).sqrt()
 }
 
+/// Freund's universal function `A_I(v)` of mode I (seed (2.53)): the factor by which a crack
+/// running at `v` (m/s) shortens the quasi-static process zone, `Lambda = Lambda_0 / A_I(v)`;
+/// `A_I(v) = v^2 alpha_d / ((1 - nu) c_s^2 R(v))` with `alpha_{d,s} = sqrt(1 - v^2 / c_{d,s}^2)`
+/// and `R = 4 alpha_d alpha_s - (1 + alpha_s^2)^2`; 1 at rest, unbounded as `v -> c_R`.
+pub fn universal_a(v: f64, c_d: f64, c_s: f64, nu: f64) -> f64 {
+    if v <= 0.0 {
+        return 1.0;
+    }
+    let alpha_d = (1.0 - (v / c_d).powi(2)).sqrt();
+    let alpha_s = (1.0 - (v / c_s).powi(2)).sqrt();
+    let r = 4.0 * alpha_d * alpha_s - (1.0 + alpha_s * alpha_s).powi(2);
+    v * v * alpha_d / ((1.0 - nu) * c_s * c_s * r)
+}
+
+#[test]
+fn the_universal_function_is_one_at_rest_and_grows_toward_c_r() {
+    let (c_d, c_s, nu) = (2090.0, 1004.0, 0.35);
+    let c_r = rayleigh_speed(c_d, c_s);
+    // The limit v -> 0: R ~ v^2 / c_s^2 (1 - c_s^2 / c_d^2) = v^2 / (2 c_s^2 (1 - nu)) in plane
+    // strain, so A_I -> 1.
+    assert!((universal_a(1e-3 * c_r, c_d, c_s, nu) - 1.0).abs() < 1e-4);
+    let mut last = 1.0;
+    for k in 1..100 {
+        let a = universal_a(0.01 * f64::from(k) * c_r, c_d, c_s, nu);
+        assert!(a > last, "{k}: {a}");
+        last = a;
+    }
+    assert!(universal_a(0.9999 * c_r, c_d, c_s, nu) > 100.0);
+}
+
 #[test]
 fn the_reference_reproduces_the_step_load_limit_and_the_seed_s_delay() {
     // Beyond the ramp F(t') = int H' sqrt(t' - u): against quadrature, and F ~ sqrt(t' - 1/2)
