@@ -9,7 +9,9 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use common::checkpoints;
+
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -152,16 +154,6 @@ fn wait_listening(child: &mut Child) {
         assert!(start.elapsed() < LIMIT, "no signal listener");
         std::thread::sleep(Duration::from_millis(1));
     }
-}
-
-/// The checkpoint files in `dir`, sorted.
-fn checkpoints(dir: &Path) -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = (std::fs::read_dir(dir).into_iter().flatten())
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "sdgc"))
-        .collect();
-    files.sort();
-    files
 }
 
 /// The `state_hash` of the run in `dir`.

@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::checkpoints;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -49,18 +51,6 @@ fn spawn_in(cwd: &Path, config: &str, out: &Path, args: &[&str], overrides: &[&s
 fn finish(child: Child) -> (i32, String) {
     let out = child.wait_with_output().unwrap();
     (out.status.code().unwrap_or(-1), stderr(&out))
-}
-
-/// The checkpoint files in `dir`, sorted.
-fn checkpoints(dir: &Path) -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .into_iter()
-        .flatten()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "sdgc"))
-        .collect();
-    files.sort();
-    files
 }
 
 /// Waits until `dir` holds a checkpoint or `child` has ended.

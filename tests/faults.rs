@@ -8,6 +8,8 @@
 
 mod common;
 
+use common::checkpoints;
+
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -135,16 +137,6 @@ fn listening_sdg(root: &mut Running) -> u32 {
         );
         std::thread::sleep(Duration::from_millis(10));
     }
-}
-
-/// The checkpoint files in `dir`.
-fn checkpoints(dir: &Path) -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = (std::fs::read_dir(dir).into_iter().flatten())
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "sdgc"))
-        .collect();
-    files.sort();
-    files
 }
 
 /// Waits until `dir` holds `n` checkpoints, the run going on.

@@ -165,13 +165,7 @@ impl Rectangle {
             } else {
                 return Err(invalid(field, "the segment must be horizontal or vertical"));
             };
-            let tag = match tag_names.iter().position(|n| *n == seg.tag) {
-                Some(t) => t as TagId,
-                None => {
-                    tag_names.push(seg.tag.clone());
-                    (tag_names.len() - 1) as TagId
-                }
-            };
+            let tag = tag_id(&mut tag_names, &seg.tag);
             for w in steps.windows(2) {
                 let ends = [id(w[0].0, w[0].1), id(w[1].0, w[1].1)];
                 match segment_edges.get(&ends) {
@@ -279,13 +273,7 @@ impl Rectangle {
                     "the segment must lie on one side of the rectangle",
                 ));
             };
-            let tag = match tag_names.iter().position(|n| *n == seg.tag) {
-                Some(t) => t as TagId,
-                None => {
-                    tag_names.push(seg.tag.clone());
-                    (tag_names.len() - 1) as TagId
-                }
-            };
+            let tag = tag_id(tag_names, &seg.tag);
             for w in steps.windows(2) {
                 let ends = [id(w[0].0, w[0].1), id(w[1].0, w[1].1)];
                 if let Some(other) = claimed.insert(ends, k) {
@@ -297,6 +285,17 @@ impl Rectangle {
             }
         }
         Ok(())
+    }
+}
+
+/// The id of tag `name` in `tag_names`, appended if new.
+fn tag_id(tag_names: &mut Vec<String>, name: &str) -> TagId {
+    match tag_names.iter().position(|n| n == name) {
+        Some(t) => t as TagId,
+        None => {
+            tag_names.push(name.to_string());
+            (tag_names.len() - 1) as TagId
+        }
     }
 }
 

@@ -334,3 +334,15 @@ end = 1e-7
 sides = ["left", "right", "bottom", "top"]
 kind = "free"
 "#;
+
+/// The checkpoint files (`*.sdgc`) in `dir`, sorted; none if it cannot be read.
+pub fn checkpoints(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "sdgc"))
+        .collect();
+    files.sort();
+    files
+}
