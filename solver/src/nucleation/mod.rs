@@ -9,7 +9,6 @@
 
 mod defects;
 mod draws;
-mod special;
 #[cfg(test)]
 mod testing;
 mod traction;

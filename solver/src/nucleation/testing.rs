@@ -5,10 +5,12 @@
 /// truncated at `0.4 SIGMA_C`.
 pub(super) const SIGMA_C: f64 = 62.1e6;
 
-/// Stephens' (1970) 1% critical value of the Kolmogorov-Smirnov statistic for `n` samples.
-pub(super) fn ks_critical(n: usize) -> f64 {
+/// The critical value of the Kolmogorov-Smirnov statistic for `n` samples at the level `level`
+/// (e.g. 0.01): Stephens' (1970) `c / (sqrt n + 0.12 + 0.11 / sqrt n)` with Kolmogorov's
+/// asymptotic `c = sqrt(-ln(level / 2) / 2)` (1.628 at 1%).
+pub(super) fn ks_critical(n: usize, level: f64) -> f64 {
     let s = (n as f64).sqrt();
-    1.628 / (s + 0.12 + 0.11 / s)
+    (-0.5 * (0.5 * level).ln()).sqrt() / (s + 0.12 + 0.11 / s)
 }
 
 /// The Kolmogorov-Smirnov statistic of `total` draws against the CDF `cdf`, given the finite
