@@ -39,6 +39,8 @@ pub struct Fracture {
     pub tangent_length: Option<f64>,
     /// Mixity factor `beta` of the damage law of `tag`.
     pub beta: f64,
+    /// Delay `tau` of the damage law of `tag`, s.
+    pub delay: f64,
     /// Nucleation from random defects, if configured.
     pub nucleation: Option<Nucleation>,
 }
@@ -110,6 +112,7 @@ impl Fracture {
                 .map_or(0.5 * config.shield_angle.to_radians(), f64::to_radians),
             tangent_length: config.tangent_length,
             beta: damage.beta,
+            delay: damage.delay,
             nucleation: config
                 .defects()
                 .expect("validated defects")

@@ -353,7 +353,8 @@ fn first_branching(
 
 /// The crack-tip states of every branch: the crossings of the damage levels on the crack edges
 /// the branch added (found by where they lie: later splits keep them on the segment), tracked
-/// per branch as a cohesive crack is per tag ([`tips::tip_states`]): the tip is where
+/// per branch as a cohesive crack is per tag ([`tips::tip_states`], speeds fitted over at
+/// least `length`, m: the damage law's process zone `c_R tau`): the tip is where
 /// the damage reaches `1 - eps`, behind the newest crack edge, whose insertion only marks where
 /// damage may start. The edges a nucleation makes are left out: the traction that exceeded the
 /// defect's strength loads them whole, so their points fail almost together (on the plate with
@@ -364,6 +365,7 @@ fn first_branching(
 pub(crate) fn branch_tips(
     events: &[FractureEvent],
     crossings: &[Crossing],
+    length: f64,
 ) -> BTreeMap<u32, Vec<TipState>> {
     let key = |e: &FractureEvent| (e.time.to_bits(), e.from.map(f64::to_bits));
     let nucleations: BTreeSet<_> = events
@@ -395,7 +397,7 @@ pub(crate) fn branch_tips(
     }
     by_branch
         .into_iter()
-        .map(|(branch, list)| (branch, tips::tip_states(&list)))
+        .map(|(branch, list)| (branch, tips::tip_states(&list, length)))
         .filter(|(_, states)| !states.is_empty())
         .collect()
 }
@@ -561,7 +563,7 @@ mod tests {
                 tip(r, t1 + (r - h) / 400.0);
             }
         }
-        let tips = branch_tips(&events, &crossings);
+        let tips = branch_tips(&events, &crossings, 0.0);
         assert_eq!(tips.keys().copied().collect::<Vec<_>>(), [2]);
         assert_eq!(tips[&2].len(), 40);
         let (_, summary) = tips::tips_csv("branch", &tips, 1000.0, &UNIT_TIME);
@@ -604,7 +606,7 @@ mod tests {
         let mut arrest = events[n].clone();
         arrest.kind = "arrest".into();
         let tips = |events: &[FractureEvent]| {
-            let tips = branch_tips(events, &crossings);
+            let tips = branch_tips(events, &crossings, 0.0);
             (
                 tips[&0].len(),
                 tips::tips_csv("branch", &tips, 1000.0, &UNIT_TIME).1,
@@ -659,7 +661,7 @@ mod tests {
             level: Level::Tip,
             edge_length: h,
         });
-        let tips = branch_tips(&events, &crossings);
+        let tips = branch_tips(&events, &crossings, 0.0);
         assert_eq!(tips.keys().copied().collect::<Vec<_>>(), [0, 1]);
         assert_eq!((tips[&0].len(), tips[&1].len()), (104, 80));
         for (id, speed) in [(0, 500.0), (1, 400.0)] {

@@ -161,6 +161,7 @@ impl Solve<'_> {
                     total_length: f.total_length,
                     first_branching_time: f.first_branching_time,
                     first_branching_distance: f.first_branching_distance,
+                    max_branch_speed_over_c_r: crack.max_speed_over_c_r,
                 }),
                 ..crack
             }),

@@ -100,9 +100,10 @@ impl Solve<'_> {
     pub(crate) fn crack_tips(&self, mesh: &Mesh, book: &Book) -> Option<(String, CrackSummary)> {
         let c_r = self.problem.material.c_r();
         let time = &self.problem.loaded.config.time;
-        if self.problem.fracture.is_some() {
+        if let Some(fracture) = &self.problem.fracture {
             let crossings: Vec<Crossing> = book.crossings.iter().map(|&(_, c)| c).collect();
-            let branches = records::branch_tips(&book.fracture_events, &crossings);
+            let zone = c_r * fracture.delay;
+            let branches = records::branch_tips(&book.fracture_events, &crossings, zone);
             Some(tips::tips_csv("branch", &branches, c_r, time))
         } else if self.problem.interfaces.any_cohesive() {
             let names = mesh.tag_names();

@@ -9,10 +9,6 @@ use std::collections::BTreeSet;
 /// The summary's documentation, whose key table lists every key.
 const SUMMARY_DOC: &str = include_str!("../../../docs/reference/summary.md");
 
-/// Numeric keys a summary may hold that its key table does not list yet: keys being added to
-/// the summary beside the study runner. A key here that the table also lists is harmless.
-const ANNOUNCED: &[&str] = &["crack.max_branch_speed_over_c_r"];
-
 /// The dotted `summary.json` keys that hold a number (possibly `null`), keys inside arrays
 /// excluded.
 pub fn metric_keys() -> BTreeSet<&'static str> {
@@ -23,7 +19,7 @@ pub fn metric_keys() -> BTreeSet<&'static str> {
         let numeric = kind.starts_with("number") || kind.starts_with("integer");
         (numeric && !key.contains('[')).then_some(key)
     });
-    rows.chain(ANNOUNCED.iter().copied()).collect()
+    rows.collect()
 }
 
 /// `Ok` when `key` is a metric; else why not, with the keys that share its first part.
