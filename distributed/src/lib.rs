@@ -23,6 +23,7 @@
 pub mod partition;
 pub mod pitching;
 mod rng;
+pub mod solving;
 #[cfg(test)]
 mod testing;
 pub mod transport;
@@ -30,8 +31,9 @@ pub mod view;
 
 pub use partition::{Partition, PartitionError, Rank};
 pub use pitching::{Causality, Options, PitchingError, RankReport, pitch_rank, run_threads};
+pub use solving::{Physics, RankSolution, solve_rank, solve_threads};
 pub use transport::loopback::{Loopback, LoopbackOptions};
 #[cfg(feature = "mpi")]
 pub use transport::mpi::{MpiError, MpiOptions, MpiTransport};
-pub use transport::{Message, Transport, TransportError, Update};
+pub use transport::{Cells, Message, Transport, TransportError, Update};
 pub use view::{LocalView, ViewError};

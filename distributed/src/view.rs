@@ -153,6 +153,21 @@ impl LocalView {
         self.triangles[t as usize]
     }
 
+    /// The local id of global triangle `g`, if this view holds it.
+    pub fn local_triangle(&self, g: TriangleId) -> Option<TriangleId> {
+        self.triangles
+            .binary_search(&g)
+            .ok()
+            .map(|t| t as TriangleId)
+    }
+
+    /// True when rank `rank` holds local triangle `t` too (one of its corners is `rank`'s).
+    pub fn held_by(&self, t: TriangleId, rank: Rank) -> bool {
+        self.mesh.triangles()[t as usize]
+            .iter()
+            .any(|&v| self.owner[v as usize] == rank)
+    }
+
     /// The rank that owns local vertex `v`.
     pub fn owner(&self, v: VertexId) -> Rank {
         self.owner[v as usize]
@@ -232,6 +247,12 @@ mod tests {
                     let local = (0..view.mesh().triangles().len() as TriangleId)
                         .find(|&l| view.global_triangle(l) == t as TriangleId);
                     assert_eq!(local.is_some(), ranks.contains(&view.rank()));
+                    assert_eq!(view.local_triangle(t as TriangleId), local);
+                    if let Some(l) = local {
+                        for r in 0..p.ranks() as Rank {
+                            assert_eq!(view.held_by(l, r), ranks.contains(&r));
+                        }
+                    }
                     if let Some(l) = local {
                         let corners = view.mesh().triangles()[l as usize].map(|v| view.global(v));
                         assert_eq!(&corners, tri, "corner order kept");

@@ -1,0 +1,263 @@
+//! Patches solved over ranks: each rank solves the patch of every tent it pitches on its own
+//! view, with the real patch solver, and its updates carry the elements neighbours read as
+//! inflow.
+//!
+//! # What a patch reads, and why it is the serial run's
+//! The patch of a tent at `v` reads the front times of `v`'s neighbours and the elements under
+//! `v`'s star triangles (its inflow). The pitching rule makes those times current
+//! ([`crate::pitching`]). Each element was left by the last tent at one of its triangle's
+//! corners; that tent's owner sends it, with the tent's update, to every rank that holds the
+//! triangle, tagged with the triangle's generation (tents at its corners so far), and a
+//! receiver stores it only if that is newer than its copy. When `v` passes the rule, its rank
+//! sees every corner `w` of its star at `w`'s current time, so the update of `w`'s last tent
+//! has arrived (or `w` is its own), and with it the element of every triangle of `w`'s star
+//! this rank holds: nothing newer exists, so the copy under each star triangle is current.
+//! The star's triangles are in the whole mesh's order with their corner order (local ids
+//! increase with global ids), so the patch solver gets the serial run's inputs in the serial
+//! run's order and returns its elements bitwise, for any partition and message timing. At the
+//! end every copy of an element, on every rank that holds it, is the serial run's.
+//!
+//! # Scope
+//! Linear elastodynamics without interface laws (every interior edge is bonded, so no
+//! interface state crosses ranks), without mesh-changing events and without fracture, from
+//! initial data at time 0. An element travels as its geometry's values
+//! ([`Geometry::to_values`]), its top facet's energy parts and its coefficients, all `f64`
+//! bits; only tents at vertices that another rank holds as a ghost send any, and solving an
+//! interior patch allocates nothing.
+
+use sdg_mesh::{Front, Mesh, Tent, VertexId};
+use sdg_solver::boundary::Boundary;
+use sdg_solver::element::{FrontSolution, GEOMETRY_VALUES, Geometry};
+use sdg_solver::patch::{Initial, PatchSolver};
+use sdg_solver::system::System;
+
+use crate::partition::{Partition, Rank};
+use crate::pitching::{
+    Causality, Options, PitchingError, RankReport, Work, on_threads, rank_start, run_rank,
+};
+use crate::transport::loopback::LoopbackOptions;
+use crate::transport::{Cells, Transport};
+use crate::view::LocalView;
+
+/// Values of a top facet's energy parts `[kinetic, strain, flux]` in an element's values.
+const ENERGY_VALUES: usize = 3;
+
+/// What every rank solves its patches with.
+#[derive(Clone, Copy, Debug)]
+pub struct Physics<'a> {
+    /// The first-order system of the material.
+    pub system: &'a System,
+    /// Polynomial order of the elements, 1 to 4.
+    pub order: usize,
+    /// Boundary conditions by tag (on the local views, boundary edges keep their tags).
+    pub boundary: &'a Boundary,
+    /// The state at time 0.
+    pub initial: Initial<'a>,
+}
+
+impl Physics<'_> {
+    /// A patch solver for stars of up to `max_star` triangles.
+    fn solver(&self, max_star: usize) -> PatchSolver {
+        PatchSolver::new(self.system.clone(), self.order, max_star)
+    }
+
+    /// Initial data under every triangle of `view`: the front solution a rank starts from.
+    pub fn initial_solution(&self, view: &LocalView) -> FrontSolution {
+        let solver = self.solver(0);
+        FrontSolution::new(
+            view.mesh().triangles().len(),
+            solver.basis().len(),
+            solver.width(),
+        )
+    }
+}
+
+/// A rank's result: its report, view, front and the elements under its view's triangles.
+#[derive(Debug)]
+pub struct RankSolution {
+    /// What the rank did.
+    pub report: RankReport,
+    /// Its view of the mesh.
+    pub view: LocalView,
+    /// Its front (local vertex ids), at the end time.
+    pub front: Front,
+    /// The elements under its view's triangles (local triangle ids).
+    pub solution: FrontSolution,
+}
+
+/// A rank's patch solves: the [`Work`] of [`solve_rank`].
+struct Patches<'a> {
+    solver: PatchSolver,
+    physics: Physics<'a>,
+    solution: &'a FrontSolution,
+    /// Per local triangle, tents at its corners so far, as far as this rank has heard.
+    generation: Vec<u32>,
+    /// Values per element.
+    stride: usize,
+}
+
+impl Work for Patches<'_> {
+    fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError> {
+        self.solver
+            .solve(
+                view.mesh(),
+                front,
+                tent,
+                self.physics.boundary,
+                self.physics.initial,
+                self.solution,
+            )
+            .map_err(|source| PitchingError::Patch {
+                rank: view.rank(),
+                vertex: view.global(tent.vertex),
+                time: tent.t_old,
+                source,
+            })?;
+        self.solver.commit(self.solution);
+        for &t in view.mesh().vertex_triangles(tent.vertex) {
+            self.generation[t as usize] += 1;
+        }
+        Ok(())
+    }
+
+    fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, cells: &mut Cells) {
+        for &t in view.mesh().vertex_triangles(v) {
+            if !view.held_by(t, to) {
+                continue;
+            }
+            cells
+                .triangles
+                .push((view.global_triangle(t), self.generation[t as usize]));
+            let energy = self
+                .solution
+                .energy(t as usize)
+                .unwrap_or([f64::NAN; ENERGY_VALUES]);
+            self.solution.with_element(t as usize, |element| {
+                let (geometry, coefficients) = element.expect("the tent's star is solved");
+                cells.values.extend(geometry.to_values());
+                cells.values.extend(energy);
+                cells.values.extend_from_slice(coefficients);
+            });
+        }
+    }
+
+    fn apply(&mut self, view: &LocalView, from: Rank, cells: &Cells) -> Result<(), PitchingError> {
+        if cells.is_empty() {
+            return Ok(());
+        }
+        if cells.values.len() != cells.len() * self.stride {
+            return Err(PitchingError::CellSize {
+                rank: view.rank(),
+                from,
+                got: cells.stride(),
+                expected: self.stride,
+            });
+        }
+        for i in 0..cells.len() {
+            let (global, generation, values) = cells.get(i);
+            let t = view
+                .local_triangle(global)
+                .filter(|&t| view.held_by(t, from))
+                .ok_or(PitchingError::StrayCell {
+                    rank: view.rank(),
+                    from,
+                    triangle: global,
+                })?;
+            if generation <= self.generation[t as usize] {
+                continue;
+            }
+            self.generation[t as usize] = generation;
+            let (geometry, rest) = values.split_at(GEOMETRY_VALUES);
+            let (energy, coefficients) = rest.split_at(ENERGY_VALUES);
+            let geometry = Geometry::from_values(geometry.try_into().expect("split there"));
+            let energy: [f64; ENERGY_VALUES] = energy.try_into().expect("split there");
+            let energy = energy.iter().all(|x| !x.is_nan()).then_some(energy);
+            self.solution
+                .store(t as usize, &geometry, coefficients, energy);
+        }
+        Ok(())
+    }
+}
+
+/// [`crate::pitch_rank`] that also solves each tent's patch with `physics` on `solution`, the
+/// elements under the view's triangles (local ids; [`Physics::initial_solution`] at the start,
+/// with `front` flat at time 0), and sends other ranks the elements they read with the updates.
+/// At the end every element of `solution` is the serial run's, bitwise.
+pub fn solve_rank<T: Transport>(
+    view: &LocalView,
+    pitcher: &sdg_mesh::Pitcher,
+    front: &Front,
+    solution: &FrontSolution,
+    physics: Physics<'_>,
+    transport: &mut T,
+    options: &Options,
+) -> Result<RankReport, PitchingError> {
+    let max_star = view
+        .owned()
+        .map(|v| view.mesh().vertex_triangles(v).len())
+        .max()
+        .unwrap_or(0);
+    let solver = physics.solver(max_star);
+    let size = solver.basis().len() * solver.width();
+    let triangles = view.mesh().triangles().len();
+    if solution.len() != triangles || solution.basis_len() * solution.width() != size {
+        return Err(PitchingError::Solution {
+            rank: view.rank(),
+            got: [solution.len(), solution.basis_len() * solution.width()],
+            expected: [triangles, size],
+        });
+    }
+    let patches = Patches {
+        solver,
+        physics,
+        solution,
+        generation: vec![0; triangles],
+        stride: GEOMETRY_VALUES + ENERGY_VALUES + size,
+    };
+    run_rank(view, pitcher, front, transport, patches, options)
+}
+
+/// Runs [`solve_rank`] for every rank of `partition` on threads of this process, connected by
+/// [`crate::Loopback`] with `delays`, from initial data at time 0. Returns the ranks' results
+/// by rank, or the first error by rank that is not an [`PitchingError::Aborted`].
+pub fn solve_threads(
+    mesh: &Mesh,
+    partition: &Partition,
+    causality: Causality,
+    physics: Physics<'_>,
+    delays: LoopbackOptions,
+    options: &Options,
+) -> Result<Vec<RankSolution>, PitchingError> {
+    let views = LocalView::all(mesh, partition)?;
+    let start = vec![0.0; mesh.vertices().len()];
+    let ranks = views
+        .iter()
+        .map(|view| {
+            let (pitcher, front) = rank_start(view, causality, &start)?;
+            Ok((pitcher, front, physics.initial_solution(view)))
+        })
+        .collect::<Result<Vec<_>, PitchingError>>()?;
+    let reports = on_threads(&views, delays, |rank, end| {
+        let (pitcher, front, solution) = &ranks[rank];
+        solve_rank(
+            &views[rank],
+            pitcher,
+            front,
+            solution,
+            physics,
+            end,
+            options,
+        )
+    })?;
+    Ok(reports
+        .into_iter()
+        .zip(views)
+        .zip(ranks)
+        .map(|((report, view), (_, front, solution))| RankSolution {
+            report,
+            view,
+            front,
+            solution,
+        })
+        .collect())
+}
