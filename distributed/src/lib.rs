@@ -14,11 +14,15 @@
 //! - [`pitching`]: asynchronous tent pitching over ranks under the `(time, id)`-first rule, with
 //!   termination by done messages (no global poll), whose tents are bitwise the serial
 //!   reference order's for every partition and message timing (the argument is in the module
-//!   docs; the tests check it).
+//!   docs; the tests check it);
+//! - [`solving`]: the same pitching with each tent's patch solved on its rank by the patch
+//!   solver, the updates carrying the elements the receiver reads as inflow, each with its
+//!   triangle's generation, whose elements are bitwise the serial run's (linear
+//!   elastodynamics without interface laws, events or fracture).
 //!
-//! Not built yet: solving patches (messages carrying the elements under a star and interface
-//! states), METIS (the `metis` crate behind a feature), mesh-changing events across ranks, deterministic rounds
-//! over ranks, outputs and checkpoints per rank. See `distributed/README.md`.
+//! Not built yet: interface states across ranks, METIS (the `metis` crate behind a feature),
+//! mesh-changing events across ranks, deterministic rounds over ranks, outputs and checkpoints
+//! per rank, `sdg run` over MPI. See `distributed/README.md`.
 
 pub mod partition;
 pub mod pitching;
