@@ -24,7 +24,7 @@ use sdg_distributed::{
 use sdg_engine::{LoadedConfig, Problem};
 use sdg_mesh::{Front, Pitcher};
 use sdg_solver::element::FrontSolution;
-use sdg_solver::patch::Initial;
+use sdg_solver::patch::{Initial, Newton};
 
 /// The command line: cells along each side and the partition's name.
 struct Args {
@@ -74,6 +74,11 @@ fn setup(problem: &Problem) -> (Causality, Physics<'_>) {
         order: config.solver.order,
         boundary: &problem.boundary,
         initial: problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave),
+        interfaces: &problem.interfaces,
+        newton: Newton {
+            tol: config.solver.newton_tol,
+            max_iter: config.solver.newton_max_iter,
+        },
     };
     (causality, physics)
 }

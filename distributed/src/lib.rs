@@ -34,7 +34,9 @@ pub mod transport;
 pub mod view;
 
 pub use partition::{Partition, PartitionError, Rank};
-pub use pitching::{Causality, Options, PitchingError, RankReport, pitch_rank, run_threads};
+pub use pitching::{
+    Causality, CellKind, Options, PitchingError, RankReport, pitch_rank, run_threads,
+};
 pub use solving::{Physics, RankSolution, solve_rank, solve_threads};
 pub use transport::loopback::{Loopback, LoopbackOptions};
 #[cfg(feature = "mpi")]

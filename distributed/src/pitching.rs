@@ -31,13 +31,13 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::{Duration, Instant};
 
-use sdg_mesh::{Front, Mesh, PitchError, Pitcher, Tent, TriangleId, VertexId};
+use sdg_mesh::{Front, Mesh, PitchError, Pitcher, Tent, VertexId};
 use sdg_solver::patch::NewtonFailure;
 
 use crate::partition::{Partition, Rank};
 use crate::rng::SplitMix64;
 use crate::transport::loopback::{Loopback, LoopbackOptions};
-use crate::transport::{Cells, Message, Transport, TransportError, Update};
+use crate::transport::{Message, Transport, TransportError, Update};
 use crate::view::{LocalView, ViewError};
 
 /// How a rank runs.
@@ -104,32 +104,53 @@ pub enum PitchingError {
         source: NewtonFailure,
     },
     #[error(
-        "rank {rank}: an element of triangle {triangle} from rank {from}, which one of them does \
-         not hold"
+        "rank {rank}: the {kind} of global id {id} from rank {from}, which one of them does not \
+         hold"
     )]
     StrayCell {
         rank: Rank,
         from: Rank,
-        triangle: TriangleId,
+        kind: CellKind,
+        id: u32,
     },
     #[error(
-        "rank {rank}: the front solution has {} triangles of {} values, but the view and the \
-         solver need {} of {}", got[0], got[1], expected[0], expected[1]
+        "rank {rank}: the front solution has {got} {what}, but the view and the solver need \
+         {expected}"
     )]
     Solution {
         rank: Rank,
-        got: [usize; 2],
-        expected: [usize; 2],
+        what: &'static str,
+        got: usize,
+        expected: usize,
     },
     #[error(
-        "rank {rank}: elements of {got} values from rank {from}, but this rank's have {expected}"
+        "rank {rank}: {kind}s of {got} values from rank {from}, but this rank's have {expected}"
     )]
     CellSize {
         rank: Rank,
         from: Rank,
+        kind: CellKind,
         got: usize,
         expected: usize,
     },
+}
+
+/// What a cell of an update is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CellKind {
+    /// An element under a front triangle.
+    Element,
+    /// An interface face over a front edge.
+    Face,
+}
+
+impl std::fmt::Display for CellKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            CellKind::Element => "element",
+            CellKind::Face => "interface face",
+        })
+    }
 }
 
 /// What a rank does besides pitching: with each of its tents, and with the elements that
@@ -139,12 +160,13 @@ pub(crate) trait Work {
     /// has its new time already).
     fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError>;
 
-    /// Writes into `cells` (empty) the elements rank `to` reads of the last tent at owned
+    /// Writes into `update`'s (empty) cells what rank `to` reads of the last tent at owned
     /// local vertex `v`.
-    fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, cells: &mut Cells);
+    fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update);
 
-    /// Stores the elements `cells` that rank `from` sent, those newer than this rank's copies.
-    fn apply(&mut self, view: &LocalView, from: Rank, cells: &Cells) -> Result<(), PitchingError>;
+    /// Stores the cells of `update` from rank `from` that are newer than this rank's copies.
+    fn apply(&mut self, view: &LocalView, from: Rank, update: &Update)
+    -> Result<(), PitchingError>;
 }
 
 impl Work for () {
@@ -152,9 +174,9 @@ impl Work for () {
         Ok(())
     }
 
-    fn cells_for(&self, _: &LocalView, _: VertexId, _: Rank, _: &mut Cells) {}
+    fn cells_for(&self, _: &LocalView, _: VertexId, _: Rank, _: &mut Update) {}
 
-    fn apply(&mut self, _: &LocalView, _: Rank, _: &Cells) -> Result<(), PitchingError> {
+    fn apply(&mut self, _: &LocalView, _: Rank, _: &Update) -> Result<(), PitchingError> {
         Ok(())
     }
 }
@@ -280,9 +302,9 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
                 vertex: self.view.global(v),
                 time: tent.t_new,
                 generation: self.generation[v as usize],
-                cells: Cells::default(),
+                ..Update::default()
             };
-            self.work.cells_for(self.view, v, to, &mut update.cells);
+            self.work.cells_for(self.view, v, to, &mut update);
             self.report.updates_sent += 1;
             self.report.update_bytes += update.encoded_len() as u64;
             self.send(to, Message::Update(update))?;
@@ -310,7 +332,7 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
                         from,
                         vertex: u.vertex,
                     })?;
-                self.work.apply(self.view, from, &u.cells)?;
+                self.work.apply(self.view, from, &u)?;
                 if u.generation > self.generation[w as usize] {
                     self.generation[w as usize] = u.generation;
                     self.front.set_time(w, u.time);

@@ -25,18 +25,22 @@
 //! bits; only tents at vertices that another rank holds as a ghost send any, and solving an
 //! interior patch allocates nothing.
 
-use sdg_mesh::{Front, Mesh, Tent, VertexId};
+use sdg_mesh::{EdgeId, Front, Mesh, Tent, VertexId};
 use sdg_solver::boundary::Boundary;
 use sdg_solver::element::{FrontSolution, GEOMETRY_VALUES, Geometry};
-use sdg_solver::patch::{Initial, PatchSolver};
+use sdg_solver::face::{
+    FACE_GEOMETRY_VALUES, FaceGeometry, FaceState, MAX_FACE_BASIS, STATE_COMPONENTS,
+};
+use sdg_solver::interface::Interfaces;
+use sdg_solver::patch::{Initial, Newton, PatchSolver};
 use sdg_solver::system::System;
 
 use crate::partition::{Partition, Rank};
 use crate::pitching::{
-    Causality, Options, PitchingError, RankReport, Work, on_threads, rank_start, run_rank,
+    Causality, CellKind, Options, PitchingError, RankReport, Work, on_threads, rank_start, run_rank,
 };
 use crate::transport::loopback::LoopbackOptions;
-use crate::transport::{Cells, Transport};
+use crate::transport::{Transport, Update};
 use crate::view::LocalView;
 
 /// Values of a top facet's energy parts `[kinetic, strain, flux]` in an element's values.
@@ -53,22 +57,29 @@ pub struct Physics<'a> {
     pub boundary: &'a Boundary,
     /// The state at time 0.
     pub initial: Initial<'a>,
+    /// Interface laws by tag (interior edges without one are bonded).
+    pub interfaces: &'a Interfaces,
+    /// Newton settings of the patches with nonlinear faces.
+    pub newton: Newton,
 }
 
 impl Physics<'_> {
     /// A patch solver for stars of up to `max_star` triangles.
     fn solver(&self, max_star: usize) -> PatchSolver {
         PatchSolver::new(self.system.clone(), self.order, max_star)
+            .with_interfaces(self.interfaces.clone(), self.newton)
     }
 
     /// Initial data under every triangle of `view`: the front solution a rank starts from.
     pub fn initial_solution(&self, view: &LocalView) -> FrontSolution {
-        let solver = self.solver(0);
+        // Only for the element sizes: no interfaces, no patch.
+        let solver = PatchSolver::new(self.system.clone(), self.order, 0);
         FrontSolution::new(
             view.mesh().triangles().len(),
             solver.basis().len(),
             solver.width(),
         )
+        .with_edges(view.mesh().edges().len())
     }
 }
 
@@ -92,8 +103,21 @@ struct Patches<'a> {
     solution: &'a FrontSolution,
     /// Per local triangle, tents at its corners so far, as far as this rank has heard.
     generation: Vec<u32>,
+    /// Per local edge, tents at its ends so far, as far as this rank has heard; empty without
+    /// nonlinear interface laws (no faces are stored then).
+    edge_generation: Vec<u32>,
     /// Values per element.
     stride: usize,
+}
+
+/// Values per interface face: its geometry's, then the coefficients of each component.
+const FACE_VALUES: usize = FACE_GEOMETRY_VALUES + STATE_COMPONENTS * MAX_FACE_BASIS;
+
+/// The edges from `v` to its neighbours on `mesh`.
+fn spokes(mesh: &Mesh, v: VertexId) -> impl Iterator<Item = EdgeId> + '_ {
+    mesh.vertex_neighbors(v)
+        .iter()
+        .filter_map(move |&w| mesh.edge_between(v, w))
 }
 
 impl Work for Patches<'_> {
@@ -117,16 +141,22 @@ impl Work for Patches<'_> {
         for &t in view.mesh().vertex_triangles(tent.vertex) {
             self.generation[t as usize] += 1;
         }
+        if !self.edge_generation.is_empty() {
+            for e in spokes(view.mesh(), tent.vertex) {
+                self.edge_generation[e as usize] += 1;
+            }
+        }
         Ok(())
     }
 
-    fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, cells: &mut Cells) {
+    fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update) {
+        let elements = &mut update.elements;
         for &t in view.mesh().vertex_triangles(v) {
             if !view.held_by(t, to) {
                 continue;
             }
-            cells
-                .triangles
+            elements
+                .ids
                 .push((view.global_triangle(t), self.generation[t as usize]));
             let energy = self
                 .solution
@@ -134,35 +164,62 @@ impl Work for Patches<'_> {
                 .unwrap_or([f64::NAN; ENERGY_VALUES]);
             self.solution.with_element(t as usize, |element| {
                 let (geometry, coefficients) = element.expect("the tent's star is solved");
-                cells.values.extend(geometry.to_values());
-                cells.values.extend(energy);
-                cells.values.extend_from_slice(coefficients);
+                elements.values.extend(geometry.to_values());
+                elements.values.extend(energy);
+                elements.values.extend_from_slice(coefficients);
             });
+        }
+        if self.edge_generation.is_empty() {
+            return;
+        }
+        for e in spokes(view.mesh(), v) {
+            let face = self.solution.face(e as usize);
+            if let Some(face) = face.filter(|_| view.edge_held_by(e, to)) {
+                let faces = &mut update.faces;
+                faces
+                    .ids
+                    .push((view.global_edge(e), self.edge_generation[e as usize]));
+                faces.values.extend(face.geometry.to_values());
+                faces.values.extend(face.coefficients.iter().flatten());
+            }
         }
     }
 
-    fn apply(&mut self, view: &LocalView, from: Rank, cells: &Cells) -> Result<(), PitchingError> {
-        if cells.is_empty() {
-            return Ok(());
+    fn apply(
+        &mut self,
+        view: &LocalView,
+        from: Rank,
+        update: &Update,
+    ) -> Result<(), PitchingError> {
+        let rank = view.rank();
+        let (elements, faces) = (&update.elements, &update.faces);
+        let sizes = [
+            (CellKind::Element, elements, self.stride),
+            (CellKind::Face, faces, FACE_VALUES),
+        ];
+        for (kind, cells, expected) in sizes {
+            if cells.values.len() != cells.len() * expected {
+                return Err(PitchingError::CellSize {
+                    rank,
+                    from,
+                    kind,
+                    got: cells.stride(),
+                    expected,
+                });
+            }
         }
-        if cells.values.len() != cells.len() * self.stride {
-            return Err(PitchingError::CellSize {
-                rank: view.rank(),
-                from,
-                got: cells.stride(),
-                expected: self.stride,
-            });
-        }
-        for i in 0..cells.len() {
-            let (global, generation, values) = cells.get(i);
+        let stray = |kind, id| PitchingError::StrayCell {
+            rank,
+            from,
+            kind,
+            id,
+        };
+        for i in 0..elements.len() {
+            let (global, generation, values) = elements.get(i);
             let t = view
                 .local_triangle(global)
                 .filter(|&t| view.held_by(t, from))
-                .ok_or(PitchingError::StrayCell {
-                    rank: view.rank(),
-                    from,
-                    triangle: global,
-                })?;
+                .ok_or(stray(CellKind::Element, global))?;
             if generation <= self.generation[t as usize] {
                 continue;
             }
@@ -174,6 +231,30 @@ impl Work for Patches<'_> {
             let energy = energy.iter().all(|x| !x.is_nan()).then_some(energy);
             self.solution
                 .store(t as usize, &geometry, coefficients, energy);
+        }
+        for i in 0..faces.len() {
+            let (global, generation, values) = faces.get(i);
+            // A face comes with the tent at one of its edge's ends.
+            let e = view
+                .local_edge(global)
+                .filter(|&e| {
+                    let ends = view.mesh().edges()[e as usize].vertices;
+                    ends.iter().any(|&v| view.owner(v) == from)
+                })
+                .filter(|_| !self.edge_generation.is_empty())
+                .ok_or(stray(CellKind::Face, global))?;
+            if generation <= self.edge_generation[e as usize] {
+                continue;
+            }
+            self.edge_generation[e as usize] = generation;
+            let (geometry, coefficients) = values.split_at(FACE_GEOMETRY_VALUES);
+            let face = FaceState {
+                geometry: FaceGeometry::from_values(geometry.try_into().expect("split there")),
+                coefficients: std::array::from_fn(|k| {
+                    std::array::from_fn(|j| coefficients[k * MAX_FACE_BASIS + j])
+                }),
+            };
+            self.solution.store_face(e as usize, &face);
         }
         Ok(())
     }
@@ -199,19 +280,37 @@ pub fn solve_rank<T: Transport>(
         .unwrap_or(0);
     let solver = physics.solver(max_star);
     let size = solver.basis().len() * solver.width();
-    let triangles = view.mesh().triangles().len();
-    if solution.len() != triangles || solution.basis_len() * solution.width() != size {
-        return Err(PitchingError::Solution {
-            rank: view.rank(),
-            got: [solution.len(), solution.basis_len() * solution.width()],
-            expected: [triangles, size],
-        });
+    let (triangles, edges) = (view.mesh().triangles().len(), view.mesh().edges().len());
+    let faces = physics.interfaces.any_nonlinear();
+    let sizes = [
+        ("triangles", solution.len(), triangles),
+        (
+            "values per element",
+            solution.basis_len() * solution.width(),
+            size,
+        ),
+        (
+            "edges",
+            solution.edges(),
+            if faces { edges } else { solution.edges() },
+        ),
+    ];
+    for (what, got, expected) in sizes {
+        if got != expected {
+            return Err(PitchingError::Solution {
+                rank: view.rank(),
+                what,
+                got,
+                expected,
+            });
+        }
     }
     let patches = Patches {
         solver,
         physics,
         solution,
         generation: vec![0; triangles],
+        edge_generation: if faces { vec![0; edges] } else { Vec::new() },
         stride: GEOMETRY_VALUES + ENERGY_VALUES + size,
     };
     run_rank(view, pitcher, front, transport, patches, options)

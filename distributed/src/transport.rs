@@ -17,13 +17,13 @@ pub mod mpi;
 
 use std::time::Duration;
 
-use sdg_mesh::{TriangleId, VertexId};
+use sdg_mesh::VertexId;
 
 use crate::partition::Rank;
 
 /// A vertex's front time after a tent at it, sent by its owner to the ranks that hold it as a
-/// ghost, with the elements under the vertex's star that the receiver holds when patches are
-/// solved.
+/// ghost, with the elements under the vertex's star and the interface faces over its spokes
+/// that the receiver holds, when patches are solved.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Update {
     /// Global vertex id.
@@ -33,48 +33,78 @@ pub struct Update {
     /// Tents pitched at the vertex so far: a receiver applies the update only if this is more
     /// than the generation of its copy.
     pub generation: u32,
-    /// The elements the tent left under the receiver's triangles of the star (none when only
-    /// pitching).
-    pub cells: Cells,
+    /// The elements the tent left under the receiver's triangles of the star, keyed by global
+    /// triangle (none when only pitching).
+    pub elements: Cells,
+    /// The interface faces the tent left over the receiver's edges among the spokes, keyed by
+    /// global edge (none without interface laws).
+    pub faces: Cells,
 }
 
-/// Elements under front triangles, as plain values (bit-exact), each with its generation.
+/// Elements under front triangles, or interface faces over front edges, as plain values
+/// (bit-exact), each with its global triangle or edge id and its generation.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Cells {
-    /// Per element, its global triangle and the tents at the triangle's corners so far: a
-    /// receiver stores the element only if this is more than the generation of its copy.
-    pub triangles: Vec<(TriangleId, u32)>,
-    /// The elements' values back to back, `values.len() / triangles.len()` each.
+    /// Per cell, its global id and generation (tents at the triangle's corners or the edge's
+    /// ends so far): a receiver stores the cell only if this is more than its copy's.
+    pub ids: Vec<(u32, u32)>,
+    /// The cells' values back to back, `values.len() / ids.len()` each.
     pub values: Vec<f64>,
 }
 
 impl Cells {
-    /// Number of elements.
+    /// Number of cells.
     pub fn len(&self) -> usize {
-        self.triangles.len()
+        self.ids.len()
     }
 
-    /// True without elements.
+    /// True without cells.
     pub fn is_empty(&self) -> bool {
-        self.triangles.is_empty()
+        self.ids.is_empty()
     }
 
-    /// Values per element (0 without elements).
+    /// Values per cell (0 without cells).
     pub fn stride(&self) -> usize {
         self.values.len().checked_div(self.len()).unwrap_or(0)
     }
 
-    /// Element `i`: its global triangle, generation and values.
-    pub fn get(&self, i: usize) -> (TriangleId, u32, &[f64]) {
+    /// Cell `i`: its global id, generation and values.
+    pub fn get(&self, i: usize) -> (u32, u32, &[f64]) {
         let stride = self.stride();
-        let (t, g) = self.triangles[i];
-        (t, g, &self.values[i * stride..(i + 1) * stride])
+        let (id, generation) = self.ids[i];
+        (id, generation, &self.values[i * stride..(i + 1) * stride])
     }
 
-    /// Empties the cells, keeping their memory.
-    pub fn clear(&mut self) {
-        self.triangles.clear();
-        self.values.clear();
+    /// Bytes of the cells in [`Message::encode`]: 8 per cell and 8 per value.
+    fn encoded_len(&self) -> usize {
+        8 * (self.len() + self.values.len())
+    }
+
+    fn encode(&self, out: &mut Vec<u8>) {
+        for &(id, generation) in &self.ids {
+            out.extend(id.to_le_bytes());
+            out.extend(generation.to_le_bytes());
+        }
+        for x in &self.values {
+            out.extend(x.to_bits().to_le_bytes());
+        }
+    }
+
+    /// `count` cells of `stride` values from the start of `bytes`, and the bytes after them.
+    fn decode(bytes: &[u8], count: usize, stride: usize) -> Option<(Self, &[u8])> {
+        let values = count.checked_mul(stride)?;
+        let len = count.checked_add(values)?.checked_mul(8)?;
+        if len > bytes.len() {
+            return None;
+        }
+        let (cells, rest) = bytes.split_at(len);
+        let word = |at: usize| u32::from_le_bytes(cells[at..at + 4].try_into().expect("4 bytes"));
+        let ids = (0..count).map(|i| (word(8 * i), word(8 * i + 4))).collect();
+        let values = cells[8 * count..]
+            .chunks_exact(8)
+            .map(|b| f64::from_bits(u64::from_le_bytes(b.try_into().expect("8 bytes"))))
+            .collect();
+        Some((Self { ids, values }, rest))
     }
 }
 
@@ -93,9 +123,9 @@ pub enum Message {
     Abort,
 }
 
-/// Bytes of an encoded [`Message::Update`] without elements; each element adds 8 bytes and 8
-/// per value.
-pub const UPDATE_BYTES: usize = 25;
+/// Bytes of an encoded [`Message::Update`] without cells; each cell adds 8 bytes and 8 per
+/// value.
+pub const UPDATE_BYTES: usize = 33;
 
 /// Why a transport failed.
 #[derive(Clone, Debug, thiserror::Error, PartialEq, Eq)]
@@ -132,15 +162,16 @@ pub trait Transport: Send {
 impl Update {
     /// Bytes of the update as [`Message::encode`] writes it.
     pub fn encoded_len(&self) -> usize {
-        UPDATE_BYTES + 8 * (self.cells.len() + self.cells.values.len())
+        UPDATE_BYTES + self.elements.encoded_len() + self.faces.encoded_len()
     }
 }
 
 impl Message {
     /// Appends the message's bytes (little endian) to `out`: for an update kind 0, vertex,
-    /// generation, time bits, element count and values per element ([`UPDATE_BYTES`]), then
-    /// per element its triangle and generation, then the values' bits; kind 1 and the count
-    /// for done; kind 2 for abort.
+    /// generation, time bits, then count and values per cell of the elements and of the faces
+    /// ([`UPDATE_BYTES`]), then per element its triangle and generation and the elements'
+    /// values' bits, then the same for the faces; kind 1 and the count for done; kind 2 for
+    /// abort.
     pub fn encode(&self, out: &mut Vec<u8>) {
         match self {
             Message::Update(u) => {
@@ -149,15 +180,12 @@ impl Message {
                 out.extend(u.vertex.to_le_bytes());
                 out.extend(u.generation.to_le_bytes());
                 out.extend(u.time.to_bits().to_le_bytes());
-                out.extend((u.cells.len() as u32).to_le_bytes());
-                out.extend((u.cells.stride() as u32).to_le_bytes());
-                for &(t, g) in &u.cells.triangles {
-                    out.extend(t.to_le_bytes());
-                    out.extend(g.to_le_bytes());
+                for cells in [&u.elements, &u.faces] {
+                    out.extend((cells.len() as u32).to_le_bytes());
+                    out.extend((cells.stride() as u32).to_le_bytes());
                 }
-                for x in &u.cells.values {
-                    out.extend(x.to_bits().to_le_bytes());
-                }
+                u.elements.encode(out);
+                u.faces.encode(out);
             }
             Message::Done { sent } => {
                 out.push(1);
@@ -178,28 +206,21 @@ impl Message {
         let long = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
         match (kind, bytes.len()) {
             (0, len) if len >= UPDATE_BYTES => {
-                let (count, stride) = (word(17) as usize, word(21) as usize);
-                let values = count.checked_mul(stride).ok_or(malformed.clone())?;
-                let expected = count
-                    .checked_add(values)
-                    .and_then(|n| n.checked_mul(8))
-                    .and_then(|n| n.checked_add(UPDATE_BYTES));
-                if expected != Some(len) {
+                let size = |at: usize| word(at) as usize;
+                let rest = &bytes[UPDATE_BYTES..];
+                let (elements, rest) =
+                    Cells::decode(rest, size(17), size(21)).ok_or(malformed.clone())?;
+                let (faces, rest) =
+                    Cells::decode(rest, size(25), size(29)).ok_or(malformed.clone())?;
+                if !rest.is_empty() {
                     return Err(malformed);
                 }
-                let at = UPDATE_BYTES + 8 * count;
                 Ok(Message::Update(Update {
                     vertex: word(1),
                     generation: word(5),
                     time: f64::from_bits(long(9)),
-                    cells: Cells {
-                        triangles: (0..count)
-                            .map(|i| (word(UPDATE_BYTES + 8 * i), word(UPDATE_BYTES + 8 * i + 4)))
-                            .collect(),
-                        values: (0..values)
-                            .map(|i| f64::from_bits(long(at + 8 * i)))
-                            .collect(),
-                    },
+                    elements,
+                    faces,
                 }))
             }
             (1, 9) => Ok(Message::Done { sent: long(1) }),
@@ -220,15 +241,19 @@ mod tests {
                 vertex: 70_000,
                 time: 0.1 + 0.2,
                 generation: 9,
-                cells: Cells::default(),
+                ..Update::default()
             }),
             Message::Update(Update {
                 vertex: 3,
                 time: 1e-300,
                 generation: 1,
-                cells: Cells {
-                    triangles: vec![(5, 2), (1 << 30, 7)],
+                elements: Cells {
+                    ids: vec![(5, 2), (1 << 30, 7)],
                     values: vec![0.1, -0.0, f64::MIN_POSITIVE, 1.0 / 3.0, 2.5, -7e10],
+                },
+                faces: Cells {
+                    ids: vec![(9, 4)],
+                    values: vec![-1.5, 0.25],
                 },
             }),
             Message::Done { sent: 1 << 40 },
@@ -245,9 +270,7 @@ mod tests {
             assert_eq!(&back, m);
             if let (Message::Update(a), Message::Update(b)) = (&back, m) {
                 let bits = |u: &Update| {
-                    u.cells
-                        .values
-                        .iter()
+                    (u.elements.values.iter().chain(&u.faces.values))
                         .map(|x| x.to_bits())
                         .collect::<Vec<_>>()
                 };
@@ -264,7 +287,7 @@ mod tests {
         );
         let mut cells = Vec::new();
         messages[1].encode(&mut cells);
-        assert_eq!(cells.len(), UPDATE_BYTES + 8 * (2 + 6));
+        assert_eq!(cells.len(), UPDATE_BYTES + 8 * (2 + 6) + 8 * (1 + 2));
         let len = cells.len() - 8;
         assert_eq!(
             Message::decode(&cells[..len]),

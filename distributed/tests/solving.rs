@@ -10,30 +10,44 @@ use sdg_distributed::{
 use sdg_engine::{LoadedConfig, Problem, RunOptions};
 use sdg_mesh::{Front, Mesh, VertexId};
 use sdg_solver::element::{FrontSolution, Geometry};
-use sdg_solver::patch::Initial;
+use sdg_solver::patch::{Initial, Newton};
 
-/// `configs/plane_wave.toml` (an oblique P wave through a PMMA square, the exact solution on
-/// every side, order 2) on `cells` x `cells` cells to `end` s, writing into `dir`.
-fn plane_wave(cells: u32, end: f64, dir: &std::path::Path) -> Problem {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/plane_wave.toml");
-    let overrides = [
-        format!("mesh.nx={cells}"),
-        format!("mesh.ny={cells}"),
+/// The shipped config `name` with `overrides`, to `end` s, writing into `dir`.
+fn shipped(name: &str, overrides: &[&str], end: f64, dir: &std::path::Path) -> Problem {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs")
+        .join(name);
+    let mut overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    overrides.extend([
         format!("time.end={end:e}"),
         "output.png=false".to_string(),
         "output.snapshot_times=[]".to_string(),
+        "output.interface_probes=[]".to_string(),
         format!("output.dir=\"{}\"", dir.display()),
-    ];
+    ]);
     Problem::setup(LoadedConfig::load(&path, &overrides).expect("a valid config"))
         .expect("a valid problem")
 }
 
+/// `configs/plane_wave.toml` (an oblique P wave through a PMMA square, the exact solution on
+/// every side, order 2) on `cells` x `cells` cells to `end` s, writing into `dir`.
+fn plane_wave(cells: u32, end: f64, dir: &std::path::Path) -> Problem {
+    let (nx, ny) = (format!("mesh.nx={cells}"), format!("mesh.ny={cells}"));
+    shipped("plane_wave.toml", &[&nx, &ny], end, dir)
+}
+
 fn physics(problem: &Problem) -> Physics<'_> {
+    let config = &problem.loaded.config;
     Physics {
         system: &problem.system,
-        order: problem.loaded.config.solver.order,
+        order: config.solver.order,
         boundary: &problem.boundary,
         initial: problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave),
+        interfaces: &problem.interfaces,
+        newton: Newton {
+            tol: config.solver.newton_tol,
+            max_iter: config.solver.newton_max_iter,
+        },
     }
 }
 
@@ -72,11 +86,28 @@ fn element_bits(solution: &FrontSolution, t: usize) -> Option<Bits> {
     })
 }
 
-/// Per global triangle, its element's bits from the ranks' copies; asserts that all copies of
-/// an element are bitwise the same and that every triangle has one, and that every rank's
-/// front is at `t_end`.
-fn gather(mesh: &Mesh, ranks: &[RankSolution], t_end: f64) -> Vec<Bits> {
+fn face_bits(solution: &FrontSolution, e: usize) -> Option<Bits> {
+    solution.face(e).map(|face| {
+        let geometry = face.geometry.to_values();
+        (geometry.iter().chain(face.coefficients.iter().flatten()))
+            .map(|x| x.to_bits())
+            .collect()
+    })
+}
+
+/// What the ranks hold, by global id: per triangle its element's bits, per edge its interface
+/// face's bits (if any).
+#[derive(Debug, PartialEq)]
+struct Gathered {
+    elements: Vec<Bits>,
+    faces: Vec<Option<Bits>>,
+}
+
+/// The ranks' copies by global id; asserts that all copies of an element or a face are bitwise
+/// the same, that every triangle has an element, and that every rank's front is at `t_end`.
+fn gather(mesh: &Mesh, ranks: &[RankSolution], t_end: f64) -> Gathered {
     let mut elements: Vec<Option<Bits>> = vec![None; mesh.triangles().len()];
+    let mut faces: Vec<Option<Option<Bits>>> = vec![None; mesh.edges().len()];
     for rank in ranks {
         let view = &rank.view;
         for t in 0..view.mesh().triangles().len() {
@@ -87,15 +118,27 @@ fn gather(mesh: &Mesh, ranks: &[RankSolution], t_end: f64) -> Vec<Bits> {
                 None => *slot = Some(bits),
             }
         }
+        for e in 0..view.mesh().edges().len() {
+            let bits = face_bits(&rank.solution, e);
+            let slot = &mut faces[view.global_edge(e as u32) as usize];
+            match slot {
+                Some(other) => assert!(*other == bits, "copies of an interface face differ"),
+                None => *slot = Some(bits),
+            }
+        }
         let front = &rank.front;
         assert!((0..front.len() as VertexId).all(|v| front.time(v) == t_end));
     }
-    elements.into_iter().map(|e| e.expect("held")).collect()
+    Gathered {
+        elements: elements.into_iter().map(|e| e.expect("held")).collect(),
+        faces: faces.into_iter().map(|f| f.expect("held")).collect(),
+    }
 }
 
-/// The engine's state hash (`summary.json`): FNV-1a over the front times' bits and, per
-/// element in triangle order, its vertices' and coefficients' bits.
-fn state_hash(front: &[f64], elements: &[Bits], size: usize) -> String {
+/// The engine's state hash (`summary.json`): FNV-1a over the front times' bits, per element in
+/// triangle order its vertices' and coefficients' bits, and per interface face in edge order
+/// its corners' and coefficients' bits.
+fn state_hash(front: &[f64], gathered: &Gathered, size: usize) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     let mut feed = |x: u64| {
         for byte in x.to_le_bytes() {
@@ -104,7 +147,7 @@ fn state_hash(front: &[f64], elements: &[Bits], size: usize) -> String {
         }
     };
     front.iter().for_each(|t| feed(t.to_bits()));
-    for bits in elements {
+    for bits in &gathered.elements {
         let values: [f64; 22] = std::array::from_fn(|i| f64::from_bits(bits[i]));
         let geometry = Geometry::from_values(&values);
         geometry
@@ -114,44 +157,88 @@ fn state_hash(front: &[f64], elements: &[Bits], size: usize) -> String {
             .for_each(|x| feed(x.to_bits()));
         bits[bits.len() - size..].iter().for_each(|&x| feed(x));
     }
+    for bits in gathered.faces.iter().flatten() {
+        // The corners are the first 9 of the face geometry's values.
+        bits[..9].iter().chain(&bits[16..]).for_each(|&x| feed(x));
+    }
     format!("{hash:016x}")
+}
+
+/// Solves `problem` on one rank (the serial order) and checks its state hash and patch count
+/// against the engine's run on one thread; returns the gathered elements and faces, the tents
+/// and the values per element.
+fn serial(problem: &Problem) -> (Gathered, usize) {
+    let (mesh, causality, physics) = (&problem.mesh, causality(problem), physics(problem));
+    let engine = RunOptions {
+        threads: Some(1),
+        force: true,
+        ..RunOptions::default()
+    };
+    let (summary, _) = sdg_engine::solve_job(problem, &engine).unwrap();
+    let one = Partition::coordinate(mesh, 1).unwrap();
+    let serial = solve_threads(mesh, &one, causality, physics, FIFO, &options(0)).unwrap();
+    let gathered = gather(mesh, &serial, causality.t_end);
+    let solution = physics.initial_solution(&serial[0].view);
+    let size = solution.width() * solution.basis_len();
+    let tents = serial[0].report.tents.len();
+    assert_eq!(tents as u64, summary.patches, "the engine's patch count");
+    assert_eq!(
+        state_hash(
+            &vec![causality.t_end; mesh.vertices().len()],
+            &gathered,
+            size
+        ),
+        summary.state_hash,
+        "one rank gives the engine's state hash"
+    );
+    (gathered, tents)
+}
+
+const FIFO: LoopbackOptions = LoopbackOptions {
+    seed: 0,
+    max_delay: Duration::ZERO,
+    fifo: true,
+};
+
+/// Solves `problem` on `ranks` ranks of `partition` with seeded delays; asserts that the
+/// elements and faces are `reference`'s and the tents `tents`; returns the updates sent.
+fn check(
+    problem: &Problem,
+    partition: &Partition,
+    seed: u64,
+    fifo: bool,
+    reference: &Gathered,
+    tents: usize,
+) -> u64 {
+    let (mesh, causality, physics) = (&problem.mesh, causality(problem), physics(problem));
+    let delays = LoopbackOptions {
+        seed,
+        max_delay: Duration::from_micros(200),
+        fifo,
+    };
+    let result =
+        solve_threads(mesh, partition, causality, physics, delays, &options(seed)).unwrap();
+    let got = gather(mesh, &result, causality.t_end);
+    assert!(
+        got == *reference,
+        "{} ranks, seed {seed}, fifo {fifo}: elements or faces differ from the serial run's",
+        partition.ranks()
+    );
+    assert_eq!(
+        result.iter().map(|r| r.report.tents.len()).sum::<usize>(),
+        tents
+    );
+    result.iter().map(|r| r.report.updates_sent).sum()
 }
 
 #[test]
 fn elements_are_the_serial_runs_for_every_partition_and_timing() {
     let dir = tempfile::tempdir().unwrap();
     let problem = plane_wave(8, 5e-6, dir.path());
-    let (mesh, causality, physics) = (&problem.mesh, causality(&problem), physics(&problem));
+    let mesh = &problem.mesh;
     let n = mesh.vertices().len();
-
-    // The serial run: the engine on one thread.
-    let engine = RunOptions {
-        threads: Some(1),
-        force: true,
-        ..RunOptions::default()
-    };
-    let (summary, _) = sdg_engine::solve_job(&problem, &engine).unwrap();
-
-    // One rank is the serial order (no messages), with the engine's elements.
-    let fifo = LoopbackOptions {
-        seed: 0,
-        max_delay: Duration::ZERO,
-        fifo: true,
-    };
-    let one = Partition::coordinate(mesh, 1).unwrap();
-    let serial = solve_threads(mesh, &one, causality, physics, fifo, &options(0)).unwrap();
-    let reference = gather(mesh, &serial, causality.t_end);
-    let size = physics.initial_solution(&serial[0].view).width()
-        * physics.initial_solution(&serial[0].view).basis_len();
-    let tents = serial[0].report.tents.len();
-    assert_eq!(tents as u64, summary.patches, "the engine's patch count");
-    assert_eq!(
-        state_hash(&vec![causality.t_end; n], &reference, size),
-        summary.state_hash,
-        "one rank gives the engine's state hash"
-    );
+    let (reference, tents) = serial(&problem);
     assert!(tents > 8 * n, "{tents} tents on {n} vertices");
-
     let mut messages = 0;
     for ranks in 2..=4 {
         let partitions = [
@@ -162,28 +249,41 @@ fn elements_are_the_serial_runs_for_every_partition_and_timing() {
         for (k, partition) in partitions.iter().enumerate() {
             for fifo in [true, false] {
                 let seed = (ranks * 10 + k) as u64;
-                let delays = LoopbackOptions {
-                    seed,
-                    max_delay: Duration::from_micros(200),
-                    fifo,
-                };
-                let result =
-                    solve_threads(mesh, partition, causality, physics, delays, &options(seed))
-                        .unwrap();
-                let got = gather(mesh, &result, causality.t_end);
-                assert!(
-                    got == reference,
-                    "{ranks} ranks, partition {k}, fifo {fifo}: elements differ from the serial \
-                     run's"
-                );
-                let tents: usize = result.iter().map(|r| r.report.tents.len()).sum();
-                assert_eq!(tents, serial[0].report.tents.len());
-                messages += result.iter().map(|r| r.report.updates_sent).sum::<u64>();
+                messages += check(&problem, partition, seed, fifo, &reference, tents);
             }
         }
     }
     eprintln!("{tents} tents a run, {messages} updates sent in 18 runs");
     assert!(messages > 1000, "{messages} updates sent");
+}
+
+#[test]
+fn interface_states_are_the_serial_runs_over_ranks() {
+    // Contact and separation across a debonded mid-line (order 3), to past the wave's arrival
+    // at the interface; the mid-line lies on a coordinate bisection's cut.
+    let dir = tempfile::tempdir().unwrap();
+    let problem = shipped(
+        "contact_separation.toml",
+        &["mesh.ny=16"],
+        1.6e-6,
+        dir.path(),
+    );
+    let mesh = &problem.mesh;
+    let (reference, tents) = serial(&problem);
+    let faces = reference.faces.iter().flatten().count();
+    assert!(faces >= 4, "{faces} interface faces");
+    let mut messages = 0;
+    for ranks in [2, 3] {
+        let partitions = [
+            Partition::coordinate(mesh, ranks).unwrap(),
+            Partition::random(mesh, ranks, 5 + ranks as u64).unwrap(),
+        ];
+        for (k, partition) in partitions.iter().enumerate() {
+            let seed = (ranks * 10 + k) as u64;
+            messages += check(&problem, partition, seed, k == 0, &reference, tents);
+        }
+    }
+    eprintln!("{tents} tents a run, {faces} interface faces, {messages} updates sent");
 }
 
 #[test]
@@ -202,7 +302,8 @@ fn a_front_solution_of_the_wrong_size_is_an_error() {
     .unwrap();
     let front = Front::flat(view.mesh().vertices().len(), 0.0);
     let good = physics.initial_solution(&view);
-    let wrong = FrontSolution::new(good.len() - 1, good.basis_len(), good.width());
+    let wrong =
+        FrontSolution::new(good.len() - 1, good.basis_len(), good.width()).with_edges(good.edges());
     let mut ends = sdg_distributed::Loopback::connect(
         1,
         LoopbackOptions {
@@ -221,13 +322,13 @@ fn a_front_solution_of_the_wrong_size_is_an_error() {
         &options(0),
     )
     .unwrap_err();
-    let size = good.basis_len() * good.width();
     assert_eq!(
         err,
         PitchingError::Solution {
             rank: 0,
-            got: [good.len() - 1, size],
-            expected: [good.len(), size],
+            what: "triangles",
+            got: good.len() - 1,
+            expected: good.len(),
         }
     );
 }
