@@ -16,13 +16,13 @@
 //!   reference order's for every partition and message timing (the argument is in the module
 //!   docs; the tests check it);
 //! - [`solving`]: the same pitching with each tent's patch solved on its rank by the patch
-//!   solver, the updates carrying the elements the receiver reads as inflow, each with its
-//!   triangle's generation, whose elements are bitwise the serial run's (linear
-//!   elastodynamics without interface laws, events or fracture).
+//!   solver, the updates carrying the elements and interface faces the receiver reads as
+//!   inflow, each with its generation, whose elements and faces are bitwise the serial run's
+//!   (with interface laws, without mesh-changing events or fracture).
 //!
-//! Not built yet: interface states across ranks, METIS (the `metis` crate behind a feature),
-//! mesh-changing events across ranks, deterministic rounds over ranks, outputs and checkpoints
-//! per rank, `sdg run` over MPI. See `distributed/README.md`.
+//! Not built yet: METIS (the `metis` crate behind a feature), mesh-changing events and
+//! fracture across ranks, deterministic rounds over ranks, outputs and checkpoints per rank,
+//! `sdg run` over MPI. See `distributed/README.md`.
 
 pub mod partition;
 pub mod pitching;

@@ -1,29 +1,31 @@
 //! Patches solved over ranks: each rank solves the patch of every tent it pitches on its own
-//! view, with the real patch solver, and its updates carry the elements neighbours read as
-//! inflow.
+//! view, with the real patch solver, and its updates carry what neighbours read as inflow: the
+//! elements under the star and the interface states over its spokes.
 //!
 //! # What a patch reads, and why it is the serial run's
-//! The patch of a tent at `v` reads the front times of `v`'s neighbours and the elements under
-//! `v`'s star triangles (its inflow). The pitching rule makes those times current
+//! The patch of a tent at `v` reads the front times of `v`'s neighbours, the elements under
+//! `v`'s star triangles (its inflow) and, with interface laws, the interface faces over `v`'s
+//! spokes (the state below its contact faces). The pitching rule makes those times current
 //! ([`crate::pitching`]). Each element was left by the last tent at one of its triangle's
-//! corners; that tent's owner sends it, with the tent's update, to every rank that holds the
-//! triangle, tagged with the triangle's generation (tents at its corners so far), and a
-//! receiver stores it only if that is newer than its copy. When `v` passes the rule, its rank
-//! sees every corner `w` of its star at `w`'s current time, so the update of `w`'s last tent
-//! has arrived (or `w` is its own), and with it the element of every triangle of `w`'s star
-//! this rank holds: nothing newer exists, so the copy under each star triangle is current.
-//! The star's triangles are in the whole mesh's order with their corner order (local ids
-//! increase with global ids), so the patch solver gets the serial run's inputs in the serial
-//! run's order and returns its elements bitwise, for any partition and message timing. At the
-//! end every copy of an element, on every rank that holds it, is the serial run's.
+//! corners, each face by the last tent at one of its edge's ends; that tent's owner sends it,
+//! with the tent's update, to every rank that holds the triangle or edge, tagged with its
+//! generation (tents at the triangle's corners or the edge's ends so far), and a receiver
+//! stores it only if that is newer than its copy. When `v` passes the rule, its rank sees
+//! every corner `w` of its star at `w`'s current time, so the update of `w`'s last tent has
+//! arrived (or `w` is its own), and with it every element and face that tent left on this
+//! rank: nothing newer exists, so the copies the patch reads are current. The star's
+//! triangles are in the whole mesh's order with their corner order (local ids increase with
+//! global ids), so the patch solver gets the serial run's inputs in the serial run's order and
+//! returns its elements and faces bitwise, for any partition and message timing. At the end
+//! every copy, on every rank that holds it, is the serial run's.
 //!
 //! # Scope
-//! Linear elastodynamics without interface laws (every interior edge is bonded, so no
-//! interface state crosses ranks), without mesh-changing events and without fracture, from
-//! initial data at time 0. An element travels as its geometry's values
-//! ([`Geometry::to_values`]), its top facet's energy parts and its coefficients, all `f64`
-//! bits; only tents at vertices that another rank holds as a ghost send any, and solving an
-//! interior patch allocates nothing.
+//! Elastodynamics with the interface laws of the solver (contact, friction, cohesion, damage),
+//! without mesh-changing events and without fracture, from initial data at time 0. An element
+//! travels as its geometry's values ([`Geometry::to_values`]), its top facet's energy parts and
+//! its coefficients, a face as its geometry's values ([`FaceGeometry::to_values`]) and its
+//! coefficients, all `f64` bits; only tents at vertices that another rank holds as a ghost send
+//! any, and solving an interior patch allocates nothing.
 
 use sdg_mesh::{EdgeId, Front, Mesh, Tent, VertexId};
 use sdg_solver::boundary::Boundary;

@@ -194,6 +194,12 @@ fn serial(problem: &Problem) -> (Gathered, usize) {
     (gathered, tents)
 }
 
+/// Interface faces with a state other than zero (separation, slip or damage).
+fn opened(gathered: &Gathered) -> usize {
+    let state = |bits: &&Bits| bits[16..].iter().any(|&x| f64::from_bits(x) != 0.0);
+    gathered.faces.iter().flatten().filter(state).count()
+}
+
 const FIFO: LoopbackOptions = LoopbackOptions {
     seed: 0,
     max_delay: Duration::ZERO,
@@ -271,7 +277,10 @@ fn interface_states_are_the_serial_runs_over_ranks() {
     let mesh = &problem.mesh;
     let (reference, tents) = serial(&problem);
     let faces = reference.faces.iter().flatten().count();
-    assert!(faces >= 4, "{faces} interface faces");
+    assert!(
+        faces >= 4 && opened(&reference) > 0,
+        "{faces} interface faces"
+    );
     let mut messages = 0;
     for ranks in [2, 3] {
         let partitions = [
@@ -284,6 +293,32 @@ fn interface_states_are_the_serial_runs_over_ranks() {
         }
     }
     eprintln!("{tents} tents a run, {faces} interface faces, {messages} updates sent");
+}
+
+#[test]
+fn friction_cohesion_and_damage_states_are_the_serial_runs_over_ranks() {
+    let cases: [(&str, &[&str], f64); 3] = [
+        ("stick_slip.toml", &["mesh.nx=8", "mesh.ny=8"], 4e-6),
+        ("cohesive_wave.toml", &["mesh.ny=16"], 2e-6),
+        (
+            "damage_interface.toml",
+            &["mesh.nx=2", "mesh.ny=16"],
+            1.6e-6,
+        ),
+    ];
+    for (name, overrides, end) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let problem = shipped(name, overrides, end, dir.path());
+        let (reference, tents) = serial(&problem);
+        let faces = reference.faces.iter().flatten().count();
+        let partition = Partition::random(&problem.mesh, 3, 7).unwrap();
+        let messages = check(&problem, &partition, 3, false, &reference, tents);
+        eprintln!("{name}: {tents} tents, {faces} interface faces, {messages} updates sent");
+        assert!(
+            faces >= 2 && opened(&reference) > 0,
+            "{name}: {faces} faces"
+        );
+    }
 }
 
 #[test]
