@@ -85,7 +85,7 @@ impl Physics<'_> {
     }
 }
 
-/// A rank's result: its report, view, front and the elements under its view's triangles.
+/// A rank's result: its report, view, front, and the elements and interface faces on it.
 #[derive(Debug)]
 pub struct RankSolution {
     /// What the rank did.
@@ -94,7 +94,8 @@ pub struct RankSolution {
     pub view: LocalView,
     /// Its front (local vertex ids), at the end time.
     pub front: Front,
-    /// The elements under its view's triangles (local triangle ids).
+    /// The elements under its view's triangles and the interface faces over its edges (local
+    /// ids).
     pub solution: FrontSolution,
 }
 
