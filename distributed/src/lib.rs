@@ -14,24 +14,32 @@
 //! - [`pitching`]: asynchronous tent pitching over ranks under the `(time, id)`-first rule, with
 //!   termination by done messages (no global poll), whose tents are bitwise the serial
 //!   reference order's for every partition and message timing (the argument is in the module
-//!   docs; the tests check it).
+//!   docs; the tests check it);
+//! - [`solving`]: the same pitching with each tent's patch solved on its rank by the patch
+//!   solver, the updates carrying the elements and interface faces the receiver reads as
+//!   inflow, each with its generation, whose elements and faces are bitwise the serial run's
+//!   (with interface laws, without mesh-changing events or fracture).
 //!
-//! Not built yet: solving patches (messages carrying the elements under a star and interface
-//! states), METIS (the `metis` crate behind a feature), mesh-changing events across ranks, deterministic rounds
-//! over ranks, outputs and checkpoints per rank. See `distributed/README.md`.
+//! Not built yet: METIS (the `metis` crate behind a feature), mesh-changing events and
+//! fracture across ranks, deterministic rounds over ranks, outputs and checkpoints per rank,
+//! `sdg run` over MPI. See `distributed/README.md`.
 
 pub mod partition;
 pub mod pitching;
 mod rng;
+pub mod solving;
 #[cfg(test)]
 mod testing;
 pub mod transport;
 pub mod view;
 
 pub use partition::{Partition, PartitionError, Rank};
-pub use pitching::{Causality, Options, PitchingError, RankReport, pitch_rank, run_threads};
+pub use pitching::{
+    Causality, CellKind, Options, PitchingError, RankReport, pitch_rank, run_threads,
+};
+pub use solving::{Physics, RankSolution, solve_rank, solve_threads};
 pub use transport::loopback::{Loopback, LoopbackOptions};
 #[cfg(feature = "mpi")]
 pub use transport::mpi::{MpiError, MpiOptions, MpiTransport};
-pub use transport::{Message, Transport, TransportError, Update};
+pub use transport::{Cells, Message, Transport, TransportError, Update};
 pub use view::{LocalView, ViewError};

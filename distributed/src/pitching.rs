@@ -32,6 +32,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::{Duration, Instant};
 
 use sdg_mesh::{Front, Mesh, PitchError, Pitcher, Tent, VertexId};
+use sdg_solver::patch::NewtonFailure;
 
 use crate::partition::{Partition, Rank};
 use crate::rng::SplitMix64;
@@ -95,6 +96,89 @@ pub enum PitchingError {
     Aborted { rank: Rank, by: Rank },
     #[error("rank {rank}: internal error (a bug, please report it): {message}")]
     Panic { rank: Rank, message: String },
+    #[error("rank {rank}: the patch of vertex {vertex} at t = {time} s: {source}")]
+    Patch {
+        rank: Rank,
+        vertex: VertexId,
+        time: f64,
+        source: NewtonFailure,
+    },
+    #[error(
+        "rank {rank}: the {kind} of global id {id} from rank {from}, which one of them does not \
+         hold"
+    )]
+    StrayCell {
+        rank: Rank,
+        from: Rank,
+        kind: CellKind,
+        id: u32,
+    },
+    #[error(
+        "rank {rank}: the front solution has {got} {what}, but the view and the solver need \
+         {expected}"
+    )]
+    Solution {
+        rank: Rank,
+        what: &'static str,
+        got: usize,
+        expected: usize,
+    },
+    #[error(
+        "rank {rank}: {kind}s of {got} values from rank {from}, but this rank's have {expected}"
+    )]
+    CellSize {
+        rank: Rank,
+        from: Rank,
+        kind: CellKind,
+        got: usize,
+        expected: usize,
+    },
+}
+
+/// What a cell of an update is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CellKind {
+    /// An element under a front triangle.
+    Element,
+    /// An interface face over a front edge.
+    Face,
+}
+
+impl std::fmt::Display for CellKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            CellKind::Element => "element",
+            CellKind::Face => "interface face",
+        })
+    }
+}
+
+/// What a rank does besides pitching: with each of its tents, and with the elements that
+/// updates carry. Nothing for pitching alone (`()`); [`crate::solving`] solves the patches.
+pub(crate) trait Work {
+    /// Called right after the tent at owned local vertex `tent.vertex` was pitched (`front`
+    /// has its new time already).
+    fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError>;
+
+    /// Writes into `update`'s (empty) cells what rank `to` reads of the last tent at owned
+    /// local vertex `v`.
+    fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update);
+
+    /// Stores the cells of `update` from rank `from` that are newer than this rank's copies.
+    fn apply(&mut self, view: &LocalView, from: Rank, update: &Update)
+    -> Result<(), PitchingError>;
+}
+
+impl Work for () {
+    fn tent(&mut self, _: &LocalView, _: &Front, _: &Tent) -> Result<(), PitchingError> {
+        Ok(())
+    }
+
+    fn cells_for(&self, _: &LocalView, _: VertexId, _: Rank, _: &mut Update) {}
+
+    fn apply(&mut self, _: &LocalView, _: Rank, _: &Update) -> Result<(), PitchingError> {
+        Ok(())
+    }
 }
 
 /// What a rank did.
@@ -119,11 +203,12 @@ pub struct RankReport {
 }
 
 /// A rank's running state.
-struct Runner<'v, T> {
+struct Runner<'v, T, W> {
     view: &'v LocalView,
     pitcher: &'v Pitcher,
     front: &'v Front,
     transport: &'v mut T,
+    work: W,
     /// Per local vertex, tents pitched at it (owned) or as last heard (ghost).
     generation: Vec<u32>,
     /// Candidates to try, and whether each local vertex is one.
@@ -139,7 +224,7 @@ struct Runner<'v, T> {
     report: RankReport,
 }
 
-impl<T: Transport> Runner<'_, T> {
+impl<T: Transport, W: Work> Runner<'_, T, W> {
     fn rank(&self) -> Rank {
         self.view.rank()
     }
@@ -206,22 +291,26 @@ impl<T: Transport> Runner<'_, T> {
                 time: t_old,
             });
         };
+        self.work.tent(self.view, self.front, &tent)?;
         self.generation[v as usize] += 1;
         if tent.t_new >= self.pitcher.t_end() {
             self.below -= 1;
         }
-        let update = Update {
-            vertex: self.view.global(v),
-            time: tent.t_new,
-            generation: self.generation[v as usize],
-        };
         for i in 0..self.view.sharers(v).len() {
-            self.send(self.view.sharers(v)[i], Message::Update(update))?;
+            let to = self.view.sharers(v)[i];
+            let mut update = Update {
+                vertex: self.view.global(v),
+                time: tent.t_new,
+                generation: self.generation[v as usize],
+                ..Update::default()
+            };
+            self.work.cells_for(self.view, v, to, &mut update);
             self.report.updates_sent += 1;
-            self.report.update_bytes += crate::transport::UPDATE_BYTES as u64;
+            self.report.update_bytes += update.encoded_len() as u64;
+            self.send(to, Message::Update(update))?;
         }
         self.report.tents.push(Tent {
-            vertex: update.vertex,
+            vertex: self.view.global(v),
             ..tent
         });
         self.offer(v);
@@ -243,6 +332,7 @@ impl<T: Transport> Runner<'_, T> {
                         from,
                         vertex: u.vertex,
                     })?;
+                self.work.apply(self.view, from, &u)?;
                 if u.generation > self.generation[w as usize] {
                     self.generation[w as usize] = u.generation;
                     self.front.set_time(w, u.time);
@@ -330,6 +420,18 @@ pub fn pitch_rank<T: Transport>(
     transport: &mut T,
     options: &Options,
 ) -> Result<RankReport, PitchingError> {
+    run_rank(view, pitcher, front, transport, (), options)
+}
+
+/// [`pitch_rank`] doing `work` besides.
+pub(crate) fn run_rank<T: Transport, W: Work>(
+    view: &LocalView,
+    pitcher: &Pitcher,
+    front: &Front,
+    transport: &mut T,
+    work: W,
+    options: &Options,
+) -> Result<RankReport, PitchingError> {
     let n = view.mesh().vertices().len();
     let ranks = transport.ranks();
     let mut state = Runner {
@@ -337,6 +439,7 @@ pub fn pitch_rank<T: Transport>(
         pitcher,
         front,
         transport,
+        work,
         generation: vec![0; n],
         candidates: Vec::new(),
         queued: vec![false; n],
@@ -385,34 +488,56 @@ pub fn run_threads(
         });
     }
     let views = LocalView::all(mesh, partition)?;
-    let mut ranks = Vec::with_capacity(views.len());
-    for view in &views {
-        let pitcher = Pitcher::new(
-            view.mesh(),
-            causality.c_max,
-            causality.safety,
-            causality.t_end,
-        )?;
-        let front = Front::flat(view.mesh().vertices().len(), 0.0);
-        for v in 0..front.len() as VertexId {
-            front.set_time(v, start[view.global(v) as usize]);
-        }
-        ranks.push((view, pitcher, front));
+    let ranks = views
+        .iter()
+        .map(|view| rank_start(view, causality, start))
+        .collect::<Result<Vec<_>, _>>()?;
+    on_threads(&views, delays, |rank, end| {
+        let (pitcher, front) = &ranks[rank];
+        pitch_rank(&views[rank], pitcher, front, end, options)
+    })
+}
+
+/// The pitcher and the local front at `start` (global, s) of the rank whose view is `view`.
+pub(crate) fn rank_start(
+    view: &LocalView,
+    causality: Causality,
+    start: &[f64],
+) -> Result<(Pitcher, Front), PitchingError> {
+    let pitcher = Pitcher::new(
+        view.mesh(),
+        causality.c_max,
+        causality.safety,
+        causality.t_end,
+    )?;
+    let front = Front::flat(view.mesh().vertices().len(), 0.0);
+    for v in 0..front.len() as VertexId {
+        front.set_time(v, start[view.global(v) as usize]);
     }
+    Ok((pitcher, front))
+}
+
+/// Runs `rank(r, transport)` for every rank `r` of `views` on its own thread, connected by
+/// [`Loopback`] with `delays`. Returns the results by rank, or the first error by rank that is
+/// not an [`PitchingError::Aborted`] (a rank stopped by another's failure). A panic on a rank
+/// aborts the others and is reported as [`PitchingError::Panic`].
+pub(crate) fn on_threads<R: Send + std::fmt::Debug>(
+    views: &[LocalView],
+    delays: LoopbackOptions,
+    rank: impl Fn(usize, &mut Loopback) -> Result<R, PitchingError> + Sync,
+) -> Result<Vec<R>, PitchingError> {
     let ends = Loopback::connect(views.len(), delays);
-    let results: Vec<Result<RankReport, PitchingError>> = std::thread::scope(|s| {
-        let handles: Vec<_> = ranks
-            .iter()
-            .zip(ends)
-            .map(|((view, pitcher, front), mut end)| {
+    let rank = &rank;
+    let results: Vec<Result<R, PitchingError>> = std::thread::scope(|s| {
+        let handles: Vec<_> = ends
+            .into_iter()
+            .enumerate()
+            .map(|(r, mut end)| {
                 s.spawn(move || {
-                    catch_unwind(AssertUnwindSafe(|| {
-                        pitch_rank(view, pitcher, front, &mut end, options)
-                    }))
-                    .unwrap_or_else(|payload| {
+                    catch_unwind(AssertUnwindSafe(|| rank(r, &mut end))).unwrap_or_else(|payload| {
                         abort_others(&mut end);
                         Err(PitchingError::Panic {
-                            rank: view.rank(),
+                            rank: r as Rank,
                             message: panic_message(payload),
                         })
                     })
@@ -422,10 +547,10 @@ pub fn run_threads(
         handles
             .into_iter()
             .enumerate()
-            .map(|(rank, handle)| {
+            .map(|(r, handle)| {
                 handle.join().unwrap_or_else(|payload| {
                     Err(PitchingError::Panic {
-                        rank: rank as Rank,
+                        rank: r as Rank,
                         message: panic_message(payload),
                     })
                 })

@@ -2,12 +2,14 @@
 //!
 //! The pitching protocol ([`crate::pitching`]) needs three messages: a vertex's new front time
 //! after a tent ([`Update`], with a generation number so that a late arrival never overwrites a
-//! newer one), "I am done" with the count of messages sent before it ([`Message::Done`], so that
-//! termination needs no ordering between messages), and "stop, I failed"
-//! ([`Message::Abort`]). A [`Transport`] sends them without blocking and receives them with a
-//! timeout. [`loopback::Loopback`] carries them between threads of one process, with seeded random
-//! delays; `mpi::MpiTransport` (with the cargo feature `mpi`) carries them between MPI
-//! processes as [`Message::encode`]'s bytes, through one communication thread per process.
+//! newer one, and when patches are solved the elements the tent left under the receiver's
+//! triangles of its star, [`Cells`], each with a generation of its own), "I am done" with the
+//! count of messages sent before it ([`Message::Done`], so that termination needs no ordering
+//! between messages), and "stop, I failed" ([`Message::Abort`]). A [`Transport`] sends them
+//! without blocking and receives them with a timeout. [`loopback::Loopback`] carries them
+//! between threads of one process, with seeded random delays; `mpi::MpiTransport` (with the
+//! cargo feature `mpi`) carries them between MPI processes as [`Message::encode`]'s bytes,
+//! through one communication thread per process.
 
 pub mod loopback;
 #[cfg(feature = "mpi")]
@@ -20,8 +22,9 @@ use sdg_mesh::VertexId;
 use crate::partition::Rank;
 
 /// A vertex's front time after a tent at it, sent by its owner to the ranks that hold it as a
-/// ghost.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// ghost, with the elements under the vertex's star and the interface faces over its spokes
+/// that the receiver holds, when patches are solved.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Update {
     /// Global vertex id.
     pub vertex: VertexId,
@@ -30,10 +33,83 @@ pub struct Update {
     /// Tents pitched at the vertex so far: a receiver applies the update only if this is more
     /// than the generation of its copy.
     pub generation: u32,
+    /// The elements the tent left under the receiver's triangles of the star, keyed by global
+    /// triangle (none when only pitching).
+    pub elements: Cells,
+    /// The interface faces the tent left over the receiver's edges among the spokes, keyed by
+    /// global edge (none without interface laws).
+    pub faces: Cells,
+}
+
+/// Elements under front triangles, or interface faces over front edges, as plain values
+/// (bit-exact), each with its global triangle or edge id and its generation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Cells {
+    /// Per cell, its global id and generation (tents at the triangle's corners or the edge's
+    /// ends so far): a receiver stores the cell only if this is more than its copy's.
+    pub ids: Vec<(u32, u32)>,
+    /// The cells' values back to back, `values.len() / ids.len()` each.
+    pub values: Vec<f64>,
+}
+
+impl Cells {
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// True without cells.
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
+    /// Values per cell (0 without cells).
+    pub fn stride(&self) -> usize {
+        self.values.len().checked_div(self.len()).unwrap_or(0)
+    }
+
+    /// Cell `i`: its global id, generation and values.
+    pub fn get(&self, i: usize) -> (u32, u32, &[f64]) {
+        let stride = self.stride();
+        let (id, generation) = self.ids[i];
+        (id, generation, &self.values[i * stride..(i + 1) * stride])
+    }
+
+    /// Bytes of the cells in [`Message::encode`]: 8 per cell and 8 per value.
+    fn encoded_len(&self) -> usize {
+        8 * (self.len() + self.values.len())
+    }
+
+    fn encode(&self, out: &mut Vec<u8>) {
+        for &(id, generation) in &self.ids {
+            out.extend(id.to_le_bytes());
+            out.extend(generation.to_le_bytes());
+        }
+        for x in &self.values {
+            out.extend(x.to_bits().to_le_bytes());
+        }
+    }
+
+    /// `count` cells of `stride` values from the start of `bytes`, and the bytes after them.
+    fn decode(bytes: &[u8], count: usize, stride: usize) -> Option<(Self, &[u8])> {
+        let values = count.checked_mul(stride)?;
+        let len = count.checked_add(values)?.checked_mul(8)?;
+        if len > bytes.len() {
+            return None;
+        }
+        let (cells, rest) = bytes.split_at(len);
+        let word = |at: usize| u32::from_le_bytes(cells[at..at + 4].try_into().expect("4 bytes"));
+        let ids = (0..count).map(|i| (word(8 * i), word(8 * i + 4))).collect();
+        let values = cells[8 * count..]
+            .chunks_exact(8)
+            .map(|b| f64::from_bits(u64::from_le_bytes(b.try_into().expect("8 bytes"))))
+            .collect();
+        Some((Self { ids, values }, rest))
+    }
 }
 
 /// What ranks tell each other.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Message {
     /// A vertex moved.
     Update(Update),
@@ -47,11 +123,12 @@ pub enum Message {
     Abort,
 }
 
-/// Bytes of an encoded [`Message::Update`].
-pub const UPDATE_BYTES: usize = 17;
+/// Bytes of an encoded [`Message::Update`] without cells; each cell adds 8 bytes and 8 per
+/// value.
+pub const UPDATE_BYTES: usize = 33;
 
 /// Why a transport failed.
-#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+#[derive(Clone, Debug, thiserror::Error, PartialEq, Eq)]
 pub enum TransportError {
     #[error("no rank {to}: there are {ranks} ranks")]
     NoSuchRank { to: Rank, ranks: usize },
@@ -82,17 +159,33 @@ pub trait Transport: Send {
     fn is_fifo(&self) -> bool;
 }
 
+impl Update {
+    /// Bytes of the update as [`Message::encode`] writes it.
+    pub fn encoded_len(&self) -> usize {
+        UPDATE_BYTES + self.elements.encoded_len() + self.faces.encoded_len()
+    }
+}
+
 impl Message {
-    /// Appends the message's bytes (little endian) to `out`: kind 0, vertex, generation and
-    /// time bits for an update ([`UPDATE_BYTES`]); kind 1 and the count for done; kind 2 for
+    /// Appends the message's bytes (little endian) to `out`: for an update kind 0, vertex,
+    /// generation, time bits, then count and values per cell of the elements and of the faces
+    /// ([`UPDATE_BYTES`]), then per element its triangle and generation and the elements'
+    /// values' bits, then the same for the faces; kind 1 and the count for done; kind 2 for
     /// abort.
     pub fn encode(&self, out: &mut Vec<u8>) {
-        match *self {
+        match self {
             Message::Update(u) => {
+                out.reserve(u.encoded_len());
                 out.push(0);
                 out.extend(u.vertex.to_le_bytes());
                 out.extend(u.generation.to_le_bytes());
                 out.extend(u.time.to_bits().to_le_bytes());
+                for cells in [&u.elements, &u.faces] {
+                    out.extend((cells.len() as u32).to_le_bytes());
+                    out.extend((cells.stride() as u32).to_le_bytes());
+                }
+                u.elements.encode(out);
+                u.faces.encode(out);
             }
             Message::Done { sent } => {
                 out.push(1);
@@ -109,17 +202,28 @@ impl Message {
             kind,
             len: bytes.len(),
         };
-        let word = |at: usize| -> [u8; 4] { bytes[at..at + 4].try_into().expect("4 bytes") };
-        let long = |at: usize| -> [u8; 8] { bytes[at..at + 8].try_into().expect("8 bytes") };
+        let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
+        let long = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
         match (kind, bytes.len()) {
-            (0, UPDATE_BYTES) => Ok(Message::Update(Update {
-                vertex: u32::from_le_bytes(word(1)),
-                generation: u32::from_le_bytes(word(5)),
-                time: f64::from_bits(u64::from_le_bytes(long(9))),
-            })),
-            (1, 9) => Ok(Message::Done {
-                sent: u64::from_le_bytes(long(1)),
-            }),
+            (0, len) if len >= UPDATE_BYTES => {
+                let size = |at: usize| word(at) as usize;
+                let rest = &bytes[UPDATE_BYTES..];
+                let (elements, rest) =
+                    Cells::decode(rest, size(17), size(21)).ok_or(malformed.clone())?;
+                let (faces, rest) =
+                    Cells::decode(rest, size(25), size(29)).ok_or(malformed.clone())?;
+                if !rest.is_empty() {
+                    return Err(malformed);
+                }
+                Ok(Message::Update(Update {
+                    vertex: word(1),
+                    generation: word(5),
+                    time: f64::from_bits(long(9)),
+                    elements,
+                    faces,
+                }))
+            }
+            (1, 9) => Ok(Message::Done { sent: long(1) }),
             (2, 1) => Ok(Message::Abort),
             _ => Err(malformed),
         }
@@ -137,15 +241,41 @@ mod tests {
                 vertex: 70_000,
                 time: 0.1 + 0.2,
                 generation: 9,
+                ..Update::default()
+            }),
+            Message::Update(Update {
+                vertex: 3,
+                time: 1e-300,
+                generation: 1,
+                elements: Cells {
+                    ids: vec![(5, 2), (1 << 30, 7)],
+                    values: vec![0.1, -0.0, f64::MIN_POSITIVE, 1.0 / 3.0, 2.5, -7e10],
+                },
+                faces: Cells {
+                    ids: vec![(9, 4)],
+                    values: vec![-1.5, 0.25],
+                },
             }),
             Message::Done { sent: 1 << 40 },
             Message::Abort,
         ];
         let mut bytes = Vec::new();
-        for m in messages {
+        for m in &messages {
             bytes.clear();
             m.encode(&mut bytes);
-            assert_eq!(Message::decode(&bytes), Ok(m));
+            if let Message::Update(u) = m {
+                assert_eq!(bytes.len(), u.encoded_len());
+            }
+            let back = Message::decode(&bytes).unwrap();
+            assert_eq!(&back, m);
+            if let (Message::Update(a), Message::Update(b)) = (&back, m) {
+                let bits = |u: &Update| {
+                    (u.elements.values.iter().chain(&u.faces.values))
+                        .map(|x| x.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(a), bits(b), "-0.0 stays -0.0");
+            }
         }
         assert_eq!(bytes.len(), 1);
         let mut update = Vec::new();
@@ -154,6 +284,14 @@ mod tests {
         assert_eq!(
             Message::decode(&update[..16]),
             Err(TransportError::Malformed { kind: 0, len: 16 })
+        );
+        let mut cells = Vec::new();
+        messages[1].encode(&mut cells);
+        assert_eq!(cells.len(), UPDATE_BYTES + 8 * (2 + 6) + 8 * (1 + 2));
+        let len = cells.len() - 8;
+        assert_eq!(
+            Message::decode(&cells[..len]),
+            Err(TransportError::Malformed { kind: 0, len })
         );
         assert!(Message::decode(&[]).is_err());
         assert!(Message::decode(&[3]).is_err());

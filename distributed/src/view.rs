@@ -6,7 +6,7 @@
 //! of an owned vertex (tent heights, refinement edges, the `(time, id)` order) is bitwise what
 //! the whole mesh gives. Global ids of vertices and triangles are kept beside it.
 
-use sdg_mesh::{Mesh, MeshError, TagId, TriangleId, VertexId};
+use sdg_mesh::{EdgeId, Mesh, MeshError, TagId, TriangleId, VertexId};
 
 use crate::partition::{Partition, Rank};
 
@@ -30,6 +30,9 @@ pub struct LocalView {
     global: Vec<VertexId>,
     /// Local triangle -> global triangle, increasing.
     triangles: Vec<TriangleId>,
+    /// Local edge -> global edge, and `(global, local)` pairs sorted by global edge.
+    edges: Vec<EdgeId>,
+    edge_lookup: Vec<(EdgeId, EdgeId)>,
     /// Per local vertex, its owner rank.
     owner: Vec<Rank>,
     /// Per local vertex, the start of its sharers in `sharer_ranks` (one more entry at the end).
@@ -90,6 +93,19 @@ impl LocalView {
         let local_mesh = Mesh::new(points, corners, mesh.tag_names().to_vec(), &tagged)
             .map_err(|source| ViewError::Mesh { rank, source })?;
 
+        let edges: Vec<EdgeId> = local_mesh
+            .edges()
+            .iter()
+            .map(|e| {
+                let [a, b] = e.vertices.map(|v| global[v as usize]);
+                mesh.edge_between(a, b)
+                    .expect("a local edge is an edge of the mesh")
+            })
+            .collect();
+        let mut edge_lookup: Vec<(EdgeId, EdgeId)> = (0..edges.len() as EdgeId)
+            .map(|e| (edges[e as usize], e))
+            .collect();
+        edge_lookup.sort_unstable();
         let owner: Vec<Rank> = global.iter().map(|&v| owners[v as usize]).collect();
         let (mut sharer_start, mut sharer_ranks) = (vec![0], Vec::new());
         for (&v, &o) in global.iter().zip(&owner) {
@@ -114,6 +130,8 @@ impl LocalView {
             mesh: local_mesh,
             global,
             triangles,
+            edges,
+            edge_lookup,
             owner,
             sharer_start,
             sharer_ranks,
@@ -151,6 +169,44 @@ impl LocalView {
     /// The global id of local triangle `t`.
     pub fn global_triangle(&self, t: TriangleId) -> TriangleId {
         self.triangles[t as usize]
+    }
+
+    /// The local id of global triangle `g`, if this view holds it.
+    pub fn local_triangle(&self, g: TriangleId) -> Option<TriangleId> {
+        self.triangles
+            .binary_search(&g)
+            .ok()
+            .map(|t| t as TriangleId)
+    }
+
+    /// The global id of local edge `e`.
+    pub fn global_edge(&self, e: EdgeId) -> EdgeId {
+        self.edges[e as usize]
+    }
+
+    /// The local id of global edge `g`, if this view holds it.
+    pub fn local_edge(&self, g: EdgeId) -> Option<EdgeId> {
+        self.edge_lookup
+            .binary_search_by_key(&g, |&(global, _)| global)
+            .ok()
+            .map(|i| self.edge_lookup[i].1)
+    }
+
+    /// True when rank `rank` holds local edge `e` too (it holds one of the edge's triangles);
+    /// exact for an edge with an owned end (the view holds both its triangles).
+    pub fn edge_held_by(&self, e: EdgeId, rank: Rank) -> bool {
+        self.mesh.edges()[e as usize]
+            .triangles
+            .iter()
+            .flatten()
+            .any(|&t| self.held_by(t, rank))
+    }
+
+    /// True when rank `rank` holds local triangle `t` too (one of its corners is `rank`'s).
+    pub fn held_by(&self, t: TriangleId, rank: Rank) -> bool {
+        self.mesh.triangles()[t as usize]
+            .iter()
+            .any(|&v| self.owner[v as usize] == rank)
     }
 
     /// The rank that owns local vertex `v`.
@@ -232,6 +288,35 @@ mod tests {
                     let local = (0..view.mesh().triangles().len() as TriangleId)
                         .find(|&l| view.global_triangle(l) == t as TriangleId);
                     assert_eq!(local.is_some(), ranks.contains(&view.rank()));
+                    assert_eq!(view.local_triangle(t as TriangleId), local);
+                    for e in mesh.triangle_edges(t as TriangleId) {
+                        let l = view.local_edge(e);
+                        if let Some(l) = l {
+                            assert_eq!(view.global_edge(l), e);
+                            let ends = view.mesh().edges()[l as usize]
+                                .vertices
+                                .map(|v| view.global(v));
+                            assert_eq!(ends, mesh.edges()[e as usize].vertices);
+                            let holders: BTreeSet<Rank> = mesh.edges()[e as usize]
+                                .triangles
+                                .iter()
+                                .flatten()
+                                .flat_map(|&u| mesh.triangles()[u as usize].map(|v| p.owner(v)))
+                                .collect();
+                            let spoke = ends.iter().any(|&v| p.owner(v) == view.rank());
+                            for r in (0..p.ranks() as Rank).filter(|_| spoke) {
+                                assert_eq!(view.edge_held_by(l, r), holders.contains(&r));
+                            }
+                        }
+                        if local.is_some() {
+                            assert!(l.is_some(), "a held triangle's edges are held");
+                        }
+                    }
+                    if let Some(l) = local {
+                        for r in 0..p.ranks() as Rank {
+                            assert_eq!(view.held_by(l, r), ranks.contains(&r));
+                        }
+                    }
                     if let Some(l) = local {
                         let corners = view.mesh().triangles()[l as usize].map(|v| view.global(v));
                         assert_eq!(&corners, tri, "corner order kept");

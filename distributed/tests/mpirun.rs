@@ -1,35 +1,42 @@
-//! `examples/mpi_pitch.rs` under `mpirun` on 1 to 4 ranks (3 and 4 oversubscribed on small
-//! machines), over loopback: every rank's tents are the serial order's. Built only with the
-//! feature `mpi`; needs OpenMPI's `mpirun` on the PATH and the example built (plain `cargo test`
-//! builds it, `--test mpirun` alone does not).
+//! `examples/mpi_pitch.rs` and `examples/mpi_solve.rs` under `mpirun` on 1 to 4 ranks (3 and 4
+//! oversubscribed on small machines), over loopback: every rank's tents are the serial order's,
+//! and every rank's elements the serial run's. Built only with the feature `mpi`; needs
+//! OpenMPI's `mpirun` on the PATH and the examples built (plain `cargo test` builds them,
+//! `--test mpirun` alone does not).
 
 use std::path::PathBuf;
 use std::process::Command;
 
-/// The example's binary, which `cargo test` builds beside the test binaries' folder.
-fn example() -> PathBuf {
+/// The binary of example `name`, which `cargo test` builds beside the test binaries' folder.
+fn example(name: &str) -> PathBuf {
     let exe = std::env::current_exe().expect("the test binary's path");
     let profile = exe
         .parent()
         .and_then(|deps| deps.parent())
         .expect("target/<profile>/deps/<test>");
-    let path = profile.join("examples").join("mpi_pitch");
+    let path = profile.join("examples").join(name);
     assert!(
         path.exists(),
         "{} is not built: `cargo test` builds the examples, `cargo test --test mpirun` alone \
          does not (build it with `cargo build --release -p sdg-distributed --features mpi \
-         --example mpi_pitch`)",
+         --examples`)",
         path.display()
     );
     path
 }
 
-/// Runs the example on `ranks` ranks and returns rank 0's summary line.
+/// Runs `mpi_pitch` on `ranks` ranks and returns rank 0's summary line.
 fn mpirun(ranks: usize, args: &[&str]) -> String {
+    run("mpi_pitch", ranks, args, "tents bitwise the serial order's")
+}
+
+/// Runs example `name` on `ranks` ranks and returns rank 0's summary line, which ends with
+/// `success`.
+fn run(name: &str, ranks: usize, args: &[&str], success: &str) -> String {
     let output = Command::new("mpirun")
         .arg("-n")
         .arg(ranks.to_string())
-        .arg(example())
+        .arg(example(name))
         .args(args)
         // As root (containers, CI), on more ranks than cores, and over loopback only.
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
@@ -43,7 +50,7 @@ fn mpirun(ranks: usize, args: &[&str]) -> String {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(
         output.status.success(),
-        "mpirun -n {ranks} mpi_pitch {args:?}: {}\n{stdout}\n{stderr}",
+        "mpirun -n {ranks} {name} {args:?}: {}\n{stdout}\n{stderr}",
         output.status
     );
     assert_eq!(
@@ -55,10 +62,7 @@ fn mpirun(ranks: usize, args: &[&str]) -> String {
         .lines()
         .find(|l| l.starts_with(&format!("{ranks} ranks")))
         .unwrap_or_else(|| panic!("no summary line:\n{stdout}"));
-    assert!(
-        summary.ends_with("tents bitwise the serial order's"),
-        "{summary}"
-    );
+    assert!(summary.ends_with(success), "{summary}");
     summary.to_string()
 }
 
@@ -95,8 +99,24 @@ fn a_random_partition_sends_an_update_for_most_tents() {
 }
 
 #[test]
+fn solving_over_mpi_gives_the_serial_elements_on_2_to_4_ranks() {
+    let success = "elements bitwise the serial run's";
+    for ranks in [2, 4] {
+        let summary = run("mpi_solve", ranks, &[], success);
+        println!("{summary}");
+        assert!(per_tent(&summary) > 0.05, "{summary}");
+    }
+    let summary = run("mpi_solve", 3, &["10", "random"], success);
+    println!("{summary}");
+    assert!(per_tent(&summary) > 1.0, "{summary}");
+}
+
+#[test]
 fn bad_arguments_exit_2() {
-    let output = Command::new(example()).arg("4").output().expect("runs");
-    assert_eq!(output.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&output.stderr).contains("CELLS: `4`"));
+    for (name, bad) in [("mpi_pitch", "4"), ("mpi_solve", "1")] {
+        let output = Command::new(example(name)).arg(bad).output().expect("runs");
+        assert_eq!(output.status.code(), Some(2));
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains(&format!("CELLS: `{bad}`")), "{stderr}");
+    }
 }

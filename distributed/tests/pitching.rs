@@ -149,11 +149,9 @@ impl Transport for Reversing {
     }
 
     fn send(&mut self, to: u32, message: Message) -> Result<(), TransportError> {
+        let update = matches!(message, Message::Update(_));
         self.1.push((to, message));
-        match message {
-            Message::Update(_) => Ok(()),
-            _ => self.flush(),
-        }
+        if update { Ok(()) } else { self.flush() }
     }
 
     fn receive(&mut self, timeout: Duration) -> Result<Option<(u32, Message)>, TransportError> {
@@ -241,6 +239,7 @@ fn a_ghost_copy_takes_an_update_only_if_it_is_newer() {
                 vertex,
                 time,
                 generation,
+                ..Update::default()
             };
             ends[1].send(0, Message::Update(update)).unwrap();
         }
@@ -402,6 +401,7 @@ fn lost_updates_stall_with_an_error_and_a_stray_update_aborts_every_rank() {
         vertex: foreign,
         time: 0.1,
         generation: 1,
+        ..sdg_distributed::Update::default()
     };
     ends[1].send(0, Message::Update(stray)).unwrap();
     let results = run(ends.into_iter().map(Lossy).collect());

@@ -7,6 +7,9 @@ use crate::basis::Basis;
 use crate::face::FaceState;
 pub use crate::spacetime::SpacePoint;
 
+/// Values in [`Geometry::to_values`].
+pub const GEOMETRY_VALUES: usize = 22;
+
 /// The affine map `X = P0 + J xi` of a tetrahedron from the reference tetrahedron.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Geometry {
@@ -77,6 +80,30 @@ impl Geometry {
     /// Determinant of `J`: six times the signed volume.
     pub fn det(&self) -> f64 {
         self.det
+    }
+
+    /// The map's stored values (origin, Jacobian and inverse by rows, determinant), for sending
+    /// it to another process bit for bit; [`Self::from_values`] reads them back.
+    pub fn to_values(&self) -> [f64; GEOMETRY_VALUES] {
+        let mut out = [0.0; GEOMETRY_VALUES];
+        let rows = self.jacobian.iter().chain(&self.inverse).flatten();
+        for (o, &x) in out.iter_mut().zip(self.origin.iter().chain(rows)) {
+            *o = x;
+        }
+        out[GEOMETRY_VALUES - 1] = self.det;
+        out
+    }
+
+    /// The map whose [`Self::to_values`] are `values`, bitwise.
+    pub fn from_values(values: &[f64; GEOMETRY_VALUES]) -> Self {
+        let matrix =
+            |at: usize| std::array::from_fn(|r| std::array::from_fn(|c| values[at + 3 * r + c]));
+        Self {
+            origin: [values[0], values[1], values[2]],
+            jacobian: matrix(3),
+            inverse: matrix(12),
+            det: values[21],
+        }
     }
 }
 
@@ -323,5 +350,9 @@ mod tests {
         let back = g.to_reference(g.from_reference(xi));
         assert!((0..3).all(|i| (back[i] - xi[i]).abs() < 1e-14));
         assert!(g.det() > 0.0);
+        let values = g.to_values();
+        assert_eq!(values[21], g.det());
+        assert_eq!(values[..3], [0.1, 0.2, 0.0]);
+        assert_eq!(Geometry::from_values(&values), g);
     }
 }

@@ -134,7 +134,34 @@ impl FaceGeometry {
     pub fn d_tau(&self) -> [f64; 2] {
         [self.inverse[0][1], self.inverse[1][1]]
     }
+
+    /// The map's stored values (corners, edge direction, inverse by rows, length), for sending
+    /// it to another process bit for bit; [`Self::from_values`] reads them back.
+    pub fn to_values(&self) -> [f64; FACE_GEOMETRY_VALUES] {
+        let mut out = [0.0; FACE_GEOMETRY_VALUES];
+        let stored = (self.corners.iter().flatten())
+            .chain(&self.direction)
+            .chain(self.inverse.iter().flatten())
+            .chain([&self.length]);
+        for (o, &x) in out.iter_mut().zip(stored) {
+            *o = x;
+        }
+        out
+    }
+
+    /// The map whose [`Self::to_values`] are `values`, bitwise.
+    pub fn from_values(values: &[f64; FACE_GEOMETRY_VALUES]) -> Self {
+        Self {
+            corners: std::array::from_fn(|k| std::array::from_fn(|i| values[3 * k + i])),
+            direction: [values[9], values[10]],
+            inverse: [[values[11], values[12]], [values[13], values[14]]],
+            length: values[15],
+        }
+    }
 }
+
+/// Values in [`FaceGeometry::to_values`].
+pub const FACE_GEOMETRY_VALUES: usize = 16;
 
 /// Components of the interface state: the normal separation `delta` (m), the tangential slip
 /// (m) and the damage `D` (dimensionless, seed 4.2; zero for laws without damage).
@@ -220,6 +247,10 @@ mod tests {
             assert!((r[0] - w[0]).abs() < 1e-14 && (r[1] - w[1]).abs() < 1e-14);
         }
         assert!((g.length() - 0.5).abs() < 1e-15);
+        let values = g.to_values();
+        assert_eq!(values[..3], [0.1, 0.2, 0.5]);
+        assert_eq!(values[15], g.length());
+        assert_eq!(FaceGeometry::from_values(&values), g);
         // Along the pole, tau alone changes eta.
         let dt = g.d_tau();
         assert!(dt[0].abs() < 1e-14 && (dt[1] - 2.5).abs() < 1e-12);

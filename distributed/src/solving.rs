@@ -1,0 +1,365 @@
+//! Patches solved over ranks: each rank solves the patch of every tent it pitches on its own
+//! view, with the real patch solver, and its updates carry what neighbours read as inflow: the
+//! elements under the star and the interface states over its spokes.
+//!
+//! # What a patch reads, and why it is the serial run's
+//! The patch of a tent at `v` reads the front times of `v`'s neighbours, the elements under
+//! `v`'s star triangles (its inflow) and, with interface laws, the interface faces over `v`'s
+//! spokes (the state below its contact faces). The pitching rule makes those times current
+//! ([`crate::pitching`]). Each element was left by the last tent at one of its triangle's
+//! corners, each face by the last tent at one of its edge's ends; that tent's owner sends it,
+//! with the tent's update, to every rank that holds the triangle or edge, tagged with its
+//! generation (tents at the triangle's corners or the edge's ends so far), and a receiver
+//! stores it only if that is newer than its copy. When `v` passes the rule, its rank sees
+//! every corner `w` of its star at `w`'s current time, so the update of `w`'s last tent has
+//! arrived (or `w` is its own), and with it every element and face that tent left on this
+//! rank: nothing newer exists, so the copies the patch reads are current. The star's
+//! triangles are in the whole mesh's order with their corner order (local ids increase with
+//! global ids), so the patch solver gets the serial run's inputs in the serial run's order and
+//! returns its elements and faces bitwise, for any partition and message timing. At the end
+//! every copy, on every rank that holds it, is the serial run's.
+//!
+//! # Scope
+//! Elastodynamics with the interface laws of the solver (contact, friction, cohesion, damage),
+//! without mesh-changing events and without fracture, from initial data at time 0. An element
+//! travels as its geometry's values ([`Geometry::to_values`]), its top facet's energy parts and
+//! its coefficients, a face as its geometry's values ([`FaceGeometry::to_values`]) and its
+//! coefficients, all `f64` bits; only tents at vertices that another rank holds as a ghost send
+//! any, and solving an interior patch allocates nothing.
+
+use sdg_mesh::{EdgeId, Front, Mesh, Tent, VertexId};
+use sdg_solver::boundary::Boundary;
+use sdg_solver::element::{FrontSolution, GEOMETRY_VALUES, Geometry};
+use sdg_solver::face::{
+    FACE_GEOMETRY_VALUES, FaceGeometry, FaceState, MAX_FACE_BASIS, STATE_COMPONENTS,
+};
+use sdg_solver::interface::Interfaces;
+use sdg_solver::patch::{Initial, Newton, PatchSolver};
+use sdg_solver::system::System;
+
+use crate::partition::{Partition, Rank};
+use crate::pitching::{
+    Causality, CellKind, Options, PitchingError, RankReport, Work, on_threads, rank_start, run_rank,
+};
+use crate::transport::loopback::LoopbackOptions;
+use crate::transport::{Transport, Update};
+use crate::view::LocalView;
+
+/// Values of a top facet's energy parts `[kinetic, strain, flux]` in an element's values.
+const ENERGY_VALUES: usize = 3;
+
+/// What every rank solves its patches with.
+#[derive(Clone, Copy, Debug)]
+pub struct Physics<'a> {
+    /// The first-order system of the material.
+    pub system: &'a System,
+    /// Polynomial order of the elements, 1 to 4.
+    pub order: usize,
+    /// Boundary conditions by tag (on the local views, boundary edges keep their tags).
+    pub boundary: &'a Boundary,
+    /// The state at time 0.
+    pub initial: Initial<'a>,
+    /// Interface laws by tag (interior edges without one are bonded).
+    pub interfaces: &'a Interfaces,
+    /// Newton settings of the patches with nonlinear faces.
+    pub newton: Newton,
+}
+
+impl Physics<'_> {
+    /// A patch solver for stars of up to `max_star` triangles.
+    fn solver(&self, max_star: usize) -> PatchSolver {
+        PatchSolver::new(self.system.clone(), self.order, max_star)
+            .with_interfaces(self.interfaces.clone(), self.newton)
+    }
+
+    /// Initial data under every triangle of `view`: the front solution a rank starts from.
+    pub fn initial_solution(&self, view: &LocalView) -> FrontSolution {
+        // Only for the element sizes: no interfaces, no patch.
+        let solver = PatchSolver::new(self.system.clone(), self.order, 0);
+        FrontSolution::new(
+            view.mesh().triangles().len(),
+            solver.basis().len(),
+            solver.width(),
+        )
+        .with_edges(view.mesh().edges().len())
+    }
+}
+
+/// A rank's result: its report, view, front, and the elements and interface faces on it.
+#[derive(Debug)]
+pub struct RankSolution {
+    /// What the rank did.
+    pub report: RankReport,
+    /// Its view of the mesh.
+    pub view: LocalView,
+    /// Its front (local vertex ids), at the end time.
+    pub front: Front,
+    /// The elements under its view's triangles and the interface faces over its edges (local
+    /// ids).
+    pub solution: FrontSolution,
+}
+
+/// A rank's patch solves: the [`Work`] of [`solve_rank`].
+struct Patches<'a> {
+    solver: PatchSolver,
+    physics: Physics<'a>,
+    solution: &'a FrontSolution,
+    /// Per local triangle, tents at its corners so far, as far as this rank has heard.
+    generation: Vec<u32>,
+    /// Per local edge, tents at its ends so far, as far as this rank has heard; empty without
+    /// nonlinear interface laws (no faces are stored then).
+    edge_generation: Vec<u32>,
+    /// Values per element.
+    stride: usize,
+}
+
+/// Values per interface face: its geometry's, then the coefficients of each component.
+const FACE_VALUES: usize = FACE_GEOMETRY_VALUES + STATE_COMPONENTS * MAX_FACE_BASIS;
+
+/// The edges from `v` to its neighbours on `mesh`.
+fn spokes(mesh: &Mesh, v: VertexId) -> impl Iterator<Item = EdgeId> + '_ {
+    mesh.vertex_neighbors(v)
+        .iter()
+        .filter_map(move |&w| mesh.edge_between(v, w))
+}
+
+impl Work for Patches<'_> {
+    fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError> {
+        self.solver
+            .solve(
+                view.mesh(),
+                front,
+                tent,
+                self.physics.boundary,
+                self.physics.initial,
+                self.solution,
+            )
+            .map_err(|source| PitchingError::Patch {
+                rank: view.rank(),
+                vertex: view.global(tent.vertex),
+                time: tent.t_old,
+                source,
+            })?;
+        self.solver.commit(self.solution);
+        for &t in view.mesh().vertex_triangles(tent.vertex) {
+            self.generation[t as usize] += 1;
+        }
+        if !self.edge_generation.is_empty() {
+            for e in spokes(view.mesh(), tent.vertex) {
+                self.edge_generation[e as usize] += 1;
+            }
+        }
+        Ok(())
+    }
+
+    fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update) {
+        let elements = &mut update.elements;
+        for &t in view.mesh().vertex_triangles(v) {
+            if !view.held_by(t, to) {
+                continue;
+            }
+            elements
+                .ids
+                .push((view.global_triangle(t), self.generation[t as usize]));
+            let energy = self
+                .solution
+                .energy(t as usize)
+                .unwrap_or([f64::NAN; ENERGY_VALUES]);
+            self.solution.with_element(t as usize, |element| {
+                let (geometry, coefficients) = element.expect("the tent's star is solved");
+                elements.values.extend(geometry.to_values());
+                elements.values.extend(energy);
+                elements.values.extend_from_slice(coefficients);
+            });
+        }
+        if self.edge_generation.is_empty() {
+            return;
+        }
+        for e in spokes(view.mesh(), v) {
+            let face = self.solution.face(e as usize);
+            if let Some(face) = face.filter(|_| view.edge_held_by(e, to)) {
+                let faces = &mut update.faces;
+                faces
+                    .ids
+                    .push((view.global_edge(e), self.edge_generation[e as usize]));
+                faces.values.extend(face.geometry.to_values());
+                faces.values.extend(face.coefficients.iter().flatten());
+            }
+        }
+    }
+
+    fn apply(
+        &mut self,
+        view: &LocalView,
+        from: Rank,
+        update: &Update,
+    ) -> Result<(), PitchingError> {
+        let rank = view.rank();
+        let (elements, faces) = (&update.elements, &update.faces);
+        let sizes = [
+            (CellKind::Element, elements, self.stride),
+            (CellKind::Face, faces, FACE_VALUES),
+        ];
+        for (kind, cells, expected) in sizes {
+            if cells.values.len() != cells.len() * expected {
+                return Err(PitchingError::CellSize {
+                    rank,
+                    from,
+                    kind,
+                    got: cells.stride(),
+                    expected,
+                });
+            }
+        }
+        let stray = |kind, id| PitchingError::StrayCell {
+            rank,
+            from,
+            kind,
+            id,
+        };
+        for i in 0..elements.len() {
+            let (global, generation, values) = elements.get(i);
+            let t = view
+                .local_triangle(global)
+                .filter(|&t| view.held_by(t, from))
+                .ok_or(stray(CellKind::Element, global))?;
+            if generation <= self.generation[t as usize] {
+                continue;
+            }
+            self.generation[t as usize] = generation;
+            let (geometry, rest) = values.split_at(GEOMETRY_VALUES);
+            let (energy, coefficients) = rest.split_at(ENERGY_VALUES);
+            let geometry = Geometry::from_values(geometry.try_into().expect("split there"));
+            let energy: [f64; ENERGY_VALUES] = energy.try_into().expect("split there");
+            let energy = energy.iter().all(|x| !x.is_nan()).then_some(energy);
+            self.solution
+                .store(t as usize, &geometry, coefficients, energy);
+        }
+        for i in 0..faces.len() {
+            let (global, generation, values) = faces.get(i);
+            // A face comes with the tent at one of its edge's ends.
+            let e = view
+                .local_edge(global)
+                .filter(|&e| {
+                    let ends = view.mesh().edges()[e as usize].vertices;
+                    ends.iter().any(|&v| view.owner(v) == from)
+                })
+                .filter(|_| !self.edge_generation.is_empty())
+                .ok_or(stray(CellKind::Face, global))?;
+            if generation <= self.edge_generation[e as usize] {
+                continue;
+            }
+            self.edge_generation[e as usize] = generation;
+            let (geometry, coefficients) = values.split_at(FACE_GEOMETRY_VALUES);
+            let face = FaceState {
+                geometry: FaceGeometry::from_values(geometry.try_into().expect("split there")),
+                coefficients: std::array::from_fn(|k| {
+                    std::array::from_fn(|j| coefficients[k * MAX_FACE_BASIS + j])
+                }),
+            };
+            self.solution.store_face(e as usize, &face);
+        }
+        Ok(())
+    }
+}
+
+/// [`crate::pitch_rank`] that also solves each tent's patch with `physics` on `solution`, the
+/// elements under the view's triangles (local ids; [`Physics::initial_solution`] at the start,
+/// with `front` flat at time 0), and sends other ranks the elements they read with the updates.
+/// At the end every element of `solution` is the serial run's, bitwise.
+pub fn solve_rank<T: Transport>(
+    view: &LocalView,
+    pitcher: &sdg_mesh::Pitcher,
+    front: &Front,
+    solution: &FrontSolution,
+    physics: Physics<'_>,
+    transport: &mut T,
+    options: &Options,
+) -> Result<RankReport, PitchingError> {
+    let max_star = view
+        .owned()
+        .map(|v| view.mesh().vertex_triangles(v).len())
+        .max()
+        .unwrap_or(0);
+    let solver = physics.solver(max_star);
+    let size = solver.basis().len() * solver.width();
+    let (triangles, edges) = (view.mesh().triangles().len(), view.mesh().edges().len());
+    let faces = physics.interfaces.any_nonlinear();
+    let sizes = [
+        ("triangles", solution.len(), triangles),
+        (
+            "values per element",
+            solution.basis_len() * solution.width(),
+            size,
+        ),
+        (
+            "edges",
+            solution.edges(),
+            if faces { edges } else { solution.edges() },
+        ),
+    ];
+    for (what, got, expected) in sizes {
+        if got != expected {
+            return Err(PitchingError::Solution {
+                rank: view.rank(),
+                what,
+                got,
+                expected,
+            });
+        }
+    }
+    let patches = Patches {
+        solver,
+        physics,
+        solution,
+        generation: vec![0; triangles],
+        edge_generation: if faces { vec![0; edges] } else { Vec::new() },
+        stride: GEOMETRY_VALUES + ENERGY_VALUES + size,
+    };
+    run_rank(view, pitcher, front, transport, patches, options)
+}
+
+/// Runs [`solve_rank`] for every rank of `partition` on threads of this process, connected by
+/// [`crate::Loopback`] with `delays`, from initial data at time 0. Returns the ranks' results
+/// by rank, or the first error by rank that is not an [`PitchingError::Aborted`].
+pub fn solve_threads(
+    mesh: &Mesh,
+    partition: &Partition,
+    causality: Causality,
+    physics: Physics<'_>,
+    delays: LoopbackOptions,
+    options: &Options,
+) -> Result<Vec<RankSolution>, PitchingError> {
+    let views = LocalView::all(mesh, partition)?;
+    let start = vec![0.0; mesh.vertices().len()];
+    let ranks = views
+        .iter()
+        .map(|view| {
+            let (pitcher, front) = rank_start(view, causality, &start)?;
+            Ok((pitcher, front, physics.initial_solution(view)))
+        })
+        .collect::<Result<Vec<_>, PitchingError>>()?;
+    let reports = on_threads(&views, delays, |rank, end| {
+        let (pitcher, front, solution) = &ranks[rank];
+        solve_rank(
+            &views[rank],
+            pitcher,
+            front,
+            solution,
+            physics,
+            end,
+            options,
+        )
+    })?;
+    Ok(reports
+        .into_iter()
+        .zip(views)
+        .zip(ranks)
+        .map(|((report, view), (_, front, solution))| RankSolution {
+            report,
+            view,
+            front,
+            solution,
+        })
+        .collect())
+}
