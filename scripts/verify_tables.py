@@ -742,6 +742,82 @@ def estimate(runs):
     )
 
 
+# ---------------------------------------------------------------------------------------------
+# branching_study: the branching plate over draws and resolutions (`sdg study`)
+
+
+def branching_study(runs):
+    """Per resolution of configs/studies/branching_convergence.toml: the statistics of its
+    study.json, from OUT/branching_convergence (the study's --output folder)."""
+    folder = runs.out / "branching_convergence"
+    path = folder / "study.json"
+    if not path.is_file():
+        raise Missing("branching_convergence")
+    study = json.loads(path.read_text())
+
+    def interval(m, scale, unit, digits):
+        if not m or m["mean"] is None:
+            return "none"
+        text = f"{m['mean'] * scale:.{digits}f}"
+        if m["ci95"]:
+            lo, hi = (x * scale for x in m["ci95"])
+            text += f" [{lo:.{digits}f}, {hi:.{digits}f}]"
+        return text + f" {unit}"
+
+    out = []
+    for g in study["groups"]:
+        if not g["done"]:
+            continue
+        m = g["metrics"]
+        fork_t = m.get("fracture.macro_branching.time")
+        fork_d = m.get("fracture.macro_branching.distance")
+        speed = m.get("crack.max_branch_speed_over_c_r")
+        over = m.get("crack.states_over_c_r")
+        balance = m.get("energy.balance_residual_rel")
+        forked = round(fork_t["present"] * g["done"]) if fork_t else 0
+        out.append(
+            [
+                f"{g['axes']['adapt.min_edge'] * 1e6:g} um",
+                f"{g['done']} of {g['cases']}",
+                f"{forked} of {g['done']}",
+                interval(fork_t, 1e6, "us", 3),
+                interval(fork_d, 1e3, "mm", 2),
+                f"{speed['mean']:.2f} ({speed['min']:.2f} to {speed['max']:.2f})" if speed else "",
+                f"{sum_of(folder, 'crack.states_over_c_r', g):,}" if over else "",
+                e(balance["max"], 1) if balance else "",
+                f"{m['patches']['mean'] / 1e6:.1f}M" if "patches" in m else "",
+                f"{m['wall_time_s']['mean']:.0f} s" if "wall_time_s" in m else "",
+            ]
+        )
+    return table(
+        [
+            "`adapt.min_edge`",
+            "draws done",
+            "forked (two arms past 1 mm)",
+            "fork time, mean [95% interval]",
+            "fork distance from the notch",
+            "largest branch speed / `c_R`: mean (least to largest) over draws",
+            "tip states above `c_R`, all draws",
+            "largest energy balance residual",
+            "patches (mean)",
+            "wall time (mean, 2 threads)",
+        ],
+        out,
+    ) + f"\n\nCommand: `sdg study {study['study']} --jobs 1 --threads 2`."
+
+
+def sum_of(folder, key, group):
+    """The sum of `key` over the done cases of `group` in the study's study.csv."""
+    with open(folder / "study.csv", newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r["status"] == "done"]
+    mine = [
+        r
+        for r in rows
+        if all(float(r[k]) == float(v) for k, v in group["axes"].items())
+    ]
+    return sum(int(r[key]) for r in mine if r[key])
+
+
 TABLES = {
     "estimate": estimate,
     "convergence": convergence,
@@ -754,6 +830,7 @@ TABLES = {
     "determinism": determinism,
     "fracture": fracture,
     "branching": branching,
+    "branching_study": branching_study,
     "status": status,
 }
 
