@@ -127,11 +127,7 @@ impl Problem {
             .transpose()?;
         let fracture = config.fracture.as_ref().map(|f| {
             Fracture::new(f, &mut mesh, |name| {
-                let entry = config
-                    .interface
-                    .iter()
-                    .find(|i| i.tags.iter().any(|t| t == name));
-                entry.and_then(|i| i.to_law().ok()).unwrap_or(Law::Bonded)
+                config.law_of(name).unwrap_or(Law::Bonded)
             })
         });
         let sites = TagSites::of(&mesh);
@@ -273,7 +269,7 @@ fn laws(
     let mut by_tag = vec![None; mesh.tag_names().len()];
     for (i, entry) in config.interface.iter().enumerate() {
         let key = || format!("interface[{i}].tags");
-        let law = entry.to_law().expect("validated law");
+        let law = entry.law.law();
         for name in &entry.tags {
             let new_cracks = fracture
                 .map(|f| f.tag)

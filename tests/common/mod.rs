@@ -270,19 +270,19 @@ pub fn meshio_available(check: &str) -> bool {
 /// The numeric columns `names` of the CSV file `path` (header on the first line): one vector per
 /// row, in the order of `names`; fields that are not numbers read as NaN.
 pub fn csv_columns(path: &Path, names: &[&str]) -> Vec<Vec<f64>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut reader = csv::Reader::from_path(path).unwrap();
+    let header = reader.headers().unwrap().clone();
     let index: Vec<usize> = names
         .iter()
-        .map(|n| header.iter().position(|h| h == n).expect("column"))
+        .map(|n| header.iter().position(|h| h == *n).expect("column"))
         .collect();
-    lines
-        .map(|l| {
-            let fields: Vec<&str> = l.split(',').collect();
+    reader
+        .records()
+        .map(|row| {
+            let row = row.unwrap();
             index
                 .iter()
-                .map(|&i| fields[i].parse().unwrap_or(f64::NAN))
+                .map(|&i| row[i].parse().unwrap_or(f64::NAN))
                 .collect()
         })
         .collect()

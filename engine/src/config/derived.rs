@@ -86,6 +86,13 @@ impl Config {
 }
 
 impl Config {
+    /// The law of the `[[interface]]` entry that names `tag`, if one does.
+    pub fn law_of(&self, tag: &str) -> Option<Law> {
+        (self.interface.iter())
+            .find(|i| i.tags.iter().any(|t| t == tag))
+            .map(|i| i.law.law())
+    }
+
     /// The scales of `[loading]`, if any; `(key, reason)` when the section is invalid.
     pub fn load_scales(&self) -> Result<Option<LoadScales>, (String, String)> {
         let Some(l) = &self.loading else {
@@ -101,12 +108,7 @@ impl Config {
                 ),
             );
         }
-        let law = self
-            .interface
-            .iter()
-            .find(|i| i.tags.contains(&l.interface))
-            .and_then(|i| i.to_law().ok());
-        let Some(Law::XuNeedleman(cohesive)) = law else {
+        let Some(Law::XuNeedleman(cohesive)) = self.law_of(&l.interface) else {
             return fail(
                 "interface",
                 format!(

@@ -10,6 +10,7 @@
 use std::path::{Path, PathBuf};
 
 use super::error::ConfigError;
+use super::interface::take_interfaces;
 use super::overrides::{apply_override, attribute, attribute_added};
 use super::schema::Config;
 
@@ -75,23 +76,26 @@ impl Config {
                 added.push((spec.as_str(), path));
             }
         }
-        let config: Config = serde_path_to_error::deserialize(root).map_err(|e| {
-            let path = e.path().to_string();
+        let error = |key: Option<String>, reason: String| {
             let error = ConfigError {
                 file: source.to_string(),
-                key: (path != ".").then_some(path),
-                reason: e.into_inner().message().to_string(),
-            };
-            attribute_added(attribute(error, overrides), &added)
-        })?;
-        config.validate().map_err(|(key, reason)| {
-            let error = ConfigError {
-                file: source.to_string(),
-                key: Some(key),
+                key,
                 reason,
             };
             attribute_added(attribute(error, overrides), &added)
+        };
+        let interface = take_interfaces(&mut root).map_err(|(key, r)| error(Some(key), r))?;
+        let mut config: Config = serde_path_to_error::deserialize(root).map_err(|e| {
+            let path = e.path().to_string();
+            error(
+                (path != ".").then_some(path),
+                e.into_inner().message().to_string(),
+            )
         })?;
+        config.interface = interface;
+        config
+            .validate()
+            .map_err(|(key, reason)| error(Some(key), reason))?;
         Ok(config)
     }
 }
@@ -224,6 +228,39 @@ mod tests {
         let set = ["mesh.nx=4".to_string()];
         let top = LoadedConfig::load(&dir.path().join("top.toml"), &set).unwrap();
         assert_eq!(top.config.mesh.nx, Some(4));
+    }
+
+    #[test]
+    fn interface_entries_come_from_the_base_or_replace_it_whole() {
+        let crack =
+            "[[mesh.interface]]\nfrom = [0.0, 0.005]\nto = [0.004, 0.005]\ntag = \"crack\"\n";
+        let cohesive = "[[interface]]\ntags = [\"crack\"]\nlaw = \"xu_needleman\"\n\
+                        strength = 1e6\ncritical_separation = 1e-6\n";
+        let base = format!("{BASE}{crack}{cohesive}");
+        let dir = folder(&[
+            ("base.toml", &base),
+            ("same.toml", "extends = \"base.toml\"\n[time]\nend = 2e-6\n"),
+            (
+                "free.toml",
+                "extends = \"base.toml\"\n[[interface]]\ntags = [\"crack\"]\nlaw = \"free\"\n",
+            ),
+            (
+                "mixed.toml",
+                "extends = \"base.toml\"\n[[interface]]\ntags = [\"crack\"]\nlaw = \"free\"\n\
+                 strength = 1e6\n",
+            ),
+        ]);
+        let load = |name: &str| LoadedConfig::load(&dir.path().join(name), &[]);
+        let base = load("base.toml").unwrap().config;
+        let same = load("same.toml").unwrap().config;
+        assert_eq!(same.interface, base.interface);
+        assert_eq!(same.law_of("crack").map(|l| l.is_cohesive()), Some(true));
+        let free = load("free.toml").unwrap().config;
+        assert_eq!(free.law_of("crack"), Some(sdg_solver::interface::Law::Free));
+        // The entry replaces the base's whole: the base's strength is not carried over.
+        let e = load("mixed.toml").unwrap_err();
+        assert!(e.file.ends_with("mixed.toml"), "{e}");
+        assert_eq!(e.key.as_deref(), Some("interface[0].strength"));
     }
 
     #[test]

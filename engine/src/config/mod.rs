@@ -7,6 +7,7 @@ mod conditions;
 mod derived;
 mod error;
 mod fracture;
+mod interface;
 mod load;
 mod loading;
 mod material;
@@ -17,10 +18,13 @@ mod settings;
 mod validate;
 
 pub use conditions::{
-    BoundaryConfig, BoundaryKind, ExactConfig, ExactKind, HistoryConfig, HistoryKind,
-    InterfaceConfig, LawName, ProfileName, WaveName,
+    BoundaryConfig, BoundaryKind, ExactConfig, ExactKind, HistoryConfig, HistoryKind, ProfileName,
+    WaveName,
 };
 pub use fracture::FractureConfig;
+pub use interface::{
+    CohesiveConfig, ContactConfig, DamageConfig, InterfaceConfig, LawConfig, LawName,
+};
 pub use loading::{LoadScales, LoadingConfig};
 pub use material::{MaterialConfig, PlaneName};
 pub(crate) use mesh::rectangle_key;

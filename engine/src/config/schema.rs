@@ -2,8 +2,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::conditions::{BoundaryConfig, ExactConfig, InterfaceConfig};
+use super::conditions::{BoundaryConfig, ExactConfig};
 use super::fracture::FractureConfig;
+use super::interface::InterfaceConfig;
 use super::loading::LoadingConfig;
 use super::material::MaterialConfig;
 use super::mesh::MeshConfig;
@@ -48,8 +49,10 @@ pub struct Config {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub boundary: Vec<BoundaryConfig>,
     /// Interface laws, one entry per group of interface tags (`[[interface]]`). Every interface
-    /// tag of the mesh must be named by one entry.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    /// tag of the mesh must be named by one entry. Read apart from the other keys
+    /// ([`Config::parse`], [`super::LoadedConfig::load`]) so that errors name the key inside an
+    /// entry.
+    #[serde(default, skip_deserializing, skip_serializing_if = "Vec::is_empty")]
     pub interface: Vec<InterfaceConfig>,
     /// A mode-I load given by its load ratio: transmitting conditions on its sides.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -344,7 +344,8 @@ impl Config {
         Ok(())
     }
 
-    /// Checks `[[interface]]`: tags named once, laws and their parameters.
+    /// Checks `[[interface]]`: tags named once, laws that the plane allows (the parameters are
+    /// checked when an entry is read).
     fn validate_interfaces(&self) -> Result<(), (String, String)> {
         let mut seen: Vec<&str> = Vec::new();
         for (i, entry) in self.interface.iter().enumerate() {
@@ -358,7 +359,7 @@ impl Config {
                 }
                 seen.push(tag);
             }
-            if entry.law.is_in_plane_only() && self.material.plane == PlaneName::Antiplane {
+            if entry.law.name().is_in_plane_only() && self.material.plane == PlaneName::Antiplane {
                 return Err((
                     key("law"),
                     "contact and cohesive laws need a normal direction, which anti-plane shear \
@@ -366,7 +367,6 @@ impl Config {
                         .into(),
                 ));
             }
-            entry.to_law().map_err(|(k, r)| (key(&k), r))?;
         }
         Ok(())
     }
@@ -379,13 +379,7 @@ impl Config {
             return Ok(());
         };
         let fail = |key: &str, reason: String| Err((format!("fracture.{key}"), reason));
-        let law_of = |tag: &str| {
-            self.interface
-                .iter()
-                .find(|i| i.tags.iter().any(|t| t == tag))
-                .and_then(|i| i.to_law().ok())
-        };
-        match law_of(&f.tag) {
+        match self.law_of(&f.tag) {
             Some(Law::Damage(d)) if d.initial == 0.0 => {}
             _ => {
                 return fail(
@@ -399,7 +393,7 @@ impl Config {
             }
         }
         for (i, tag) in f.from.iter().enumerate() {
-            if !matches!(law_of(tag), Some(Law::Damage(_) | Law::Free)) {
+            if !matches!(self.law_of(tag), Some(Law::Damage(_) | Law::Free)) {
                 return fail(
                     &format!("from[{i}]"),
                     format!(

@@ -6,6 +6,7 @@ use super::network::{self, CrackLink, MacroFork};
 use super::tips::{self, TipState};
 use crate::config::TimeConfig;
 use crate::frontier::Frontier;
+use crate::output::table::Table;
 use sdg_mesh::{EdgeId, Mesh, TagId};
 use sdg_solver::crack::Crossing;
 use sdg_solver::element::FrontSolution;
@@ -13,7 +14,6 @@ use sdg_solver::face::{FaceBasis, FaceState, STATE_COMPONENTS};
 use serde::Serialize;
 use std::borrow::Cow;
 use std::collections::{BTreeMap, BTreeSet};
-use std::fmt::Write as _;
 
 /// Scratch size for one element's basis values and fields at a point.
 pub(crate) const SCRATCH: usize = 64;
@@ -109,22 +109,22 @@ pub struct FractureSummary {
 /// `events.csv`: one line per fracture event in the order they happened, at its time on the
 /// clock of `time`.
 pub(crate) fn events_csv(events: &[FractureEvent], time: &TimeConfig) -> String {
-    let mut csv = String::from("time_s,event,branch,x_m,y_m,to_x_m,to_y_m,reason\n");
+    let mut csv = Table::new([
+        "time_s", "event", "branch", "x_m", "y_m", "to_x_m", "to_y_m", "reason",
+    ]);
     for e in events {
-        let _ = writeln!(
-            csv,
-            "{:e},{},{},{:e},{:e},{:e},{:e},{}",
-            time.clock(e.time),
-            e.kind,
+        csv.row([
+            format!("{:e}", time.clock(e.time)),
+            e.kind.to_string(),
             e.branch.map_or(String::new(), |b| b.to_string()),
-            e.from[0],
-            e.from[1],
-            e.to[0],
-            e.to[1],
-            e.reason.as_deref().unwrap_or("")
-        );
+            format!("{:e}", e.from[0]),
+            format!("{:e}", e.from[1]),
+            format!("{:e}", e.to[0]),
+            format!("{:e}", e.to[1]),
+            e.reason.as_deref().unwrap_or("").to_string(),
+        ]);
     }
-    csv
+    csv.into_text()
 }
 
 /// A crack edge at the end of a run.
@@ -217,7 +217,7 @@ pub(crate) fn wake_coarsening(
 /// empty on initial cracks.
 pub(crate) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge], events: &[FractureEvent]) -> String {
     let extensions: Vec<&FractureEvent> = events.iter().filter(|e| e.kind == "extension").collect();
-    let mut csv = String::from("x0_m,y0_m,x1_m,y1_m,tag,branch,damage\n");
+    let mut csv = Table::new(["x0_m", "y0_m", "x1_m", "y1_m", "tag", "branch", "damage"]);
     for c in cracks {
         let tag = mesh.edges()[c.edge as usize]
             .tag
@@ -229,13 +229,17 @@ pub(crate) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge], events: &[FractureEv
             .find(|e| on_segment(middle, e.from, e.to))
             .and_then(|e| e.branch)
             .map_or(String::new(), |b| b.to_string());
-        let _ = writeln!(
-            csv,
-            "{:e},{:e},{:e},{:e},{tag},{branch},{:e}",
-            a[0], a[1], b[0], b[1], c.damage
-        );
+        csv.row([
+            format!("{:e}", a[0]),
+            format!("{:e}", a[1]),
+            format!("{:e}", b[0]),
+            format!("{:e}", b[1]),
+            tag.to_string(),
+            branch,
+            format!("{:e}", c.damage),
+        ]);
     }
-    csv
+    csv.into_text()
 }
 
 /// The summary of the fracture events of a run on the final `state`, whose crack edges are

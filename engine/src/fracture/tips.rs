@@ -28,8 +28,8 @@
 //!
 //! One tip per interface tag: a tag whose crack grows at two ends mixes them.
 
+use crate::output::table::Table;
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 
 use serde::Serialize;
 
@@ -230,21 +230,28 @@ pub(crate) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
     c_r: f64,
     time: &TimeConfig,
 ) -> (String, CrackSummary) {
-    let mut csv = format!("t_s,{key},x_m,y_m,extension_m,speed_m_s,process_zone_length_m\n");
+    let mut csv = Table::new([
+        "t_s",
+        key,
+        "x_m",
+        "y_m",
+        "extension_m",
+        "speed_m_s",
+        "process_zone_length_m",
+    ]);
     let mut summary = CrackSummary::default();
     for (crack, states) in cracks {
         let states = states.as_ref();
         for s in states {
-            let _ = writeln!(
-                csv,
-                "{:e},{crack},{:e},{:e},{:e},{:e},{:e}",
-                time.clock(s.time),
-                s.point[0],
-                s.point[1],
-                s.extension,
-                s.speed,
-                s.process_zone_length
-            );
+            csv.row([
+                format!("{:e}", time.clock(s.time)),
+                crack.to_string(),
+                format!("{:e}", s.point[0]),
+                format!("{:e}", s.point[1]),
+                format!("{:e}", s.extension),
+                format!("{:e}", s.speed),
+                format!("{:e}", s.process_zone_length),
+            ]);
             summary.max_speed = summary.max_speed.max(s.speed);
             summary.states_over_c_r += usize::from(s.speed > c_r);
         }
@@ -254,7 +261,7 @@ pub(crate) fn tips_csv<K: std::fmt::Display, S: AsRef<[TipState]>>(
         }
     }
     summary.max_speed_over_c_r = summary.max_speed / c_r;
-    (csv, summary)
+    (csv.into_text(), summary)
 }
 
 #[cfg(test)]

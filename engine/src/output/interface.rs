@@ -6,14 +6,13 @@
 //! end is sampled by the tent on the other side). Rows are sorted by probe and time, so the file
 //! does not depend on the order in which tents were solved.
 
-use std::fmt::Write as _;
-
 use sdg_mesh::Mesh;
 use sdg_solver::interface::Mode;
 use sdg_solver::patch::{InterfaceSample, PatchSolver};
 
 use crate::config::TimeConfig;
 use crate::output::snapshot::{InterfaceValues, cut_face};
+use crate::output::table::Table;
 use crate::problem::Probe;
 
 /// One interface face's cut by a snapshot plane: time (s), ends (m) and values there.
@@ -103,34 +102,47 @@ pub(crate) fn csv(
     time: &TimeConfig,
 ) -> String {
     samples.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.time.total_cmp(&b.1.time)));
-    let mut out = String::from(
-        "t_s,x_m,y_m,tag,s_n_pa,s_t_pa,sI_n_pa,sI_t_pa,delta_m,slip_m,jump_vn_m_s,jump_vt_m_s,\
-         eta,gamma,damage,mode\n",
-    );
+    let mut out = Table::new([
+        "t_s",
+        "x_m",
+        "y_m",
+        "tag",
+        "s_n_pa",
+        "s_t_pa",
+        "sI_n_pa",
+        "sI_t_pa",
+        "delta_m",
+        "slip_m",
+        "jump_vn_m_s",
+        "jump_vt_m_s",
+        "eta",
+        "gamma",
+        "damage",
+        "mode",
+    ]);
     for (i, s) in samples.iter() {
         let probe = &probes[*i];
-        let _ = writeln!(
-            out,
-            "{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{}",
-            time.clock(s.time),
-            probe.at[0],
-            probe.at[1],
-            probe.tag,
-            s.traction[0],
-            s.traction[1],
-            s.bonded_traction[0],
-            s.bonded_traction[1],
-            s.delta,
-            s.slip,
-            s.velocity_jump[0],
-            s.velocity_jump[1],
-            s.eta,
-            s.gamma,
-            s.damage,
-            s.mode.name()
-        );
+        let e = |v: f64| format!("{v:e}");
+        out.row([
+            e(time.clock(s.time)),
+            e(probe.at[0]),
+            e(probe.at[1]),
+            probe.tag.to_string(),
+            e(s.traction[0]),
+            e(s.traction[1]),
+            e(s.bonded_traction[0]),
+            e(s.bonded_traction[1]),
+            e(s.delta),
+            e(s.slip),
+            e(s.velocity_jump[0]),
+            e(s.velocity_jump[1]),
+            s.eta.to_string(),
+            s.gamma.to_string(),
+            s.damage.to_string(),
+            s.mode.name().to_string(),
+        ]);
     }
-    out
+    out.into_text()
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ use super::line::{LineChart, LineStyle};
 use super::vtu::VtuGrid;
 use crate::error::EngineError;
 use crate::output::Field;
+use crate::output::table::{ReadTable, number};
 
 /// Size of `sdg plot` pictures and run snapshots, pixels.
 pub const FIELD_PNG_SIZE: (u32, u32) = (1000, 800);
@@ -235,28 +236,15 @@ pub fn plot_vtu(request: &PlotRequest) -> Result<PathBuf, EngineError> {
 /// boundary work and numerical dissipation (J/m) against time (us); interface work too when
 /// any is recorded.
 pub fn history_chart(csv: &str) -> Result<LineChart, EngineError> {
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let table = ReadTable::parse(csv, "history.csv")?;
     let column = |name: &str| {
-        header
-            .iter()
-            .position(|h| *h == name)
+        (table.column(name))
             .ok_or_else(|| EngineError::Plot(format!("history has no column {name}")))
     };
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| {
-            l.split(',')
-                .map(|v| v.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
     let time = column("time_s")?;
     let series = |k: usize| -> Vec<(f64, f64)> {
-        rows.iter()
-            .map(|r| {
-                let get = |i: usize| r.get(i).copied().unwrap_or(f64::NAN);
-                (get(time) * 1e6, get(k))
-            })
+        (table.rows())
+            .map(|r| (number(r.get(time)) * 1e6, number(r.get(k))))
             .collect()
     };
     let mut chart = LineChart::new("Energy history", "time (us)", "energy (J/m)");

@@ -9,6 +9,7 @@ use super::canvas::Image;
 use super::line::{LineChart, LineStyle};
 use crate::error::EngineError;
 use crate::lefm;
+use crate::output::table::{ReadTable, number};
 
 /// Size of `crack_tips.png`, pixels: two charts stacked.
 pub const CRACK_PNG_SIZE: (u32, u32) = (1000, 1200);
@@ -114,12 +115,9 @@ fn tip_series(
     tips: &mut Vec<TipSeries>,
 ) -> Result<(), EngineError> {
     let first = tips.len();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let table = ReadTable::parse(csv, source)?;
     let column = |name: &str| {
-        header
-            .iter()
-            .position(|h| *h == name)
+        (table.column(name))
             .ok_or_else(|| EngineError::Input(format!("{source}: no column {name}")))
     };
     let (tag, prefix) = match column("interface") {
@@ -137,14 +135,9 @@ fn tip_series(
         Some(n) => (n.arrival, 1.0 / n.tau, 1.0 / (n.tau * n.c_r), 1.0 / n.c_r),
         None => (0.0, 1e6, 1e3, 1.0),
     };
-    for line in lines {
-        let f: Vec<&str> = line.split(',').collect();
-        let get = |i: usize| {
-            f.get(i)
-                .and_then(|s| s.parse::<f64>().ok())
-                .unwrap_or(f64::NAN)
-        };
-        let name = format!("{label}, {prefix}{}", f.get(tag).copied().unwrap_or(""));
+    for row in table.rows() {
+        let get = |i: usize| number(row.get(i));
+        let name = format!("{label}, {prefix}{}", row.get(tag).unwrap_or(""));
         if tips[first..].last().is_none_or(|l| l.name != name) {
             tips.push(TipSeries {
                 name,

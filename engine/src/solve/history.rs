@@ -1,8 +1,6 @@
 //! What each accepted patch adds to the bookkeeping: energy sums, snapshot slices, and the
 //! history rows that integrate over the whole front.
 
-use std::fmt::Write as _;
-
 use std::sync::atomic::Ordering;
 
 use sdg_mesh::TriangleId;
@@ -16,6 +14,7 @@ use super::book::Book;
 use super::context::{Solve, initial_state};
 use crate::frontier::Frontier;
 use crate::output::snapshot::PointValues;
+use crate::output::table;
 
 impl Solve<'_> {
     /// Adds a solved patch to the totals.
@@ -110,21 +109,20 @@ impl Solve<'_> {
             - e.total
             - totals.dissipation
             - totals.interface_work;
-        let _ = writeln!(
-            book.history,
-            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
-            time,
-            book.patches,
-            rho * e.total,
-            rho * e.kinetic,
-            rho * e.strain,
-            rho * totals.boundary_work,
-            rho * totals.dissipation,
-            rho * totals.interface_work,
-            rho * totals.friction_dissipation,
-            rho * totals.fracture_work,
-            rho * balance
-        );
+        let j = |v: f64| format!("{:e}", rho * v);
+        book.history.push_str(&table::line([
+            format!("{time:e}"),
+            book.patches.to_string(),
+            j(e.total),
+            j(e.kinetic),
+            j(e.strain),
+            j(totals.boundary_work),
+            j(totals.dissipation),
+            j(totals.interface_work),
+            j(totals.friction_dissipation),
+            j(totals.fracture_work),
+            j(balance),
+        ]));
         // Progress for batch jobs, which have no progress bar: one line per history row.
         tracing::info!(
             front_min_time_s = time,

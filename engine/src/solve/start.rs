@@ -5,6 +5,7 @@ use super::context::{Intervention, Solve, initial_state};
 use super::summary::Timings;
 use super::work::deadline;
 use crate::output::snapshot::Snapshots;
+use crate::output::table;
 use crate::progress::Progress;
 use crate::trace::Tracer;
 use parking_lot::Mutex;
@@ -230,10 +231,19 @@ impl<'a> Solve<'a> {
                     after,
                 ),
                 passed: Vec::new(),
-                history: String::from(
-                    "time_s,patches,front_energy_j,kinetic_j,strain_j,boundary_work_j,dissipation_j,\
-                     interface_work_j,friction_dissipation_j,fracture_energy_j,balance_residual_j\n",
-                ),
+                history: table::line([
+                    "time_s",
+                    "patches",
+                    "front_energy_j",
+                    "kinetic_j",
+                    "strain_j",
+                    "boundary_work_j",
+                    "dissipation_j",
+                    "interface_work_j",
+                    "friction_dissipation_j",
+                    "fracture_energy_j",
+                    "balance_residual_j",
+                ]),
                 progress: Progress::new(
                     options.progress,
                     state.mesh.vertices().len() as f64 * t_end,

@@ -82,6 +82,9 @@ pub struct Entry {
     pub deps: Vec<u64>,
 }
 
+/// The columns of a trace file.
+pub(super) const HEADER: [&str; 6] = ["id", "kind", "vertex", "start_s", "duration_s", "deps"];
+
 /// Reads a trace written by `sdg run --trace`.
 pub fn read(path: &Path) -> Result<Vec<Entry>, EngineError> {
     // The trace is the command's input: one that cannot be read is bad input (exit 2).
@@ -91,41 +94,48 @@ pub fn read(path: &Path) -> Result<Vec<Entry>, EngineError> {
     let bad = |line: usize, reason: &str| {
         EngineError::Input(format!("{}:{line}: {reason}", path.display()))
     };
-    let mut lines = text.lines().enumerate();
-    match lines.next() {
-        Some((_, "id,kind,vertex,start_s,duration_s,deps")) => {}
+    let line = |p: Option<&csv::Position>| p.map_or(0, |p| p.line() as usize);
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(text.as_bytes());
+    let mut records = reader.records();
+    match records.next() {
+        Some(Ok(header)) if header.iter().eq(HEADER) => {}
         _ => return Err(bad(1, "not a trace of `sdg run --trace` (header)")),
     }
     let mut entries = Vec::new();
-    for (i, line) in lines {
-        let fields: Vec<&str> = line.split(',').collect();
-        let [id, kind, vertex, start, duration, deps] = fields[..] else {
-            return Err(bad(i + 1, "expected 6 fields"));
+    for record in records {
+        let record = record.map_err(|e| bad(line(e.position()), &e.to_string()))?;
+        let n = line(record.position());
+        let [id, kind, vertex, start, duration, deps] = record.iter().collect::<Vec<_>>()[..]
+        else {
+            return Err(bad(n, "expected 6 fields"));
         };
         let number = |s: &str, what: &str| {
             s.parse::<f64>()
                 .ok()
                 .filter(|x| x.is_finite() && *x >= 0.0)
-                .ok_or_else(|| bad(i + 1, &format!("{what} is not a time in s: {s:?}")))
+                .ok_or_else(|| bad(n, &format!("{what} is not a time in s: {s:?}")))
         };
         let entry = Entry {
-            id: id.parse().map_err(|_| bad(i + 1, "bad id"))?,
-            kind: Kind::parse(kind).ok_or_else(|| bad(i + 1, "unknown kind"))?,
+            id: id.parse().map_err(|_| bad(n, "bad id"))?,
+            kind: Kind::parse(kind).ok_or_else(|| bad(n, "unknown kind"))?,
             vertex: if vertex.is_empty() {
                 None
             } else {
-                Some(vertex.parse().map_err(|_| bad(i + 1, "bad vertex"))?)
+                Some(vertex.parse().map_err(|_| bad(n, "bad vertex"))?)
             },
             start_s: number(start, "start_s")?,
             duration_s: number(duration, "duration_s")?,
             deps: deps
                 .split(';')
                 .filter(|d| !d.is_empty())
-                .map(|d| d.parse().map_err(|_| bad(i + 1, "bad dependency")))
+                .map(|d| d.parse().map_err(|_| bad(n, "bad dependency")))
                 .collect::<Result<_, _>>()?,
         };
         if entry.deps.iter().any(|&d| d >= entry.id) {
-            return Err(bad(i + 1, "a dependency on a later tent"));
+            return Err(bad(n, "a dependency on a later tent"));
         }
         entries.push(entry);
     }

@@ -1,14 +1,14 @@
 //! Recording a trace while a run goes (`sdg run --trace FILE`).
 
-use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
 use parking_lot::Mutex;
 use sdg_mesh::{Mesh, VertexId};
 
-use super::entry::{Entry, Kind};
+use super::entry::{Entry, HEADER, Kind};
 use crate::error::EngineError;
+use crate::output::table::Table;
 use crate::output::write_atomic;
 
 /// A tent being traced.
@@ -211,22 +211,20 @@ impl Tracer {
     pub(crate) fn write(&self, path: &Path) -> Result<(), EngineError> {
         let mut entries = self.entries.lock().clone();
         entries.sort_by_key(|e| e.id);
-        let mut text = String::from("id,kind,vertex,start_s,duration_s,deps\n");
+        let mut table = Table::new(HEADER);
         for e in &entries {
             let deps: Vec<String> = e.deps.iter().map(u64::to_string).collect();
-            let _ = writeln!(
-                text,
-                "{},{},{},{:e},{:e},{}",
-                e.id,
-                e.kind.name(),
+            table.row([
+                e.id.to_string(),
+                e.kind.name().to_string(),
                 e.vertex.map_or(String::new(), |v| v.to_string()),
-                e.start_s,
-                e.duration_s,
-                deps.join(";")
-            );
+                format!("{:e}", e.start_s),
+                format!("{:e}", e.duration_s),
+                deps.join(";"),
+            ]);
         }
         let (dir, name) = split(path)?;
-        write_atomic(dir, name, text.as_bytes()).map(drop)
+        write_atomic(dir, name, table.into_text().as_bytes()).map(drop)
     }
 }
 
