@@ -29,9 +29,9 @@ pub struct FractureConfig {
     pub snap: f64,
     /// Where no split may be made (a piece would be shorter than `min_piece`), the crack takes
     /// an existing edge of the tip's triangle within this angle of its direction, degrees in
-    /// (0, 90). Default half the shield angle; with the whole shield angle, a tip on a grid of
-    /// edges 45 degrees apart always finds one (it does not stand still while the mesh is at
-    /// its floor).
+    /// (0, 90]. Default half the shield angle; with 90, a tip takes the nearer end of the
+    /// crossed edge that points forward and is shielded: it does not stand still while the
+    /// mesh is at its floor.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub floor_angle: Option<f64>,
     /// A tip's forward half is taken about its crack's direction averaged over about this
@@ -198,14 +198,14 @@ shield_angle = 35.0
             ),
             ("fracture.snap=0.0", "fracture.snap", "(0, 0.5]"),
             (
-                "fracture.floor_angle=90.0",
+                "fracture.floor_angle=90.5",
                 "fracture.floor_angle",
-                "(0, 90)",
+                "(0, 90]",
             ),
             (
                 "fracture.floor_angle=-5.0",
                 "fracture.floor_angle",
-                "(0, 90)",
+                "(0, 90]",
             ),
             (
                 "fracture.min_piece=-1e-6",

@@ -422,11 +422,11 @@ impl Config {
             );
         }
         if let Some(angle) = f.floor_angle
-            && !(angle > 0.0 && angle < 90.0)
+            && !(angle > 0.0 && angle <= 90.0)
         {
             return fail(
                 "floor_angle",
-                format!("must be in (0, 90) degrees, got {angle}"),
+                format!("must be in (0, 90] degrees, got {angle}"),
             );
         }
         for (key, length) in [

@@ -89,7 +89,7 @@ pub struct CrackNetwork {
     /// Distance from the nearest initial tip to the first branching, m; `null` if none.
     pub first_branching_distance: Option<f64>,
     /// Largest speed of a branch's debonded front over `c_R`: `max_speed_over_c_r`, whose
-    /// speeds are fitted per branch over at least the process zone `c_R tau` ([`tip_states`]).
+    /// speeds are fitted per branch over at least the process zone `c_R tau` (`crack_tips.csv`).
     pub max_branch_speed_over_c_r: f64,
 }
 
