@@ -163,6 +163,24 @@ struct RunArgs {
     /// `sdg scaling`.
     #[arg(long, value_name = "FILE")]
     trace: Option<PathBuf>,
+    /// Split the front over N ranks, threads of this process (no mesh-changing events): the
+    /// same state hash as a run on threads.
+    #[arg(long, value_name = "N", conflicts_with = "threads")]
+    ranks: Option<NonZeroUsize>,
+    /// How the vertices are split among the ranks (with --ranks).
+    #[arg(long, value_enum, default_value_t = PartitionArg::Coordinate, requires = "ranks")]
+    partition: PartitionArg,
+}
+
+/// `--partition`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum PartitionArg {
+    /// Recursive coordinate bisection weighted by star size.
+    Coordinate,
+    /// Stripes along x of equal weight.
+    Stripes,
+    /// Seeded random owners (for tests: nearly every vertex on a rank boundary).
+    Random,
 }
 
 #[derive(Debug, Args)]
@@ -450,6 +468,9 @@ fn mesh(job: &JobArgs) -> Result<(), EngineError> {
 }
 
 fn run(args: &RunArgs) -> Result<(), EngineError> {
+    if let Some(ranks) = args.ranks {
+        return run_ranks(args, ranks.get());
+    }
     // Before anything else: a signal during set-up is a request like any other.
     let control = Arc::new(Control::default());
     listen_to_signals(control.clone())?;
@@ -514,6 +535,42 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
                 f.branches
             );
         }
+    }
+    Ok(())
+}
+
+/// `sdg run --ranks N`: the front split over `ranks` in-process ranks. No signal listener: a
+/// run over ranks writes no checkpoints, so SIGTERM and SIGINT end it at once.
+fn run_ranks(args: &RunArgs, ranks: usize) -> Result<(), EngineError> {
+    exit_with_study()?;
+    let job = &args.job;
+    let problem = setup(&job.config)?;
+    let options = RunOptions {
+        restart: args.restart.clone(),
+        max_wall_time_s: args.max_wall_time,
+        trace: args.trace.clone(),
+        ..options(job)
+    };
+    let partition = match args.partition {
+        PartitionArg::Coordinate => sdg_engine::PartitionKind::Coordinate,
+        PartitionArg::Stripes => sdg_engine::PartitionKind::Stripes,
+        PartitionArg::Random => sdg_engine::PartitionKind::Random,
+    };
+    let ranks = sdg_engine::RankOptions { ranks, partition };
+    let (summary, dir) = sdg_engine::solve_ranks(&problem, &options, &ranks)?;
+    if !job.config.quiet {
+        say!(
+            "{} patches (order {}) to t = {:e} s in {:.3} s on {} ranks ({} partition); \
+             energy balance residual {:.1e}; outputs in {}",
+            summary.patches,
+            summary.order,
+            summary.final_time,
+            summary.wall_time_s,
+            summary.ranks,
+            partition.name(),
+            summary.energy.balance_residual_rel,
+            dir.display()
+        );
     }
     Ok(())
 }

@@ -35,7 +35,7 @@ pub mod view;
 
 pub use partition::{Partition, PartitionError, Rank};
 pub use pitching::{
-    Causality, CellKind, Options, PitchingError, RankReport, pitch_rank, run_threads,
+    Causality, CellKind, Options, PitchingError, RankReport, SolvedPatch, pitch_rank, run_threads,
 };
 pub use solving::{Physics, RankSolution, solve_rank, solve_threads};
 pub use transport::loopback::{Loopback, LoopbackOptions};
