@@ -22,7 +22,7 @@
 //!
 //! Not built yet: METIS (the `metis` crate behind a feature), mesh-changing events and
 //! fracture across ranks, deterministic rounds over ranks, outputs and checkpoints per rank,
-//! `sdg run` over MPI. See `distributed/README.md`.
+//! `sdg run` over MPI (`sdg run --ranks` uses [`Loopback`]). See `distributed/README.md`.
 
 pub mod partition;
 pub mod pitching;
