@@ -94,6 +94,8 @@ pub enum PitchingError {
     },
     #[error("rank {rank} stopped because rank {by} failed")]
     Aborted { rank: Rank, by: Rank },
+    #[error("gathering the results on rank 0: rank {rank}: {reason}")]
+    Gather { rank: Rank, reason: String },
     #[error("rank {rank}: internal error (a bug, please report it): {message}")]
     Panic { rank: Rank, message: String },
     #[error("rank {rank}: the patch of vertex {vertex} at t = {time} s: {source}")]

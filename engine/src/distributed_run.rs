@@ -17,9 +17,9 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use sdg_distributed::{
-    Causality, LoopbackOptions, Options, Partition, Physics, RankSolution, SolvedPatch,
+    Causality, Gathered, LoopbackOptions, Options, Partition, Physics, RankReport, SolvedPatch,
 };
-use sdg_mesh::{Front, VertexId};
+use sdg_mesh::Front;
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::norms::{FrontEnergy, front_energy, slice_errors};
 use sdg_solver::patch::{Initial, Newton, PatchReport, PatchSolver};
@@ -150,11 +150,35 @@ pub fn solve_ranks(
         idle_limit: IDLE_LIMIT,
     };
     let solved = sdg_distributed::solve_threads(mesh, &partition, causality, physics, delays, &run)
+        .and_then(|solved| sdg_distributed::gather_threads(mesh, &solved))
         .map_err(|e| EngineError::Runtime(format!("the run over ranks failed: {e}")))?;
     let wall_time_s = started.elapsed().as_secs_f64();
+    finish(
+        problem,
+        &dir,
+        (ranks.partition, &solved),
+        wall_time_s,
+        estimate,
+    )
+}
+
+/// Writes the outputs of a run over ranks that ended with `gathered` after `wall_time_s` on
+/// the `partition`, and its `summary.json` into `dir`. Returns the summary and the folder.
+fn finish(
+    problem: &Problem,
+    dir: &Path,
+    (partition, gathered): (PartitionKind, &Gathered),
+    wall_time_s: f64,
+    estimate: crate::estimate::Estimate,
+) -> Result<(RunSummary, PathBuf), EngineError> {
+    let config = &problem.loaded.config;
+    let mesh = &problem.mesh;
     let finishing = Instant::now();
-    let (front, solution) = gather(problem, &solved);
-    let patches = in_serial_order(&solved);
+    let (front, solution) = (&gathered.front, &gathered.solution);
+    let patches: Vec<SolvedPatch> = (gathered.in_serial_order().into_iter())
+        .map(|(_, p)| p)
+        .collect();
+    let ranks = gathered.reports.len();
     tracing::info!(patches = patches.len(), wall_time_s, "solve finished");
     let initial_energy = {
         let initial_front = Front::flat(mesh.vertices().len(), 0.0);
@@ -163,28 +187,28 @@ pub fn solve_ranks(
             solution.basis_len(),
             solution.width(),
         );
-        energy_on(problem, &initial_front, &empty, ranks.ranks)
+        energy_on(problem, &initial_front, &empty, ranks)
     };
     let mut summary = summarize(
         problem,
-        (&front, &solution),
+        (front, solution),
         &patches,
-        &solved,
+        &gathered.reports,
         initial_energy,
         estimate,
     )?;
     summary.wall_time_s = wall_time_s;
     summary.patches_per_second = patches.len() as f64 / wall_time_s.max(f64::MIN_POSITIVE);
-    summary.distributed = Some(distributed_summary(ranks.partition, &solved));
+    summary.distributed = Some(distributed_summary(partition, gathered));
     let history = history(problem, &summary, initial_energy);
-    let snapshots = end_snapshots(problem, &front, &solution, &dir);
+    let snapshots = end_snapshots(problem, front, solution, dir);
     summary.snapshots = snapshots.as_ref().map_or(Vec::new(), |s| s.clone());
     let mut written = vec![
         snapshots.map(drop),
-        write_output(&dir, "history.csv", history.as_bytes()).map(drop),
+        write_output(dir, "history.csv", history.as_bytes()).map(drop),
     ];
     if config.output.png {
-        crate::plot::write_history_png(&dir, &history);
+        crate::plot::write_history_png(dir, &history);
     }
     let mut failures = written.drain(..).filter_map(Result::err);
     if let Some(first) = failures.next() {
@@ -195,8 +219,8 @@ pub fn solve_ranks(
     }
     summary.timings.output_s += finishing.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
-    write_output(&dir, "summary.json", json.as_bytes())?;
-    Ok((summary, dir))
+    write_output(dir, "summary.json", json.as_bytes())?;
+    Ok((summary, dir.to_path_buf()))
 }
 
 /// What a run over ranks cannot do yet, as bad input naming the key or option and why.
@@ -270,65 +294,6 @@ fn prepare_folder(dir: &Path) -> Result<(), EngineError> {
     Ok(())
 }
 
-/// The whole mesh's front and solution from the ranks': each element from the rank owning its
-/// triangle's first corner, each interface face from the owner of its edge's first end (both
-/// hold the current copy at the end), each vertex's time from its owner.
-fn gather(problem: &Problem, ranks: &[RankSolution]) -> (Front, FrontSolution) {
-    let mesh = &problem.mesh;
-    let (basis_len, width) = {
-        let solver = PatchSolver::new(
-            problem.system.clone(),
-            problem.loaded.config.solver.order,
-            0,
-        );
-        (solver.basis().len(), solver.width())
-    };
-    let front = Front::flat(mesh.vertices().len(), 0.0);
-    let solution =
-        FrontSolution::new(mesh.triangles().len(), basis_len, width).with_edges(mesh.edges().len());
-    for rank in ranks {
-        let view = &rank.view;
-        let local = view.mesh();
-        let owns = |v: VertexId| view.owner(v) == view.rank();
-        for v in (0..local.vertices().len() as VertexId).filter(|&v| owns(v)) {
-            front.set_time(view.global(v), rank.front.time(v));
-        }
-        for (t, corners) in local.triangles().iter().enumerate() {
-            if !owns(corners[0]) {
-                continue;
-            }
-            let global = view.global_triangle(t as u32) as usize;
-            let energy = rank.solution.energy(t);
-            rank.solution.with_element(t, |element| {
-                if let Some((geometry, coefficients)) = element {
-                    solution.store(global, geometry, coefficients, energy);
-                }
-            });
-        }
-        for (e, edge) in local.edges().iter().enumerate() {
-            if let Some(face) = rank.solution.face(e).filter(|_| owns(edge.vertices[0])) {
-                solution.store_face(view.global_edge(e as u32) as usize, &face);
-            }
-        }
-    }
-    (front, solution)
-}
-
-/// Every rank's solved patches in the serial order of their tents, `(t_old, global vertex)`:
-/// the order of a run on one thread, so that sums over them are its sums, bitwise.
-fn in_serial_order(ranks: &[RankSolution]) -> Vec<SolvedPatch> {
-    let mut all: Vec<(f64, VertexId, SolvedPatch)> = ranks
-        .iter()
-        .flat_map(|rank| {
-            let report = &rank.report;
-            (report.tents.iter().zip(&report.patches))
-                .map(|(tent, &p)| (tent.t_old, tent.vertex, p))
-        })
-        .collect();
-    all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    all.into_iter().map(|(_, _, p)| p).collect()
-}
-
 /// The energy on `front` with the elements of `solution` (initial data where there is none),
 /// scaled units, integrated on `threads` threads.
 fn energy_on(
@@ -361,7 +326,7 @@ fn summarize(
     problem: &Problem,
     (front, solution): (&Front, &FrontSolution),
     patches: &[SolvedPatch],
-    ranks: &[RankSolution],
+    ranks: &[RankReport],
     energy0: FrontEnergy,
     estimate: crate::estimate::Estimate,
 ) -> Result<RunSummary, EngineError> {
@@ -404,7 +369,7 @@ fn summarize(
         }
         slope = slope.max(p.slope);
     }
-    timings.waiting_s = ranks.iter().map(|r| r.report.waited.as_secs_f64()).sum();
+    timings.waiting_s = ranks.iter().map(|r| r.waited.as_secs_f64()).sum();
     let count = patches.len() as u64;
     let (initial_j, work) = (rho * energy0.total, rho * totals.boundary_work);
     let (dissipation, interface_work) = (rho * totals.dissipation, rho * totals.interface_work);
@@ -489,15 +454,15 @@ fn non_finite(r: &PatchReport) -> Option<(&'static str, f64)> {
 }
 
 /// `distributed` of `summary.json`.
-fn distributed_summary(partition: PartitionKind, ranks: &[RankSolution]) -> DistributedSummary {
-    let tents: usize = ranks.iter().map(|r| r.report.tents.len()).sum();
-    let per_tent = |x: u64| x as f64 / tents.max(1) as f64;
+fn distributed_summary(partition: PartitionKind, gathered: &Gathered) -> DistributedSummary {
+    let reports = &gathered.reports;
+    let per_tent = |x: u64| x as f64 / gathered.tents.len().max(1) as f64;
     DistributedSummary {
         partition: partition.name(),
-        boundary_vertices: ranks.iter().map(|r| r.report.boundary_vertices).sum(),
-        updates_per_tent: per_tent(ranks.iter().map(|r| r.report.updates_sent).sum()),
-        bytes_per_tent: per_tent(ranks.iter().map(|r| r.report.update_bytes).sum()),
-        waited_s: ranks.iter().map(|r| r.report.waited.as_secs_f64()).sum(),
+        boundary_vertices: reports.iter().map(|r| r.boundary_vertices).sum(),
+        updates_per_tent: per_tent(reports.iter().map(|r| r.updates_sent).sum()),
+        bytes_per_tent: per_tent(reports.iter().map(|r| r.update_bytes).sum()),
+        waited_s: reports.iter().map(|r| r.waited.as_secs_f64()).sum(),
     }
 }
 
