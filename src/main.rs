@@ -167,9 +167,14 @@ struct RunArgs {
     /// same state hash as a run on threads.
     #[arg(long, value_name = "N", conflicts_with = "threads")]
     ranks: Option<NonZeroUsize>,
-    /// How the vertices are split among the ranks (with --ranks).
-    #[arg(long, value_enum, default_value_t = PartitionArg::Coordinate, requires = "ranks")]
-    partition: PartitionArg,
+    /// One rank per MPI process: start with `mpirun -n N sdg run CONFIG --mpi` (a build with
+    /// the cargo feature `mpi`).
+    #[arg(long, conflicts_with_all = ["threads", "ranks"])]
+    mpi: bool,
+    /// How the vertices are split among the ranks (with --ranks or --mpi) [default:
+    /// coordinate].
+    #[arg(long, value_enum)]
+    partition: Option<PartitionArg>,
 }
 
 /// `--partition`.
@@ -468,8 +473,23 @@ fn mesh(job: &JobArgs) -> Result<(), EngineError> {
 }
 
 fn run(args: &RunArgs) -> Result<(), EngineError> {
+    if args.mpi {
+        return run_mpi(args);
+    }
+    if let Some(processes) = mpi_processes().filter(|&n| n > 1) {
+        return Err(EngineError::Input(format!(
+            "started as one of {processes} MPI processes without --mpi: each would run the \
+             whole job; add --mpi (with a build with the cargo feature mpi: cargo build \
+             --release --features mpi)"
+        )));
+    }
     if let Some(ranks) = args.ranks {
         return run_ranks(args, ranks.get());
+    }
+    if args.partition.is_some() {
+        return Err(EngineError::Input(
+            "--partition: splits the front among ranks: give --ranks N or --mpi too".into(),
+        ));
     }
     // Before anything else: a signal during set-up is a request like any other.
     let control = Arc::new(Control::default());
@@ -539,6 +559,74 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
     Ok(())
 }
 
+/// The number of processes of the MPI job this process is part of, as the launcher tells it
+/// (OpenMPI's `mpirun`, or a PMI launcher such as Slurm's `srun`); `None` outside one.
+fn mpi_processes() -> Option<usize> {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"]
+        .iter()
+        .find_map(|name| std::env::var(name).ok()?.parse().ok())
+}
+
+/// The partition kind of `--partition`.
+fn partition_kind(args: &RunArgs) -> sdg_engine::PartitionKind {
+    match args.partition.unwrap_or(PartitionArg::Coordinate) {
+        PartitionArg::Coordinate => sdg_engine::PartitionKind::Coordinate,
+        PartitionArg::Stripes => sdg_engine::PartitionKind::Stripes,
+        PartitionArg::Random => sdg_engine::PartitionKind::Random,
+    }
+}
+
+/// `sdg run --mpi`: one rank per MPI process; rank 0 writes the outputs and prints the totals.
+#[cfg(feature = "mpi")]
+fn run_mpi(args: &RunArgs) -> Result<(), EngineError> {
+    let job = &args.job;
+    let problem = setup(&job.config)?;
+    let options = RunOptions {
+        restart: args.restart.clone(),
+        max_wall_time_s: args.max_wall_time,
+        trace: args.trace.clone(),
+        ..options(job)
+    };
+    let partition = partition_kind(args);
+    if let Some((summary, dir)) = sdg_engine::solve_mpi(&problem, &options, partition)?
+        && !job.config.quiet
+    {
+        print_ranks_totals(&summary, partition, &dir);
+    }
+    Ok(())
+}
+
+/// `sdg run --mpi` in a build without the cargo feature `mpi`: bad input, saying how to build.
+#[cfg(not(feature = "mpi"))]
+fn run_mpi(_: &RunArgs) -> Result<(), EngineError> {
+    Err(EngineError::Input(
+        "--mpi: this sdg was built without MPI; build it with the cargo feature mpi (cargo \
+         build --release --features mpi, which needs OpenMPI and libclang) and start it with \
+         mpirun -n N sdg run CONFIG --mpi"
+            .into(),
+    ))
+}
+
+/// Prints the totals of a run over ranks.
+fn print_ranks_totals(
+    summary: &sdg_engine::RunSummary,
+    partition: sdg_engine::PartitionKind,
+    dir: &std::path::Path,
+) {
+    say!(
+        "{} patches (order {}) to t = {:e} s in {:.3} s on {} ranks ({} partition); \
+         energy balance residual {:.1e}; outputs in {}",
+        summary.patches,
+        summary.order,
+        summary.final_time,
+        summary.wall_time_s,
+        summary.ranks,
+        partition.name(),
+        summary.energy.balance_residual_rel,
+        dir.display()
+    );
+}
+
 /// `sdg run --ranks N`: the front split over `ranks` in-process ranks. No signal listener: a
 /// run over ranks writes no checkpoints, so SIGTERM and SIGINT end it at once.
 fn run_ranks(args: &RunArgs, ranks: usize) -> Result<(), EngineError> {
@@ -551,26 +639,11 @@ fn run_ranks(args: &RunArgs, ranks: usize) -> Result<(), EngineError> {
         trace: args.trace.clone(),
         ..options(job)
     };
-    let partition = match args.partition {
-        PartitionArg::Coordinate => sdg_engine::PartitionKind::Coordinate,
-        PartitionArg::Stripes => sdg_engine::PartitionKind::Stripes,
-        PartitionArg::Random => sdg_engine::PartitionKind::Random,
-    };
+    let partition = partition_kind(args);
     let ranks = sdg_engine::RankOptions { ranks, partition };
     let (summary, dir) = sdg_engine::solve_ranks(&problem, &options, &ranks)?;
     if !job.config.quiet {
-        say!(
-            "{} patches (order {}) to t = {:e} s in {:.3} s on {} ranks ({} partition); \
-             energy balance residual {:.1e}; outputs in {}",
-            summary.patches,
-            summary.order,
-            summary.final_time,
-            summary.wall_time_s,
-            summary.ranks,
-            partition.name(),
-            summary.energy.balance_residual_rel,
-            dir.display()
-        );
+        print_ranks_totals(&summary, partition, &dir);
     }
     Ok(())
 }

@@ -102,35 +102,8 @@ pub fn solve_ranks(
     let dir = options.output_dir(problem)?;
     prepare_folder(&dir)?;
     let mesh = &problem.mesh;
-    let partition = match ranks.partition {
-        PartitionKind::Coordinate => Partition::coordinate(mesh, ranks.ranks),
-        PartitionKind::Stripes => Partition::striped(mesh, ranks.ranks),
-        PartitionKind::Random => Partition::random(mesh, ranks.ranks, RANDOM_SEED),
-    }
-    .map_err(|e| {
-        EngineError::Input(format!(
-            "--ranks {} --partition {}: {e}",
-            ranks.ranks,
-            ranks.partition.name()
-        ))
-    })?;
-    let initial = problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave);
-    let physics = Physics {
-        system: &problem.system,
-        order: config.solver.order,
-        boundary: &problem.boundary,
-        initial,
-        interfaces: &problem.interfaces,
-        newton: Newton {
-            tol: config.solver.newton_tol,
-            max_iter: config.solver.newton_max_iter,
-        },
-    };
-    let causality = Causality {
-        c_max: problem.material.max_wave_speed(),
-        safety: config.pitch.safety,
-        t_end: config.time.span(),
-    };
+    let partition = partition_for(mesh, ranks.partition, ranks.ranks)?;
+    let (physics, causality) = (physics(problem), causality(problem));
     let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
     tracing::info!(
         ranks = ranks.ranks,
@@ -160,6 +133,98 @@ pub fn solve_ranks(
         wall_time_s,
         estimate,
     )
+}
+
+/// `sdg run --mpi` on this MPI process (one rank per process of `mpirun`): the ranks split the
+/// front as [`solve_ranks`] does, with `sdg_distributed::MpiTransport`, and gather the results
+/// on rank 0, which writes the outputs. Returns the summary and the folder on rank 0, `None`
+/// on the others. Errors as [`solve_ranks`]; what is refused, every rank refuses alike, before
+/// MPI starts.
+#[cfg(feature = "mpi")]
+pub fn solve_mpi(
+    problem: &Problem,
+    options: &RunOptions,
+    partition: PartitionKind,
+) -> Result<Option<(RunSummary, PathBuf)>, EngineError> {
+    use sdg_distributed::{LocalView, MpiOptions, MpiTransport, Transport};
+    refuse(
+        problem,
+        options,
+        &RankOptions {
+            ranks: 1,
+            partition,
+        },
+    )?;
+    let dir = options.output_dir(problem)?;
+    let mut transport = MpiTransport::start(MpiOptions::default())
+        .map_err(|e| EngineError::Runtime(format!("starting MPI: {e}")))?;
+    let (rank, ranks) = (transport.rank(), transport.ranks());
+    let failed = |e: sdg_distributed::PitchingError| {
+        EngineError::Runtime(format!("the run over {ranks} MPI ranks failed: {e}"))
+    };
+    let Start {
+        state, max_star, ..
+    } = Start::new(problem)?;
+    let estimate = state.estimate(problem, max_star, ranks, false);
+    if options.progress && rank == 0 {
+        crate::progress::note(format_args!("estimate: {}", estimate.describe()));
+    }
+    if !options.force {
+        estimate.check(problem)?;
+    }
+    if rank == 0 {
+        prepare_folder(&dir)?;
+    }
+    let mesh = &problem.mesh;
+    let partition_of = partition_for(mesh, partition, ranks)?;
+    let (physics, causality) = (physics(problem), causality(problem));
+    let view = LocalView::new(mesh, &partition_of, rank).map_err(|e| failed(e.into()))?;
+    let pitcher = sdg_mesh::Pitcher::new(
+        view.mesh(),
+        causality.c_max,
+        causality.safety,
+        causality.t_end,
+    )
+    .map_err(|e| failed(e.into()))?;
+    let front = Front::flat(view.mesh().vertices().len(), 0.0);
+    let solution = physics.initial_solution(&view);
+    let run = Options {
+        seed: u64::from(rank),
+        idle_limit: IDLE_LIMIT,
+    };
+    // Every rank set up before any sends (a barrier), and done before any gathers.
+    transport
+        .sum(&[0])
+        .map_err(|e| failed(sdg_distributed::PitchingError::Transport { rank, source: e }))?;
+    let started = Instant::now();
+    let report = sdg_distributed::solve_rank(
+        &view,
+        &pitcher,
+        &front,
+        &solution,
+        physics,
+        &mut transport,
+        &run,
+    )
+    .map_err(failed)?;
+    transport
+        .sum(&[0])
+        .map_err(|e| failed(sdg_distributed::PitchingError::Transport { rank, source: e }))?;
+    let wall_time_s = started.elapsed().as_secs_f64();
+    let gathered = sdg_distributed::gather(
+        mesh,
+        &view,
+        (&front, &solution, &report),
+        &mut transport,
+        IDLE_LIMIT,
+    )
+    .map_err(failed)?;
+    match gathered {
+        Some(gathered) => {
+            finish(problem, &dir, (partition, &gathered), wall_time_s, estimate).map(Some)
+        }
+        None => Ok(None),
+    }
 }
 
 /// Writes the outputs of a run over ranks that ended with `gathered` after `wall_time_s` on
@@ -223,6 +288,47 @@ fn finish(
     Ok((summary, dir.to_path_buf()))
 }
 
+/// The partition of `mesh` over `ranks` ranks of `kind`; one that cannot be made (more ranks
+/// than vertices) is bad input.
+fn partition_for(
+    mesh: &sdg_mesh::Mesh,
+    kind: PartitionKind,
+    ranks: usize,
+) -> Result<Partition, EngineError> {
+    match kind {
+        PartitionKind::Coordinate => Partition::coordinate(mesh, ranks),
+        PartitionKind::Stripes => Partition::striped(mesh, ranks),
+        PartitionKind::Random => Partition::random(mesh, ranks, RANDOM_SEED),
+    }
+    .map_err(|e| EngineError::Input(format!("{ranks} ranks, --partition {}: {e}", kind.name())))
+}
+
+/// What every rank solves its patches with.
+fn physics(problem: &Problem) -> Physics<'_> {
+    let config = &problem.loaded.config;
+    Physics {
+        system: &problem.system,
+        order: config.solver.order,
+        boundary: &problem.boundary,
+        initial: problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave),
+        interfaces: &problem.interfaces,
+        newton: Newton {
+            tol: config.solver.newton_tol,
+            max_iter: config.solver.newton_max_iter,
+        },
+    }
+}
+
+/// What every rank pitches its tents with.
+fn causality(problem: &Problem) -> Causality {
+    let config = &problem.loaded.config;
+    Causality {
+        c_max: problem.material.max_wave_speed(),
+        safety: config.pitch.safety,
+        t_end: config.time.span(),
+    }
+}
+
 /// What a run over ranks cannot do yet, as bad input naming the key or option and why.
 fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Result<(), EngineError> {
     let config = &problem.loaded.config;
@@ -230,14 +336,12 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
     let events = "mesh-changing events do not run over ranks yet";
     let refusals = [
         (ranks.ranks == 0).then(|| "--ranks: must be at least 1".to_string()),
-        config
-            .adapt
-            .enabled
-            .then(|| format!("{file}: adapt.enabled: {events}; run on threads (without --ranks)")),
-        config
-            .fracture
-            .is_some()
-            .then(|| format!("{file}: [fracture]: {events}; run on threads (without --ranks)")),
+        config.adapt.enabled.then(|| {
+            format!("{file}: adapt.enabled: {events}; run on threads (without --ranks or --mpi)")
+        }),
+        config.fracture.is_some().then(|| {
+            format!("{file}: [fracture]: {events}; run on threads (without --ranks or --mpi)")
+        }),
         (options.deterministic || config.scheduler.deterministic).then(|| {
             format!(
                 "{}: deterministic rounds do not run over ranks; without events the \

@@ -19,6 +19,8 @@ pub mod study;
 pub mod trace;
 
 pub use config::{Config, ConfigError, LoadedConfig};
+#[cfg(feature = "mpi")]
+pub use distributed_run::solve_mpi;
 pub use distributed_run::{PartitionKind, RankOptions, solve_ranks};
 pub use error::EngineError;
 pub use estimate::Estimate;
