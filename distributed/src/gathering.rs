@@ -4,10 +4,10 @@
 //! A triangle's element is on every rank holding the triangle, all copies the same at the end
 //! ([`crate::solving`]); each is gathered once, from the rank owning the triangle's first
 //! corner, and each interface face from the rank owning its edge's first end. Each rank packs
-//! what it owns into three [`Message::Update`]s ([`Part`]), which other ranks send to rank 0
-//! after the run, through the same transport; [`gather_threads`] packs and unpacks the same
-//! messages (through their bytes) without sending them, so that the in-process path checks
-//! the encoding the MPI path relies on.
+//! what it owns into three [`Message::Update`]s (cells, tents, counts), which other ranks send
+//! to rank 0 after the run, through the same transport; [`gather_threads`] packs and unpacks
+//! the same messages (through their bytes) without sending them, so that the in-process path
+//! checks the encoding the MPI path relies on.
 
 use std::time::Duration;
 

@@ -1,13 +1,14 @@
-//! `sdg run --ranks N`: one front split over N ranks, each a thread of this process connected
-//! to the others by the in-process transport (`sdg_distributed::Loopback`), with the same
-//! tents, elements and interface states as a run on threads.
+//! `sdg run --ranks N` and `sdg run --mpi`: one front split over N ranks, each a thread of
+//! this process connected to the others by the in-process transport
+//! (`sdg_distributed::Loopback`), or each an MPI process (`MpiTransport`, cargo feature `mpi`),
+//! with the same tents, elements and interface states as a run on threads.
 //!
-//! Each rank pitches and solves the tents at the vertices it owns ([`sdg_distributed::solve_rank`]);
-//! at the end the elements are gathered to one front, each from the rank owning its
-//! triangle's first corner (an interface face from the owner of its edge's first end), and
-//! the outputs are written from it: `summary.json` with the state hash, energy totals summed
-//! in the serial order of the tents, `history.csv` (its first and last rows) and the snapshots
-//! at the end time.
+//! Each rank pitches and solves the tents at the vertices it owns
+//! ([`sdg_distributed::solve_rank`]); at the end the elements are gathered on rank 0
+//! ([`sdg_distributed::gathering`]), each from the rank owning its triangle's first corner (an
+//! interface face from the owner of its edge's first end), and rank 0 writes the outputs:
+//! `summary.json` with the state hash, energy totals summed in the serial order of the tents,
+//! `history.csv` (its first and last rows) and the snapshots at the end time.
 //!
 //! What cannot be honoured yet is refused as bad input (exit 2), naming the key and why:
 //! mesh-changing events (`[adapt]`, `[fracture]`), deterministic rounds, checkpoints and
