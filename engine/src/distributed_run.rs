@@ -381,10 +381,22 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
             format!("{file}: output.spacetime_mesh: a run over ranks does not write it yet")
         }),
     ];
-    match refusals.into_iter().flatten().next() {
-        Some(reason) => Err(EngineError::Input(reason)),
-        None => Ok(()),
+    if let Some(reason) = refusals.into_iter().flatten().next() {
+        return Err(EngineError::Input(reason));
     }
+    // What is not done, without being asked for by a key of its own.
+    if problem.interfaces.any_cohesive() {
+        tracing::warn!(
+            "crack_tips.csv and the summary's crack block are not written by a run over ranks yet"
+        );
+    }
+    if config.checkpoint.every_wall_s.is_finite() {
+        tracing::info!(
+            every_wall_s = config.checkpoint.every_wall_s,
+            "a run over ranks writes no checkpoints: checkpoint.every_wall_s does not apply"
+        );
+    }
+    Ok(())
 }
 
 /// Removes an earlier run's `summary.json` and snapshot files from `dir`.
