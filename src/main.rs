@@ -163,6 +163,18 @@ struct RunArgs {
     /// `sdg scaling`.
     #[arg(long, value_name = "FILE")]
     trace: Option<PathBuf>,
+    /// Split the front over N ranks, threads of this process (no mesh-changing events): the
+    /// same state hash as a run on threads.
+    #[arg(long, value_name = "N", conflicts_with = "threads")]
+    ranks: Option<NonZeroUsize>,
+    /// One rank per MPI process: start with `mpirun -n N sdg run CONFIG --mpi` (a build with
+    /// the cargo feature `mpi`).
+    #[arg(long, conflicts_with_all = ["threads", "ranks"])]
+    mpi: bool,
+    /// How the vertices are split among the ranks (with --ranks or --mpi) [default:
+    /// coordinate].
+    #[arg(long, value_enum)]
+    partition: Option<PartitionArg>,
 }
 
 #[derive(Debug, Args)]
@@ -195,14 +207,14 @@ enum LogFormat {
 /// Writes a line to stdout, or drops it if stdout cannot be written (`println!` panics then).
 macro_rules! say {
     ($($arg:tt)*) => {
-        write_line(&mut std::io::stdout(), format_args!($($arg)*))
+        $crate::write_line(&mut std::io::stdout(), format_args!($($arg)*))
     };
 }
 
 /// Writes a line to stderr, or drops it if stderr cannot be written (`eprintln!` panics then).
 macro_rules! note {
     ($($arg:tt)*) => {
-        write_line(&mut std::io::stderr(), format_args!($($arg)*))
+        $crate::write_line(&mut std::io::stderr(), format_args!($($arg)*))
     };
 }
 
@@ -227,6 +239,12 @@ impl Write for LogWriter {
         Ok(())
     }
 }
+
+// After the macros, which they use.
+mod ranks;
+mod signals;
+
+use ranks::PartitionArg;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -296,108 +314,6 @@ fn options(job: &JobArgs) -> RunOptions {
     }
 }
 
-/// A second SIGTERM or SIGINT within this long of the first is taken as the same request.
-const SAME_REQUEST: std::time::Duration = std::time::Duration::from_secs(1);
-
-/// The environment variable that injects a fault for the tests (`tests/faults.rs`):
-/// `signal-listener` makes the signal listener panic when SIGUSR1 arrives. (The engine reads
-/// it too, for faults of file writes: `engine/src/output/fault.rs`.)
-const FAULT: &str = "SDG_FAULT";
-
-/// Turns signals into requests to the run: SIGTERM, SIGINT and SIGHUP (the terminal or the
-/// job's session gone) checkpoint and stop (exit 3), SIGUSR1 checkpoints and goes on. A second
-/// SIGTERM, SIGINT or SIGHUP, [`SAME_REQUEST`] or more after the first, ends the process at
-/// once with code 130, without waiting for the checkpoint (the one before it is left whole).
-/// Started first thing in `sdg run`, so that a signal during set-up stops the run the same
-/// way, with a checkpoint of the initial state.
-///
-/// Once listening, the process no longer dies of these signals: should the listener end, the
-/// run would go on deaf to them. Nothing in it may panic on output (its messages are dropped if
-/// stderr cannot be written), and should it panic all the same (a bug) the process exits at once
-/// with code 1, as after SIGKILL (files are written whole or not at all).
-fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError> {
-    use tokio::signal::unix::{SignalKind, signal};
-    let failed = |e: std::io::Error| EngineError::Runtime(format!("signal handling: {e}"));
-    let runtime = tokio::runtime::Builder::new_current_thread()
-        .enable_io()
-        .build()
-        .map_err(failed)?;
-    let listen = |kind| {
-        let _guard = runtime.enter();
-        signal(kind).map_err(failed)
-    };
-    let (mut term, mut int, mut hup, mut usr1) = (
-        listen(SignalKind::terminate())?,
-        listen(SignalKind::interrupt())?,
-        listen(SignalKind::hangup())?,
-        listen(SignalKind::user_defined1())?,
-    );
-    let fault = std::env::var_os(FAULT).is_some_and(|f| f == "signal-listener");
-    let listener = async move {
-        let mut stopping: Option<std::time::Instant> = None;
-        loop {
-            let name = tokio::select! {
-                _ = term.recv() => "SIGTERM",
-                _ = int.recv() => "SIGINT",
-                _ = hup.recv() => "SIGHUP",
-                _ = usr1.recv() => {
-                    if fault {
-                        panic!("{FAULT}=signal-listener: a panic on SIGUSR1");
-                    }
-                    control.checkpoint();
-                    aside(|| tracing::info!("SIGUSR1: a checkpoint at the next quiescent point"));
-                    continue;
-                }
-            };
-            if let Some(first) = stopping {
-                // A batch system may signal both the job's shell and sdg, and the shell
-                // pass its signal on: one within a second is the same request.
-                if first.elapsed() < SAME_REQUEST {
-                    continue;
-                }
-                let said = aside(move || {
-                    note!("{name} again: exiting without waiting for the checkpoint");
-                });
-                let _ = said.recv_timeout(std::time::Duration::from_millis(100));
-                std::process::exit(130);
-            }
-            stopping = Some(std::time::Instant::now());
-            control.stop(format!("{name} received"));
-            aside(move || {
-                note!("{name}: writing a checkpoint, then stopping (again to exit at once)");
-            });
-        }
-    };
-    std::thread::Builder::new()
-        .name("signals".into())
-        .spawn(move || {
-            let listening = std::panic::AssertUnwindSafe(|| runtime.block_on(listener));
-            if std::panic::catch_unwind(listening).is_err() {
-                note!(
-                    "error: internal error: the signal listener failed (a bug, please report \
-                     it with the message above); exiting without a checkpoint"
-                );
-                std::process::exit(1);
-            }
-        })
-        .map_err(failed)?;
-    Ok(())
-}
-
-/// Runs `write` on a thread of its own, so that the signal listener never waits for stderr (a
-/// pipe nobody reads, a terminal stopped by Ctrl-S): the receiver hears when it is done, or
-/// is disconnected if the thread could not start.
-fn aside(write: impl FnOnce() + Send + 'static) -> std::sync::mpsc::Receiver<()> {
-    let (done, said) = std::sync::mpsc::channel();
-    let _ = std::thread::Builder::new()
-        .name("signal message".into())
-        .spawn(move || {
-            write();
-            let _ = done.send(());
-        });
-    said
-}
-
 fn validate(args: &ValidateArgs) -> Result<(), EngineError> {
     let problem = setup(&args.config)?;
     let options = RunOptions {
@@ -450,9 +366,27 @@ fn mesh(job: &JobArgs) -> Result<(), EngineError> {
 }
 
 fn run(args: &RunArgs) -> Result<(), EngineError> {
+    if args.mpi {
+        return run_over_ranks(args, None);
+    }
+    if let Some(processes) = ranks::mpi_processes().filter(|&n| n > 1) {
+        return Err(EngineError::Input(format!(
+            "started as one of {processes} MPI processes without --mpi: each would run the \
+             whole job; add --mpi (with a build with the cargo feature mpi: cargo build \
+             --release --features mpi)"
+        )));
+    }
+    if let Some(ranks) = args.ranks {
+        return run_over_ranks(args, Some(ranks.get()));
+    }
+    if args.partition.is_some() {
+        return Err(EngineError::Input(
+            "--partition: splits the front among ranks: give --ranks N or --mpi too".into(),
+        ));
+    }
     // Before anything else: a signal during set-up is a request like any other.
     let control = Arc::new(Control::default());
-    listen_to_signals(control.clone())?;
+    signals::listen_to_signals(control.clone())?;
     exit_with_study()?;
     let job = &args.job;
     let problem = setup(&job.config)?;
@@ -514,6 +448,35 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
                 f.branches
             );
         }
+    }
+    Ok(())
+}
+
+/// `sdg run --ranks N` (`ranks`) or, without, `sdg run --mpi`: the front split over ranks.
+/// No signal listener: a run over ranks writes no checkpoints, so SIGTERM and SIGINT end it
+/// at once.
+fn run_over_ranks(args: &RunArgs, ranks: Option<usize>) -> Result<(), EngineError> {
+    exit_with_study()?;
+    let job = &args.job;
+    let problem = setup(&job.config)?;
+    let options = RunOptions {
+        restart: args.restart.clone(),
+        max_wall_time_s: args.max_wall_time,
+        trace: args.trace.clone(),
+        ..options(job)
+    };
+    let partition = args
+        .partition
+        .map_or_else(Default::default, PartitionArg::kind);
+    let done = match ranks {
+        Some(ranks) => {
+            let ranks = sdg_engine::RankOptions { ranks, partition };
+            Some(sdg_engine::solve_ranks(&problem, &options, &ranks)?)
+        }
+        None => ranks::solve_mpi(&problem, &options, partition)?,
+    };
+    if let Some((summary, dir)) = done.filter(|_| !job.config.quiet) {
+        say!("{}", ranks::totals(&summary, partition, &dir));
     }
     Ok(())
 }

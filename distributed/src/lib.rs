@@ -18,12 +18,16 @@
 //! - [`solving`]: the same pitching with each tent's patch solved on its rank by the patch
 //!   solver, the updates carrying the elements and interface faces the receiver reads as
 //!   inflow, each with its generation, whose elements and faces are bitwise the serial run's
-//!   (with interface laws, without mesh-changing events or fracture).
+//!   (with interface laws, without mesh-changing events or fracture);
+//! - [`gathering`]: the ranks' results gathered on rank 0, each element and face once (from
+//!   the owner of its triangle's first corner or its edge's first end), with every tent's
+//!   patch report, through messages of the same transport.
 //!
 //! Not built yet: METIS (the `metis` crate behind a feature), mesh-changing events and
 //! fracture across ranks, deterministic rounds over ranks, outputs and checkpoints per rank,
-//! `sdg run` over MPI. See `distributed/README.md`.
+//! `sdg run` over MPI (`sdg run --ranks` uses [`Loopback`]). See `distributed/README.md`.
 
+pub mod gathering;
 pub mod partition;
 pub mod pitching;
 mod rng;
@@ -33,9 +37,10 @@ mod testing;
 pub mod transport;
 pub mod view;
 
+pub use gathering::{Gathered, gather, gather_threads};
 pub use partition::{Partition, PartitionError, Rank};
 pub use pitching::{
-    Causality, CellKind, Options, PitchingError, RankReport, pitch_rank, run_threads,
+    Causality, CellKind, Options, PitchingError, RankReport, SolvedPatch, pitch_rank, run_threads,
 };
 pub use solving::{Physics, RankSolution, solve_rank, solve_threads};
 pub use transport::loopback::{Loopback, LoopbackOptions};

@@ -32,7 +32,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::{Duration, Instant};
 
 use sdg_mesh::{Front, Mesh, PitchError, Pitcher, Tent, VertexId};
-use sdg_solver::patch::NewtonFailure;
+use sdg_solver::patch::{NewtonFailure, PatchReport};
 
 use crate::partition::{Partition, Rank};
 use crate::rng::SplitMix64;
@@ -94,6 +94,8 @@ pub enum PitchingError {
     },
     #[error("rank {rank} stopped because rank {by} failed")]
     Aborted { rank: Rank, by: Rank },
+    #[error("gathering the results on rank 0: rank {rank}: {reason}")]
+    Gather { rank: Rank, reason: String },
     #[error("rank {rank}: internal error (a bug, please report it): {message}")]
     Panic { rank: Rank, message: String },
     #[error("rank {rank}: the patch of vertex {vertex} at t = {time} s: {source}")]
@@ -167,6 +169,13 @@ pub(crate) trait Work {
     /// Stores the cells of `update` from rank `from` that are newer than this rank's copies.
     fn apply(&mut self, view: &LocalView, from: Rank, update: &Update)
     -> Result<(), PitchingError>;
+
+    /// Adds what the work recorded to the rank's `report`, at the end of a run.
+    fn into_report(self, _report: &mut RankReport)
+    where
+        Self: Sized,
+    {
+    }
 }
 
 impl Work for () {
@@ -200,6 +209,18 @@ pub struct RankReport {
     pub boundary_vertices: usize,
     /// Time spent waiting for messages with nothing to pitch.
     pub waited: Duration,
+    /// With patches solved ([`crate::solve_rank`]), one per tent in the order of `tents`; empty
+    /// for pitching alone.
+    pub patches: Vec<SolvedPatch>,
+}
+
+/// What a solved patch adds to a run's totals.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolvedPatch {
+    /// The patch solver's report (scaled units).
+    pub report: PatchReport,
+    /// The steepest front facet of the tent's star after the tent, `|grad t|`, s/m.
+    pub slope: f64,
 }
 
 /// A rank's running state.
@@ -461,7 +482,11 @@ pub(crate) fn run_rank<T: Transport, W: Work>(
         state.offer(v);
     }
     match state.run(options.idle_limit) {
-        Ok(()) => Ok(state.report),
+        Ok(()) => {
+            let mut report = state.report;
+            state.work.into_report(&mut report);
+            Ok(report)
+        }
         Err(e) => {
             abort_others(state.transport);
             Err(e)

@@ -39,7 +39,8 @@ use sdg_solver::system::System;
 
 use crate::partition::{Partition, Rank};
 use crate::pitching::{
-    Causality, CellKind, Options, PitchingError, RankReport, Work, on_threads, rank_start, run_rank,
+    Causality, CellKind, Options, PitchingError, RankReport, SolvedPatch, Work, on_threads,
+    rank_start, run_rank,
 };
 use crate::transport::loopback::LoopbackOptions;
 use crate::transport::{Transport, Update};
@@ -111,6 +112,8 @@ struct Patches<'a> {
     edge_generation: Vec<u32>,
     /// Values per element.
     stride: usize,
+    /// Per tent so far, its patch's report and slope.
+    patches: Vec<SolvedPatch>,
 }
 
 /// Values per interface face: its geometry's, then the coefficients of each component.
@@ -125,7 +128,8 @@ fn spokes(mesh: &Mesh, v: VertexId) -> impl Iterator<Item = EdgeId> + '_ {
 
 impl Work for Patches<'_> {
     fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError> {
-        self.solver
+        let report = self
+            .solver
             .solve(
                 view.mesh(),
                 front,
@@ -141,9 +145,12 @@ impl Work for Patches<'_> {
                 source,
             })?;
         self.solver.commit(self.solution);
+        let mut slope = 0.0_f64;
         for &t in view.mesh().vertex_triangles(tent.vertex) {
             self.generation[t as usize] += 1;
+            slope = slope.max(front.slope(view.mesh(), t));
         }
+        self.patches.push(SolvedPatch { report, slope });
         if !self.edge_generation.is_empty() {
             for e in spokes(view.mesh(), tent.vertex) {
                 self.edge_generation[e as usize] += 1;
@@ -261,6 +268,10 @@ impl Work for Patches<'_> {
         }
         Ok(())
     }
+
+    fn into_report(self, report: &mut RankReport) {
+        report.patches = self.patches;
+    }
 }
 
 /// [`crate::pitch_rank`] that also solves each tent's patch with `physics` on `solution`, the
@@ -315,6 +326,7 @@ pub fn solve_rank<T: Transport>(
         generation: vec![0; triangles],
         edge_generation: if faces { vec![0; edges] } else { Vec::new() },
         stride: GEOMETRY_VALUES + ENERGY_VALUES + size,
+        patches: Vec::new(),
     };
     run_rank(view, pitcher, front, transport, patches, options)
 }

@@ -3,6 +3,7 @@
 
 mod adaptivity;
 pub mod config;
+pub mod distributed_run;
 pub mod error;
 pub mod estimate;
 pub mod fracture;
@@ -18,6 +19,9 @@ pub mod study;
 pub mod trace;
 
 pub use config::{Config, ConfigError, LoadedConfig};
+#[cfg(feature = "mpi")]
+pub use distributed_run::solve_mpi;
+pub use distributed_run::{PartitionKind, RankOptions, solve_ranks};
 pub use error::EngineError;
 pub use estimate::Estimate;
 pub use fracture::{CrackNetwork, CrackSummary, FractureSummary};

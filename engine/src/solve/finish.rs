@@ -150,6 +150,8 @@ impl Solve<'_> {
             wall_time_s,
             patches_per_second: book.patches as f64 / wall_time_s.max(f64::MIN_POSITIVE),
             threads: scheduler.threads,
+            ranks: 1,
+            distributed: None,
             peak_memory_bytes: estimate::peak_resident_bytes(),
             estimate,
             energy,

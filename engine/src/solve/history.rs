@@ -4,10 +4,11 @@
 use std::sync::atomic::Ordering;
 
 use sdg_mesh::TriangleId;
+use sdg_solver::basis::Basis;
 use sdg_solver::element::{FrontSolution, Geometry, evaluate};
 use sdg_solver::norms::front_energy;
 use sdg_solver::patch::PatchReport;
-use sdg_solver::system::MAX_FIELDS;
+use sdg_solver::system::{MAX_FIELDS, System};
 use sdg_solver::{Material, Plane};
 
 use super::book::Book;
@@ -65,7 +66,7 @@ impl Solve<'_> {
                 book.snapshots.add_element(&geometry.vertices(), |x| {
                     point_values(
                         &self.problem.material,
-                        self,
+                        (&self.problem.system, &self.basis),
                         geometry,
                         coefficients,
                         x,
@@ -135,18 +136,18 @@ impl Solve<'_> {
     }
 }
 
-/// Physical field values of an element at the scaled point `x` for snapshots.
-fn point_values(
+/// Physical field values at the scaled point `x` of an element of `system` on `basis`, for
+/// snapshots; `phi` and `values` are scratch of the basis length and the element width.
+pub(crate) fn point_values(
     material: &Material,
-    solve: &Solve<'_>,
+    (system, basis): (&System, &Basis),
     geometry: &Geometry,
     coefficients: &[f64],
     x: [f64; 3],
     phi: &mut [f64],
     values: &mut [f64],
 ) -> PointValues {
-    let system = &solve.problem.system;
-    evaluate(&solve.basis, geometry, coefficients, x, phi, values);
+    evaluate(basis, geometry, coefficients, x, phi, values);
     let fields = system.fields();
     let mut q = [0.0; MAX_FIELDS];
     q[..fields].copy_from_slice(&values[..fields]);

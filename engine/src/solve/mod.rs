@@ -29,5 +29,6 @@ pub use control::Control;
 pub use run::{solve_job, solve_job_with};
 pub use start::estimate_job;
 pub use summary::{
-    CheckpointSummary, EnergySummary, ErrorSummary, InterfaceSummary, RunSummary, Timings,
+    CheckpointSummary, DistributedSummary, EnergySummary, ErrorSummary, InterfaceSummary,
+    RunSummary, Timings,
 };

@@ -95,8 +95,13 @@ pub struct RunSummary {
     pub wall_time_s: f64,
     /// Patches per second of wall-clock time.
     pub patches_per_second: f64,
-    /// Worker threads used.
+    /// Worker threads used (with `--ranks`, one per rank).
     pub threads: usize,
+    /// Ranks the front was split over (`sdg run --ranks`); 1 for a run in one process.
+    pub ranks: usize,
+    /// How the ranks shared the work (`sdg run --ranks`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub distributed: Option<DistributedSummary>,
     /// Peak resident memory of the process, bytes (Linux; absent elsewhere).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub peak_memory_bytes: Option<f64>,
@@ -150,6 +155,21 @@ pub struct RunSummary {
     pub checkpoint: CheckpointSummary,
     /// Where the wall time went.
     pub timings: Timings,
+}
+
+/// `distributed` in `summary.json`: the partition and the messages between ranks.
+#[derive(Clone, Debug, Serialize)]
+pub struct DistributedSummary {
+    /// `"coordinate"`, `"stripes"` or `"random"`.
+    pub partition: &'static str,
+    /// Vertices whose owner rank is not that of every neighbour, summed over ranks.
+    pub boundary_vertices: usize,
+    /// Update messages sent per tent.
+    pub updates_per_tent: f64,
+    /// Bytes of those updates per tent.
+    pub bytes_per_tent: f64,
+    /// Time the ranks waited for updates with nothing to pitch, summed over ranks, s.
+    pub waited_s: f64,
 }
 
 /// `timings` in `summary.json`: where the wall time went, s, summed over the worker threads

@@ -1,0 +1,123 @@
+//! `mpirun -n R sdg run CONFIG --mpi`: one rank per MPI process gives the state hash and patch
+//! count of `sdg run --threads 1`, and a run under `mpirun` without `--mpi` is refused. Built
+//! only with the feature `mpi`; needs OpenMPI's `mpirun` on the PATH.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use common::{sdg, stderr};
+
+/// `mpirun -n ranks sdg args`, as root, oversubscribed and over loopback (as in CI).
+fn mpirun(ranks: usize, args: &[&str]) -> Output {
+    Command::new("mpirun")
+        .arg("-n")
+        .arg(ranks.to_string())
+        .arg(env!("CARGO_BIN_EXE_sdg"))
+        .args(args)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .env("OMPI_MCA_btl", "self,vader")
+        .env("OMPI_MCA_oob_tcp_if_include", "lo")
+        .output()
+        .expect("mpirun runs (OpenMPI installed: openmpi-bin)")
+}
+
+/// The `run` arguments of the shipped config `name` with `overrides`, writing into `out`.
+fn run_args(name: &str, overrides: &[&str], out: &Path) -> Vec<String> {
+    let config = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(name);
+    let mut args = vec![
+        "run".to_string(),
+        config.display().to_string(),
+        "--quiet".into(),
+    ];
+    for o in overrides {
+        args.extend(["--set".to_string(), o.to_string()]);
+    }
+    args.extend(["--output".to_string(), out.display().to_string()]);
+    args
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+/// Runs `name` on one thread, then under `mpirun` for each `(ranks, partition)`, and checks
+/// the state hash, patches and ranks of each.
+fn check(name: &str, overrides: &[&str], cases: &[(usize, &str)]) {
+    let dir = tempfile::tempdir().unwrap();
+    let threads_out = dir.path().join("threads");
+    let mut args = run_args(name, overrides, &threads_out);
+    args.extend(["--threads".into(), "1".into()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = sdg(&args);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let threads = summary(&threads_out);
+    for &(ranks, partition) in cases {
+        let out = dir.path().join(format!("{ranks}-{partition}"));
+        let mut args = run_args(name, overrides, &out);
+        args.extend(["--mpi", "--partition", partition].map(String::from));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let result = mpirun(ranks, &args);
+        assert!(
+            result.status.success(),
+            "mpirun -n {ranks} {args:?}: {}",
+            stderr(&result)
+        );
+        let mpi = summary(&out);
+        assert_eq!(
+            mpi["state_hash"], threads["state_hash"],
+            "{ranks} {partition}"
+        );
+        assert_eq!(mpi["patches"], threads["patches"]);
+        assert_eq!(mpi["ranks"], ranks);
+        assert_eq!(mpi["energy"]["final"], threads["energy"]["final"]);
+    }
+}
+
+#[test]
+fn plane_wave_over_mpi_is_the_run_on_one_thread() {
+    let overrides = [
+        "mesh.nx=8",
+        "mesh.ny=8",
+        "time.end=1e-6",
+        "output.snapshot_times=[1e-6]",
+        "output.png=false",
+    ];
+    let cases = [
+        (1, "coordinate"),
+        (2, "coordinate"),
+        (3, "random"),
+        (4, "stripes"),
+    ];
+    check("plane_wave.toml", &overrides, &cases);
+}
+
+#[test]
+fn frictional_interface_over_mpi_is_the_run_on_one_thread() {
+    let overrides = [
+        "mesh.nx=8",
+        "mesh.ny=8",
+        "time.end=4e-6",
+        "output.snapshot_times=[]",
+        "output.interface_probes=[]",
+        "output.png=false",
+    ];
+    check("stick_slip.toml", &overrides, &[(3, "random")]);
+}
+
+#[test]
+fn a_run_under_mpirun_without_mpi_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = run_args("plane_wave.toml", &[], dir.path());
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = mpirun(2, &args);
+    assert_eq!(result.status.code(), Some(2));
+    assert!(stderr(&result).contains("add --mpi"), "{}", stderr(&result));
+    assert!(!dir.path().join("summary.json").exists());
+}
