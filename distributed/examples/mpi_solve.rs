@@ -21,10 +21,9 @@ use sdg_distributed::{
     Causality, LocalView, LoopbackOptions, MpiOptions, MpiTransport, Options, Partition, Physics,
     RankReport, RankSolution, Transport, solve_rank, solve_threads,
 };
-use sdg_engine::{LoadedConfig, Problem};
+use sdg_engine::{LoadedConfig, Problem, causality, physics};
 use sdg_mesh::{Front, Pitcher};
 use sdg_solver::element::FrontSolution;
-use sdg_solver::patch::{Initial, Newton};
 
 /// The command line: cells along each side and the partition's name.
 struct Args {
@@ -63,24 +62,7 @@ fn plane_wave(cells: u32) -> Result<Problem, String> {
 }
 
 fn setup(problem: &Problem) -> (Causality, Physics<'_>) {
-    let config = &problem.loaded.config;
-    let causality = Causality {
-        c_max: problem.material.max_wave_speed(),
-        safety: config.pitch.safety,
-        t_end: config.time.span(),
-    };
-    let physics = Physics {
-        system: &problem.system,
-        order: config.solver.order,
-        boundary: &problem.boundary,
-        initial: problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave),
-        interfaces: &problem.interfaces,
-        newton: Newton {
-            tol: config.solver.newton_tol,
-            max_iter: config.solver.newton_max_iter,
-        },
-    };
-    (causality, physics)
+    (causality(problem), physics(problem))
 }
 
 /// Solves this rank's share; returns its view, report, elements and the wall time.

@@ -7,9 +7,8 @@ use sdg_distributed::{
     Causality, Gathered, Loopback, LoopbackOptions, Options, Partition, Physics, gather,
     gather_threads, solve_threads,
 };
-use sdg_engine::{LoadedConfig, Problem};
+use sdg_engine::{LoadedConfig, Problem, causality, physics};
 use sdg_solver::element::FrontSolution;
-use sdg_solver::patch::{Initial, Newton};
 
 /// `configs/stick_slip.toml` on 6 x 6 cells to 3 us: friction faces that slip.
 fn stick_slip(dir: &std::path::Path) -> Problem {
@@ -25,25 +24,8 @@ fn stick_slip(dir: &std::path::Path) -> Problem {
     Problem::setup(LoadedConfig::load(path.as_ref(), &overrides).unwrap()).unwrap()
 }
 
-fn physics(problem: &Problem) -> (Causality, Physics<'_>) {
-    let config = &problem.loaded.config;
-    let causality = Causality {
-        c_max: problem.material.max_wave_speed(),
-        safety: config.pitch.safety,
-        t_end: config.time.span(),
-    };
-    let physics = Physics {
-        system: &problem.system,
-        order: config.solver.order,
-        boundary: &problem.boundary,
-        initial: problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave),
-        interfaces: &problem.interfaces,
-        newton: Newton {
-            tol: config.solver.newton_tol,
-            max_iter: config.solver.newton_max_iter,
-        },
-    };
-    (causality, physics)
+fn setup(problem: &Problem) -> (Causality, Physics<'_>) {
+    (causality(problem), physics(problem))
 }
 
 /// Every element's and face's bits, by global id.
@@ -86,7 +68,7 @@ fn gathering_through_a_transport_gives_the_serial_runs_elements_and_tents() {
     let dir = tempfile::tempdir().unwrap();
     let problem = stick_slip(dir.path());
     let mesh = &problem.mesh;
-    let (causality, physics) = physics(&problem);
+    let (causality, physics) = setup(&problem);
     let fifo = LoopbackOptions {
         seed: 0,
         max_delay: Duration::ZERO,

@@ -4,13 +4,11 @@
 use std::time::Duration;
 
 use sdg_distributed::{
-    Causality, LoopbackOptions, Options, Partition, Physics, PitchingError, RankSolution,
-    solve_threads,
+    LoopbackOptions, Options, Partition, PitchingError, RankSolution, solve_threads,
 };
-use sdg_engine::{LoadedConfig, Problem, RunOptions};
+use sdg_engine::{LoadedConfig, Problem, RunOptions, causality, physics};
 use sdg_mesh::{Front, Mesh, VertexId};
 use sdg_solver::element::{FrontSolution, Geometry};
-use sdg_solver::patch::{Initial, Newton};
 
 /// The shipped config `name` with `overrides`, to `end` s, writing into `dir`.
 fn shipped(name: &str, overrides: &[&str], end: f64, dir: &std::path::Path) -> Problem {
@@ -34,30 +32,6 @@ fn shipped(name: &str, overrides: &[&str], end: f64, dir: &std::path::Path) -> P
 fn plane_wave(cells: u32, end: f64, dir: &std::path::Path) -> Problem {
     let (nx, ny) = (format!("mesh.nx={cells}"), format!("mesh.ny={cells}"));
     shipped("plane_wave.toml", &[&nx, &ny], end, dir)
-}
-
-fn physics(problem: &Problem) -> Physics<'_> {
-    let config = &problem.loaded.config;
-    Physics {
-        system: &problem.system,
-        order: config.solver.order,
-        boundary: &problem.boundary,
-        initial: problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave),
-        interfaces: &problem.interfaces,
-        newton: Newton {
-            tol: config.solver.newton_tol,
-            max_iter: config.solver.newton_max_iter,
-        },
-    }
-}
-
-fn causality(problem: &Problem) -> Causality {
-    let config = &problem.loaded.config;
-    Causality {
-        c_max: problem.material.max_wave_speed(),
-        safety: config.pitch.safety,
-        t_end: config.time.span(),
-    }
 }
 
 fn options(seed: u64) -> Options {

@@ -304,8 +304,8 @@ fn partition_for(
     .map_err(|e| EngineError::Input(format!("{ranks} ranks, --partition {}: {e}", kind.name())))
 }
 
-/// What every rank solves its patches with.
-fn physics(problem: &Problem) -> Physics<'_> {
+/// What every rank solves the patches of `problem` with.
+pub fn physics(problem: &Problem) -> Physics<'_> {
     let config = &problem.loaded.config;
     Physics {
         system: &problem.system,
@@ -320,8 +320,8 @@ fn physics(problem: &Problem) -> Physics<'_> {
     }
 }
 
-/// What every rank pitches its tents with.
-fn causality(problem: &Problem) -> Causality {
+/// What every rank pitches the tents of `problem` with.
+pub fn causality(problem: &Problem) -> Causality {
     let config = &problem.loaded.config;
     Causality {
         c_max: problem.material.max_wave_speed(),
