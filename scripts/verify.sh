@@ -12,9 +12,9 @@
 # wall-time columns. About 10 minutes on 2 cores, half of it the main job; VERIFY_MAIN=0 skips
 # the main job and keeps its tables as they are.
 #
-# The branching study's table (verify:branching_study) is read from $VERIFY_OUT/branching_convergence,
-# the --output folder of `sdg study configs/studies/branching_convergence.toml` (hours: run it
-# apart, then copy or link its study.json and study.csv there); without it the table is kept.
+# The branching study's table (verify:branching_study) is read from results/branching_convergence,
+# the --output folder of `sdg study configs/studies/branching_convergence.toml` kept in the
+# repository (results/README.md; hours: run it apart); without its study.json the table is kept.
 #
 # Environment: SDG (the binary, default target/release/sdg), THREADS (default 2), VERIFY_OUT,
 # VERIFY_MAIN (1 or 0). Needs python3 (standard library only).

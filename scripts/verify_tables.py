@@ -748,8 +748,9 @@ def estimate(runs):
 
 def branching_study(runs):
     """Per resolution of configs/studies/branching_convergence.toml: the statistics of its
-    study.json, from OUT/branching_convergence (the study's --output folder)."""
-    folder = runs.out / "branching_convergence"
+    study.json, from results/branching_convergence (the study's --output folder, kept in the
+    repository)."""
+    folder = Path(__file__).resolve().parent.parent / "results" / "branching_convergence"
     path = folder / "study.json"
     if not path.is_file():
         raise Missing("branching_convergence")
@@ -803,7 +804,7 @@ def branching_study(runs):
             "wall time (mean, 2 threads)",
         ],
         out,
-    ) + f"\n\nCommand: `sdg study {study['study']} --jobs 1 --threads 2`."
+    ) + f"\n\nCommand: `sdg study {study['study']} --output results/branching_convergence --jobs 1 --threads 2`."
 
 
 def sum_of(folder, key, group):
