@@ -74,6 +74,11 @@ pub struct FractureConfig {
     /// the report uses it; without it none is reported.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub macro_length: Option<f64>,
+    /// The same reach for a second, shorter report, `fracture.short_macro_branching`, m (> 0):
+    /// a fork whose arms reach this and no further (one arm arrested) counts there and not in
+    /// the macro one. Only the report uses it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub short_macro_length: Option<f64>,
 }
 
 impl FractureConfig {

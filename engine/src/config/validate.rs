@@ -431,6 +431,7 @@ impl Config {
         }
         for (key, length) in [
             ("macro_length", f.macro_length),
+            ("short_macro_length", f.short_macro_length),
             ("min_piece", f.min_piece),
             ("tangent_length", f.tangent_length),
         ] {

@@ -60,6 +60,10 @@ pub struct MacroFork {
     /// from the fork to the arm's farthest point) that lies on open edges (damage at least
     /// [`OPEN_DAMAGE`]), m.
     pub open_arms: Vec<f64>,
+    /// Angle between the two longest of `arms`, degrees in [0, 180]: each arm's direction is
+    /// from the fork to the point where the path of its reach is `length` long along crack
+    /// edges, so that it measures the fork at the scale it is defined on.
+    pub angle: f64,
 }
 
 /// A vertex's neighbour along a crack edge, with the edge's length (m), time (s) and damage.
@@ -94,7 +98,7 @@ pub(crate) fn first_macro_fork(
         if neighbours.len() < 3 {
             continue;
         }
-        let Some((time, arms, open_arms)) = fork_at(&graph, v, length) else {
+        let Some((time, arms, open_arms, angle)) = fork_at(&graph, v, length) else {
             continue;
         };
         let candidate = MacroFork {
@@ -106,6 +110,7 @@ pub(crate) fn first_macro_fork(
                 .min_by(f64::total_cmp),
             arms,
             open_arms,
+            angle,
         };
         let earlier = |a: &MacroFork, b: &MacroFork| {
             a.time.total_cmp(&b.time).then(
@@ -126,9 +131,9 @@ pub(crate) fn first_macro_fork(
 /// that links two cracks just past the fork) does not merge the arms it joins.
 const CORE: f64 = 0.1;
 
-/// A fork's time (s), the reaches of its long forward arms (m), longest first, and their open
-/// lengths (m).
-type ForkArms = (f64, Vec<f64>, Vec<f64>);
+/// A fork's time (s), the reaches of its long forward arms (m), longest first, their open
+/// lengths (m) and the angle between the two longest (degrees).
+type ForkArms = (f64, Vec<f64>, Vec<f64>, f64);
 
 /// When `v` is a macro fork for `length` (m), its [`ForkArms`]. The arms are the parts of the
 /// network outside the fork's core that hang on it; an arm starts with the earliest of its
@@ -175,12 +180,21 @@ fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<ForkArms> {
             .then(a.1.total_cmp(&b.1))
             .then(b.2.total_cmp(&a.2))
     });
-    // (start, reach, open length) of the long forward arms.
-    let mut long: Vec<(f64, f64, f64)> = arms
+    // (start, reach, open length, direction) of the long forward arms.
+    let origin = graph[&v].1;
+    let mut long: Vec<(f64, f64, f64, [f64; 2])> = arms
         .into_iter()
         .skip(1)
         .filter(|a| a.2 >= length)
-        .map(|a| (a.1, a.2, open_length(&previous, a.3)))
+        .map(|a| {
+            let at = point_at(graph, &previous, &distances, a.3, length);
+            (
+                a.1,
+                a.2,
+                open_length(&previous, a.3),
+                [at[0] - origin[0], at[1] - origin[1]],
+            )
+        })
         .collect();
     long.sort_by(|a, b| a.0.total_cmp(&b.0));
     if long.len() < 2 {
@@ -188,11 +202,42 @@ fn fork_at(graph: &Graph, v: VertexId, length: f64) -> Option<ForkArms> {
     }
     let time = long[1].0;
     long.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let [a, b] = [long[0].3, long[1].3];
+    let angle = (a[0] * b[1] - a[1] * b[0])
+        .abs()
+        .atan2(a[0] * b[0] + a[1] * b[1])
+        .to_degrees();
     Some((
         time,
         long.iter().map(|a| a.1).collect(),
         long.iter().map(|a| a.2).collect(),
+        angle,
     ))
+}
+
+/// The point (m) at `length` (m) along the shortest path that `previous` records from the fork
+/// to `end`, whose distance from the fork is at least `length`; linear along the edge it lies on.
+fn point_at(
+    graph: &Graph,
+    previous: &Previous,
+    distances: &BTreeMap<VertexId, f64>,
+    mut end: VertexId,
+    length: f64,
+) -> [f64; 2] {
+    while let Some(&(from, edge, _)) = previous.get(&end) {
+        let near = distances[&from];
+        if near <= length {
+            let s = if edge > 0.0 {
+                (length - near) / edge
+            } else {
+                0.0
+            };
+            let [p, q] = [graph[&from].1, graph[&end].1];
+            return [p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1])];
+        }
+        end = from;
+    }
+    graph[&end].1
 }
 
 /// Per vertex reached, the previous vertex on its shortest path and the length (m) and damage
@@ -311,8 +356,35 @@ mod tests {
         assert_eq!(fork.distance, Some(0.5));
         assert_eq!(fork.arms.len(), 2);
         assert!((fork.arms[0] - up).abs() < 1e-15 && (fork.arms[1] - down).abs() < 1e-15);
+        assert!((fork.angle - 90.0).abs() < 1e-12, "{}", fork.angle);
         // An arm shorter than the length is a side branch: no macro fork.
         assert_eq!(first_macro_fork(&y_network(), 0.8, &[]), None);
+    }
+
+    #[test]
+    fn an_arm_s_direction_is_that_of_its_point_at_the_length() {
+        // The notch into (1, 0); one arm up to (1, 1) and on right to (3, 1), one down to
+        // (1, -3). At length 2 the upper arm's point is (2, 1): 45 degrees up, 135 from the
+        // lower arm.
+        let mut links = path(0, &[[0.0, 0.0], [1.0, 0.0]], &[0.0]);
+        for (ends, points) in [
+            ([1, 2], [[1.0, 0.0], [1.0, 1.0]]),
+            ([2, 3], [[1.0, 1.0], [3.0, 1.0]]),
+            ([1, 4], [[1.0, 0.0], [1.0, -3.0]]),
+        ] {
+            links.push(CrackLink {
+                ends,
+                points,
+                time: 1.0,
+                initial: false,
+                damage: 1.0,
+            });
+        }
+        let fork = first_macro_fork(&links, 2.0, &[]).unwrap();
+        assert!((fork.angle - 135.0).abs() < 1e-12, "{}", fork.angle);
+        // At length 1 the upper arm's point is (1, 1): straight up, opposite the lower arm.
+        let fork = first_macro_fork(&links, 1.0, &[]).unwrap();
+        assert!((fork.angle - 180.0).abs() < 1e-12, "{}", fork.angle);
     }
 
     #[test]
@@ -325,6 +397,8 @@ mod tests {
         let fork = first_macro_fork(&links, 0.7, &[]).unwrap();
         assert_eq!((fork.time, fork.distance), (3.0, None));
         assert_eq!(fork.arms, vec![1.0, 0.5 * 2f64.sqrt()]);
+        // Back along the notch, and down at 45 degrees.
+        assert!((fork.angle - 135.0).abs() < 1e-12, "{}", fork.angle);
         // With the notch an initial crack again, it is the incoming arm whenever its edge at
         // the fork was made (here a crack that ran into it later): the fork is as before.
         links[0].initial = true;

@@ -104,6 +104,8 @@ pub struct FractureSummary {
     /// beyond the one the crack came in by (`network`); none without that setting or such a
     /// fork.
     pub macro_branching: Option<MacroFork>,
+    /// The same for arms of `fracture.short_macro_length`.
+    pub short_macro_branching: Option<MacroFork>,
 }
 
 /// `events.csv`: one line per fracture event in the order they happened, at its time on the
@@ -243,23 +245,25 @@ pub(crate) fn cracks_csv(mesh: &Mesh, cracks: &[CrackEdge], events: &[FractureEv
 }
 
 /// The summary of the fracture events of a run on the final `state`, whose crack edges are
-/// `cracks`; `initial_tips` are the positions of the initial cracks' tips, m; `macro_length`
-/// the arms' reach of a macro fork, m; its times are on the clock of `time`.
+/// `cracks`; `initial_tips` are the positions of the initial cracks' tips, m; `macro_lengths`
+/// the arms' reach of a macro fork and of a short one, m; its times are on the clock of `time`.
 pub(crate) fn summary(
     events: &[FractureEvent],
     (state, cracks): (&Frontier, &[CrackEdge]),
     fracture: &Fracture,
-    (initial_tips, macro_length): (&[[f64; 2]], Option<f64>),
+    (initial_tips, macro_lengths): (&[[f64; 2]], [Option<f64>; 2]),
     time: &TimeConfig,
 ) -> FractureSummary {
     let count = |kind: &str| events.iter().filter(|e| e.kind == kind).count() as u64;
     let (first_branching_time, first_branching_distance) = first_branching(events, initial_tips);
-    let macro_branching = macro_length
-        .and_then(|length| macro_fork(&state.mesh, fracture, events, cracks, length, initial_tips))
-        .map(|fork| MacroFork {
-            time: time.clock(fork.time),
-            ..fork
-        });
+    let [macro_branching, short_macro_branching] = macro_lengths.map(|length| {
+        length
+            .and_then(|l| macro_fork(&state.mesh, fracture, events, cracks, l, initial_tips))
+            .map(|fork| MacroFork {
+                time: time.clock(fork.time),
+                ..fork
+            })
+    });
     FractureSummary {
         nucleations: count("nucleation"),
         extensions: count("extension"),
@@ -284,6 +288,7 @@ pub(crate) fn summary(
         first_branching_time: first_branching_time.map(|t| time.clock(t)),
         first_branching_distance,
         macro_branching,
+        short_macro_branching,
     }
 }
 

@@ -119,12 +119,15 @@ impl Solve<'_> {
         });
         let fracture = problem.fracture.as_ref().map(|fracture| {
             let initial_tips = initial_tip_points(fracture, &problem.mesh);
-            let macro_length = config.fracture.as_ref().and_then(|f| f.macro_length);
+            let lengths = config
+                .fracture
+                .as_ref()
+                .map_or([None; 2], |f| [f.macro_length, f.short_macro_length]);
             records::summary(
                 &book.fracture_events,
                 (state, &front_cracks(problem, fracture, state)),
                 fracture,
-                (&initial_tips, macro_length),
+                (&initial_tips, lengths),
                 &config.time,
             )
         });
