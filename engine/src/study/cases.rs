@@ -5,16 +5,31 @@ use std::path::{Path, PathBuf};
 
 use crate::config::Config;
 
-/// One axis of a study: a config key and its values.
+/// One axis of a study: a config key and its values, and keys that go with it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Axis {
     /// The dotted config key, as `--set` takes it.
     pub key: String,
-    /// Its values, in order.
+    /// Its values, in order (distinct when `with` is not empty).
     pub values: Vec<toml::Value>,
     /// True for a `{ draws = N, first = F }` axis (the integers `F`, ..., `F + N - 1`): the
     /// statistics are taken over it.
     pub draws: bool,
+    /// Further config keys that vary with this one (`{ values = [...], with = { ... } }`):
+    /// each with one value per value of `values`, the `i`-th set with the `i`-th (a load and
+    /// the domain sized for it, say).
+    pub with: Vec<(String, Vec<toml::Value>)>,
+}
+
+impl Axis {
+    /// The keys and values of `with` that go with `value` of this axis.
+    pub(super) fn companions<'a>(
+        &'a self,
+        value: &toml::Value,
+    ) -> impl Iterator<Item = (&'a String, &'a toml::Value)> {
+        let i = self.values.iter().position(|v| v == value);
+        (self.with.iter()).filter_map(move |(k, vs)| Some((k, &vs[i?])))
+    }
 }
 
 /// One case of a study: a value of every axis.
@@ -105,7 +120,12 @@ pub(super) fn overrides(
     values: &[toml::Value],
 ) -> (Vec<String>, Vec<String>) {
     let set = set.iter().map(|(k, v)| (k, v, format!("set.\"{k}\"")));
-    let axes = (axes.iter().zip(values)).map(|(a, v)| (&a.key, v, format!("axes.\"{}\"", a.key)));
+    let axes = (axes.iter().zip(values)).flat_map(|(a, v)| {
+        let main = (&a.key, v, format!("axes.\"{}\"", a.key));
+        let with =
+            (a.companions(v)).map(|(k, w)| (k, w, format!("axes.\"{}\".with.\"{k}\"", a.key)));
+        std::iter::once(main).chain(with)
+    });
     set.chain(axes)
         .map(|(key, value, source)| (format!("{key}={}", toml_text(value)), source))
         .unzip()
@@ -163,6 +183,7 @@ mod tests {
             key: key.into(),
             values: values.to_vec(),
             draws: false,
+            with: Vec::new(),
         }
     }
 
@@ -201,6 +222,15 @@ mod tests {
             ["output.png=false", "mesh.diagonal=\"right\"", "x=0.1"]
         );
         assert_eq!(sources[1], "axes.\"mesh.diagonal\"");
+        // Keys that go with an axis take the value at its value's place.
+        let mut load = axis("loading.load_ratio", &[Float(0.1), Float(0.5)]);
+        load.with = vec![("mesh.width".into(), vec![Float(4e-3), Float(2e-3)])];
+        let (specs, sources) = overrides(&[], &[load], &[Float(0.5)]);
+        assert_eq!(specs, ["loading.load_ratio=0.5", "mesh.width=0.002"]);
+        assert_eq!(
+            sources[1],
+            "axes.\"loading.load_ratio\".with.\"mesh.width\""
+        );
         assert_eq!(case_dir(Path::new("o"), 7, 16), Path::new("o/cases/007"));
         assert_eq!(case_dir(Path::new("o"), 7, 1001), Path::new("o/cases/0007"));
     }

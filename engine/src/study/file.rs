@@ -86,17 +86,30 @@ impl Study {
         for (key, value) in in_file_order(raw.set) {
             flatten(key, value, &mut set);
         }
-        let mut axes = Vec::new();
+        let mut axes: Vec<Axis> = Vec::new();
         for (key, value) in in_file_order(raw.axes) {
             let name = format!("axes.\"{key}\"");
-            if set.iter().any(|(k, _)| *k == key) {
-                return Err(error(
-                    Some(&name),
-                    "is also in [set]: give a key one place".into(),
-                ));
+            let (values, draws, with) = axis_values(value).map_err(|r| error(Some(&name), r))?;
+            let taken = |k: &str| {
+                set.iter().any(|(s, _)| s == k)
+                    || (axes.iter()).any(|a| a.key == k || a.with.iter().any(|(w, _)| w == k))
+            };
+            let places = std::iter::once((&key, name.clone()))
+                .chain((with.iter()).map(|(k, _)| (k, format!("{name}.with.\"{k}\""))));
+            for (i, (k, place)) in places.enumerate() {
+                if taken(k) || (i > 0 && *k == key) {
+                    return Err(error(
+                        Some(&place),
+                        format!("`{k}` is also set elsewhere in the study: give a key one place"),
+                    ));
+                }
             }
-            let (values, draws) = axis_values(value).map_err(|r| error(Some(&name), r))?;
-            axes.push(Axis { key, values, draws });
+            axes.push(Axis {
+                key,
+                values,
+                draws,
+                with,
+            });
         }
         Ok(Self {
             file: file.to_path_buf(),
@@ -170,14 +183,57 @@ fn flatten(key: String, value: toml::Value, out: &mut Vec<(String, toml::Value)>
     }
 }
 
-/// The values of an axis (a non-empty list, or `{ draws = N, first = F }`, `F` 1 by
-/// default), and whether it is a draws axis; or why it is neither.
-fn axis_values(value: toml::Value) -> Result<(Vec<toml::Value>, bool), String> {
+/// An axis's values, whether it is a draws axis, and the keys that go with it (see
+/// [`axis_values`]).
+type AxisValues = (Vec<toml::Value>, bool, Vec<(String, Vec<toml::Value>)>);
+
+/// The values of an axis (a non-empty list; `{ draws = N, first = F }`, `F` 1 by default; or
+/// `{ values = [...], with = { "key" = [...], ... } }`, distinct values each with a value of
+/// every key of `with`), whether it is a draws axis and the keys that go with it; or why it is
+/// none of these.
+fn axis_values(value: toml::Value) -> Result<AxisValues, String> {
     match value {
         toml::Value::Array(values) if values.is_empty() => {
             Err("an empty list: give at least one value".into())
         }
-        toml::Value::Array(values) => Ok((values, false)),
+        toml::Value::Array(values) => Ok((values, false, Vec::new())),
+        toml::Value::Table(mut table) if table.contains_key("values") => {
+            if let Some(k) = table
+                .keys()
+                .find(|k| !["values", "with"].contains(&k.as_str()))
+            {
+                return Err(format!(
+                    "unknown key `{k}` of an axis with keys that go with it (values, with)"
+                ));
+            }
+            let (values, _, _) = axis_values(table.remove("values").expect("checked"))
+                .map_err(|r| format!("values: {r}"))?;
+            for (i, v) in values.iter().enumerate() {
+                if values[..i].contains(v) {
+                    return Err(format!("values: {v} is listed twice"));
+                }
+            }
+            let with = match table.remove("with") {
+                None => toml::map::Map::new(),
+                Some(toml::Value::Table(with)) => with,
+                Some(v) => return Err(format!("with must be a table of keys and lists, got {v}")),
+            };
+            let mut keys = Vec::new();
+            for (k, v) in with {
+                match v {
+                    toml::Value::Array(vs) if vs.len() == values.len() => keys.push((k, vs)),
+                    toml::Value::Array(vs) => {
+                        return Err(format!(
+                            "with.\"{k}\": {} values for the axis's {}: give one per value",
+                            vs.len(),
+                            values.len()
+                        ));
+                    }
+                    v => return Err(format!("with.\"{k}\" must be a list, got {v}")),
+                }
+            }
+            Ok((values, false, keys))
+        }
         toml::Value::Table(table) if table.contains_key("draws") => {
             if let Some(k) = table
                 .keys()
@@ -197,11 +253,15 @@ fn axis_values(value: toml::Value) -> Result<(Vec<toml::Value>, bool), String> {
             let last = first
                 .checked_add(draws - 1)
                 .ok_or_else(|| format!("first = {first}: the draws overflow"))?;
-            Ok(((first..=last).map(toml::Value::Integer).collect(), true))
+            Ok((
+                (first..=last).map(toml::Value::Integer).collect(),
+                true,
+                Vec::new(),
+            ))
         }
         v => Err(format!(
-            "an axis is a list of values or {{ draws = N, first = F }}, got {v} (quote a \
-             dotted key: \"adapt.min_edge\" = [...])"
+            "an axis is a list of values, {{ draws = N, first = F }} or {{ values = [...], with \
+             = {{ ... }} }}, got {v} (quote a dotted key: \"adapt.min_edge\" = [...])"
         )),
     }
 }
@@ -246,6 +306,25 @@ mod tests {
     }
 
     #[test]
+    fn keys_that_go_with_an_axis_are_set_with_its_values() {
+        let (_dir, file) = study(
+            "base = \"base.toml\"\nmetrics = [\"patches\"]\n[axes]\n\"mesh.nx\" = { values = [4, \
+             8], with = { \"mesh.ny\" = [6, 12], \"time.end\" = [1e-6, 2e-6] } }\n\
+             \"adapt.tol\" = [1.0, 2.0]\n",
+        );
+        let s = Study::load(&file).unwrap();
+        assert_eq!(s.axes[0].with.len(), 2);
+        let cases = s.prepare().unwrap();
+        assert_eq!(cases.len(), 4);
+        assert_eq!(
+            cases[2].overrides,
+            ["mesh.nx=8", "mesh.ny=12", "time.end=2e-6", "adapt.tol=1.0"]
+        );
+        assert_eq!(cases[2].label(&s.axes), "mesh.nx=8, adapt.tol=1.0");
+        assert_ne!(cases[0].hash, cases[2].hash);
+    }
+
+    #[test]
     fn bad_studies_name_the_key() {
         let head = "base = \"base.toml\"\nmetrics = [\"patches\"]\n";
         let cases = [
@@ -269,7 +348,35 @@ mod tests {
             (
                 &format!("{head}[axes]\n\"mesh.nx\" = [4]\n[set]\n\"mesh.nx\" = 8\n"),
                 "axes.\"mesh.nx\"",
-                "[set]",
+                "one place",
+            ),
+            (
+                &format!(
+                    "{head}[axes]\n\"mesh.nx\" = {{ values = [4, 8], with = {{ \"mesh.ny\" = [4] }} }}\n"
+                ),
+                "axes.\"mesh.nx\"",
+                "1 values for the axis's 2",
+            ),
+            (
+                &format!("{head}[axes]\n\"mesh.nx\" = {{ values = [4, 4] }}\n"),
+                "axes.\"mesh.nx\"",
+                "listed twice",
+            ),
+            (
+                &format!(
+                    "{head}[axes]\n\"mesh.nx\" = {{ values = [4], with = {{ \"mesh.ny\" = [4] }} }}\n\
+                     \"mesh.ny\" = [8]\n"
+                ),
+                "axes.\"mesh.ny\"",
+                "one place",
+            ),
+            (
+                &format!(
+                    "{head}[axes]\n\"mesh.nx\" = {{ values = [4], with = {{ \"mesh.ny\" = [4] }} }}\n\
+                     [set]\n\"mesh.ny\" = 8\n"
+                ),
+                "axes.\"mesh.nx\".with.\"mesh.ny\"",
+                "one place",
             ),
         ];
         for (text, key, reason) in cases {

@@ -51,10 +51,14 @@ fn read_summary(path: &Path) -> Result<Value, EngineError> {
         .map_err(|e| EngineError::Input(format!("{}: not JSON: {e}", path.display())))
 }
 
-/// `study.csv`: `case`, a column per axis and per metric (named by their keys), `status`.
+/// `study.csv`: `case`, a column per axis (each followed by the keys that go with it) and per
+/// metric (named by their keys), `status`.
 fn csv(study: &Study, cases: &[Case], collected: &Collected) -> String {
     let mut header = vec!["case".to_string()];
-    header.extend(study.axes.iter().map(|a| a.key.clone()));
+    for axis in &study.axes {
+        header.push(axis.key.clone());
+        header.extend(axis.with.iter().map(|(k, _)| k.clone()));
+    }
     header.extend(study.metrics.iter().cloned());
     header.push("status".into());
     let mut table = Table::new(header);
@@ -63,7 +67,10 @@ fn csv(study: &Study, cases: &[Case], collected: &Collected) -> String {
         .zip(collected.statuses.iter().zip(&collected.values))
     {
         let mut cells = vec![case.index.to_string()];
-        cells.extend(case.values.iter().map(cases::value_text));
+        for (axis, value) in study.axes.iter().zip(&case.values) {
+            cells.push(cases::value_text(value));
+            cells.extend(axis.companions(value).map(|(_, v)| cases::value_text(v)));
+        }
         cells.extend(values.iter().map(|v| v.map_or(String::new(), number)));
         cells.push(status.name().into());
         table.row(cells);
@@ -83,7 +90,12 @@ fn number(v: f64) -> String {
 /// `study.json`: the study, and per group per metric the statistics over its finished cases.
 fn summary_json(study: &Study, groups: &[Group], collected: &Collected) -> Value {
     let axes: Vec<Value> = (study.axes.iter())
-        .map(|a| json!({"key": a.key, "values": a.values, "draws": a.draws}))
+        .map(|a| {
+            let with: serde_json::Map<String, Value> = (a.with.iter())
+                .map(|(k, vs)| (k.clone(), json!(vs)))
+                .collect();
+            json!({"key": a.key, "values": a.values, "draws": a.draws, "with": with})
+        })
         .collect();
     let non_draws: Vec<&str> = (study.axes.iter())
         .filter(|a| !a.draws)
