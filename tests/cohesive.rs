@@ -358,6 +358,17 @@ fn mode1_crack_starts_when_lefm_says() {
     assert!(summary.energy.balance_residual_rel.abs() < 1e-6);
     assert!(summary.coarsenings > 0);
     assert_fracture_energy_never_negative(dir.path());
+    // summary.json's comparison: the first tip state and LEFM's start in t', and nothing
+    // compared before t' = 3 (the default `compare_from`).
+    let lefm_block = summary.lefm.expect("[loading] runs compare with LEFM");
+    let first = (rows[0].0 - t0) / tau;
+    assert!(
+        (lefm_block.onset_time.unwrap() - first).abs() < 1e-9,
+        "{lefm_block:?}"
+    );
+    assert!((lefm_block.lefm_onset_time - lefm::initiation()).abs() < 1e-9);
+    assert_eq!(lefm_block.tip_states_compared, 0);
+    assert_eq!(lefm_block.tip_error_max, None);
 }
 
 /// The work of the cohesive tractions (`history.csv`) is the law's potential plus what the

@@ -11,8 +11,13 @@ use std::time::{Duration, Instant};
 use common::{CONFIG, sdg, stderr};
 
 /// Study files shipped in configs/studies/, each run by a test here (the branching
-/// convergence study, hours on 2 cores, is checked and listed only).
-const SHIPPED: [&str; 2] = ["branching_convergence.toml", "plate_draws.toml"];
+/// convergence study and the LEFM sweeps, hours on 2 cores, are checked and listed only).
+const SHIPPED: [&str; 4] = [
+    "branching_convergence.toml",
+    "lefm_sweep_high.toml",
+    "lefm_sweep_low.toml",
+    "plate_draws.toml",
+];
 
 fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
@@ -89,6 +94,44 @@ fn the_branching_convergence_study_is_valid_and_lists_its_cases() {
         cases[23].contains("adapt.min_edge=1.5e-6, fracture.seed=8"),
         "{listing}"
     );
+}
+
+/// The LEFM sweeps (scripts/lefm_sweep.py writes them): every case's config is valid, and the
+/// load ratios are the seed's, lowest first.
+#[test]
+fn the_lefm_sweeps_are_valid_and_list_the_seed_s_load_ratios() {
+    for (name, exponents) in [
+        ("lefm_sweep_low.toml", vec![-1.5, -1.25, -1.0, -0.75, -0.5]),
+        (
+            "lefm_sweep_high.toml",
+            [4.0, 8.0, 16.0, 32.0, 64.0, 128.0]
+                .map(|d| -1.0 / d)
+                .to_vec(),
+        ),
+    ] {
+        let file = repo(&format!("configs/studies/{name}"));
+        let dir = tempfile::tempdir().unwrap();
+        let out = sdg(&[
+            "study",
+            file.to_str().unwrap(),
+            "--dry-run",
+            "--output",
+            dir.path().to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+        let listing = String::from_utf8(out.stdout).unwrap();
+        let ratios: Vec<f64> = (listing.lines())
+            .filter_map(|l| l.split("loading.load_ratio=").nth(1))
+            .map(|r| r.trim().parse().unwrap())
+            .collect();
+        assert_eq!(ratios.len(), exponents.len(), "{listing}");
+        for (r, e) in ratios.iter().zip(&exponents) {
+            assert!(
+                (r / 10f64.powf(*e) - 1.0).abs() < 1e-12,
+                "{name}: {r} vs 10^{e}"
+            );
+        }
+    }
 }
 
 /// The shipped example: 2 loads by 3 draws of the defects, its table and its statistics.

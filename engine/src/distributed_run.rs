@@ -539,6 +539,7 @@ fn summarize(
             newton_iterations_max: newton_max,
         },
         loading: problem.loading,
+        lefm: None,
         crack: None,
         fracture: None,
         error,

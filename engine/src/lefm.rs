@@ -8,6 +8,8 @@
 //! `da'/dt' = 1 - 1 / F(t')^2` once `F >= 1` (zero before); `t' = t / tau'`,
 //! `a' = a / (tau' c_R)`.
 
+use serde::Serialize;
+
 /// Gauss-Legendre nodes and weights on [-1, 1], 4 points: exact to degree 7.
 const GAUSS_4: [(f64, f64); 4] = [
     (-0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
@@ -62,9 +64,119 @@ pub fn tip_history(end: f64, n: usize) -> Vec<(f64, f64, f64)> {
     out
 }
 
+/// The normalized time `t'` at which the LEFM tip starts: `F(t') = 1` (by bisection; `F`
+/// grows with `t'`).
+pub fn initiation() -> f64 {
+    let (mut lo, mut hi) = (0.0, 10.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if intensity(mid) < 1.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// `lefm` in `summary.json`: the computed tip of the `[loading]` interface against the LEFM
+/// tip history, in normalized time `t' = (t - t0) / tau'` (`t0` the waves' arrival).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct LefmComparison {
+    /// `t'` of the first tip state; none without one.
+    pub onset_time: Option<f64>,
+    /// `t'` at which the LEFM tip starts ([`initiation`]).
+    pub lefm_onset_time: f64,
+    /// `t'` from which the rest compares (`loading.compare_from`).
+    pub compare_from: f64,
+    /// Tip states from `compare_from` on.
+    pub tip_states_compared: usize,
+    /// Largest `abs(a / a_LEFM - 1)` over those states, `a` the extension; none without one.
+    pub tip_error_max: Option<f64>,
+    /// The work of the cohesive tractions between the first history row from `compare_from`
+    /// and the last, over the extension between them (the latest tip state at or before each
+    /// row), over `phi`; none when the run ends before `compare_from` or the tip did not move.
+    pub energy_release_over_phi: Option<f64>,
+}
+
+/// The comparison of the tip states `tips` (`t'`, extension m) and the history rows `work`
+/// (`t'`, work of the cohesive tractions J/m), both in time order, from `t' = from`; `unit`
+/// is `tau' c_R` (m), `phi` the work of separation (J/m^2).
+pub fn compare(
+    tips: &[(f64, f64)],
+    work: &[(f64, f64)],
+    from: f64,
+    unit: f64,
+    phi: f64,
+) -> LefmComparison {
+    let late: Vec<(f64, f64)> = tips.iter().copied().filter(|s| s.0 >= from).collect();
+    let end = late.last().map_or(0.0, |s| s.0);
+    let reference = tip_history(end, (end * 200.0).ceil() as usize);
+    let lefm_at = |t: f64| {
+        let i = reference
+            .partition_point(|r| r.0 < t)
+            .clamp(1, reference.len() - 1);
+        let ((t0, a0, _), (t1, a1, _)) = (reference[i - 1], reference[i]);
+        let s = if t1 > t0 { (t - t0) / (t1 - t0) } else { 0.0 };
+        (a0 + s * (a1 - a0)) * unit
+    };
+    let tip_error_max = late
+        .iter()
+        .map(|&(t, a)| (a / lefm_at(t) - 1.0).abs())
+        .reduce(f64::max);
+    let extension = |t: f64| {
+        tips.iter()
+            .take_while(|s| s.0 <= t)
+            .last()
+            .map_or(0.0, |s| s.1)
+    };
+    let energy_release_over_phi = match (work.iter().find(|r| r.0 >= from), work.last()) {
+        (Some(&(t0, w0)), Some(&(t1, w1))) if extension(t1) > extension(t0) => {
+            Some((w1 - w0) / (extension(t1) - extension(t0)) / phi)
+        }
+        _ => None,
+    };
+    LefmComparison {
+        onset_time: tips.first().map(|s| s.0),
+        lefm_onset_time: initiation(),
+        compare_from: from,
+        tip_states_compared: late.len(),
+        tip_error_max,
+        energy_release_over_phi,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_tip_that_is_lefm_s_compares_exactly() {
+        let unit = 2e-3;
+        let start = initiation();
+        assert!((intensity(start) - 1.0).abs() < 1e-12);
+        // LEFM's own tip, sampled, with the work phi per unit extension from t' = 3.
+        let history = tip_history(5.0, 500);
+        let tips: Vec<(f64, f64)> = (history.iter())
+            .filter(|r| r.1 > 0.0)
+            .map(|r| (r.0, r.1 * unit))
+            .collect();
+        let work: Vec<(f64, f64)> = tips.iter().map(|&(t, a)| (t, 350.0 * a + 1.0)).collect();
+        let c = compare(&tips, &work, 3.0, unit, 350.0);
+        assert!(c.tip_error_max.unwrap() < 1e-6, "{c:?}");
+        assert_eq!(c.tip_states_compared, 201);
+        assert!((c.energy_release_over_phi.unwrap() - 1.0).abs() < 1e-12);
+        assert!((c.onset_time.unwrap() - start).abs() < 0.02);
+        // 5% ahead everywhere: an error of 0.05; half the work: 0.5 phi.
+        let ahead: Vec<(f64, f64)> = tips.iter().map(|&(t, a)| (t, 1.05 * a)).collect();
+        let half: Vec<(f64, f64)> = work.iter().map(|&(t, w)| (t, 0.5 * w)).collect();
+        let c = compare(&ahead, &half, 3.0, unit, 350.0 * 1.05);
+        assert!((c.tip_error_max.unwrap() - 0.05).abs() < 1e-5, "{c:?}");
+        assert!((c.energy_release_over_phi.unwrap() - 0.5 / 1.05 / 1.05).abs() < 1e-12);
+        // A run that ends before t' = 3: nothing to compare.
+        let c = compare(&tips[..10], &work[..10], 3.0, unit, 350.0);
+        assert_eq!((c.tip_error_max, c.energy_release_over_phi), (None, None));
+    }
 
     #[test]
     fn the_ramp_reaches_the_step_load_history() {

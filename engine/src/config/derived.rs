@@ -108,6 +108,15 @@ impl Config {
                 ),
             );
         }
+        if !(l.compare_from.is_finite() && l.compare_from > 0.0) {
+            return fail(
+                "compare_from",
+                format!(
+                    "must be a positive normalized time t', got {}",
+                    l.compare_from
+                ),
+            );
+        }
         let Some(Law::XuNeedleman(cohesive)) = self.law_of(&l.interface) else {
             return fail(
                 "interface",

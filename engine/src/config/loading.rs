@@ -20,6 +20,16 @@ pub struct LoadingConfig {
     pub interface: String,
     /// The sides the waves enter through (transmitting; not named by a `[[boundary]]`).
     pub sides: Vec<String>,
+    /// Normalized time `t'` (> 0) from which `summary.json`'s `lefm` compares the tip with
+    /// LEFM and measures the energy released per unit extension. Only the report uses it.
+    #[serde(default = "default_compare_from")]
+    pub compare_from: f64,
+}
+
+/// `compare_from`'s default: from `t' = 3`, where the seed compares its tips with LEFM
+/// (Fig. 2.6).
+fn default_compare_from() -> f64 {
+    3.0
 }
 
 /// The scales of a `[loading]`: SI units.
@@ -86,6 +96,7 @@ sides = ["bottom", "top"]
         for (set, key, reason) in [
             ("loading.load_ratio=0", "loading.load_ratio", "(0, 1]"),
             ("loading.load_ratio=1.5", "loading.load_ratio", "(0, 1]"),
+            ("loading.compare_from=0", "loading.compare_from", "positive"),
             (
                 "loading.interface=\"crack\"",
                 "loading.interface",

@@ -160,6 +160,7 @@ impl Solve<'_> {
             energy,
             interface,
             loading: problem.loading,
+            lefm: self.lefm(crack_csv.as_deref(), &book.history),
             crack: crack.map(|crack| CrackSummary {
                 network: fracture.as_ref().map(|f| CrackNetwork {
                     branches: f.branches,

@@ -18,7 +18,9 @@ use crate::fracture::picture;
 use crate::fracture::records;
 use crate::fracture::tips;
 use crate::fracture::tips::CrackSummary;
+use crate::lefm::{self, LefmComparison};
 use crate::output::interface;
+use crate::output::table::{ReadTable, number};
 
 impl Solve<'_> {
     /// Writes what a run that stops before the end has produced so far: the history up to now
@@ -92,6 +94,37 @@ impl Solve<'_> {
         let csv = records::cracks_csv(&state.mesh, &cracks, events);
         write_output(dir, "cracks.csv", csv.as_bytes())?;
         Ok(())
+    }
+
+    /// With `[loading]`: its interface's tip states in `crack_tips` (the text of
+    /// `crack_tips.csv`) and the work of the cohesive tractions in `history` (of
+    /// `history.csv`) against LEFM; `None` without `[loading]` or either table.
+    pub(crate) fn lefm(&self, crack_tips: Option<&str>, history: &str) -> Option<LefmComparison> {
+        let loading = self.problem.loading?;
+        let config = &self.problem.loaded.config;
+        let from = config.loading.as_ref()?.compare_from;
+        let (t0, tau) = (config.time.clock(loading.arrival_time), loading.scales.tau);
+        let columns = |text: &str, names: [&str; 2]| -> Option<Vec<(f64, f64)>> {
+            let table = ReadTable::parse(text, "").ok()?;
+            let [a, b] = names.map(|n| table.column(n));
+            let tag = table.column("interface");
+            let name = &config.loading.as_ref()?.interface;
+            let rows = table
+                .rows()
+                .filter(|r| tag.is_none_or(|c| r.get(c) == Some(name)));
+            rows.map(|r| Some(((number(r.get(a?)) - t0) / tau, number(r.get(b?)))))
+                .collect()
+        };
+        let tips = columns(crack_tips?, ["t_s", "extension_m"])?;
+        let work = columns(history, ["time_s", "fracture_energy_j"])?;
+        let unit = tau * loading.scales.c_r;
+        Some(lefm::compare(
+            &tips,
+            &work,
+            from,
+            unit,
+            loading.scales.work_of_separation,
+        ))
     }
 
     /// `crack_tips.csv` and its summary from the tip crossings recorded so far: per crack

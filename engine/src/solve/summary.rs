@@ -115,6 +115,9 @@ pub struct RunSummary {
     /// The scales of `[loading]`, when configured.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub loading: Option<crate::problem::Loading>,
+    /// With `[loading]`: the tip of its interface against LEFM.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lefm: Option<crate::lefm::LefmComparison>,
     /// Crack tips of cohesive interfaces (runs with a cohesive law).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub crack: Option<crate::fracture::tips::CrackSummary>,

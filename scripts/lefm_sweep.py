@@ -1,0 +1,138 @@
+#!/usr/bin/env python3
+"""Writes the LEFM sweep studies of seed 2.5.3 (Figs. 2.6-2.10):
+
+    configs/studies/lefm_sweep_low.toml    sigma' = 10^-3/2 ... 10^-1/2, from mode1_lefm.toml
+    configs/studies/lefm_sweep_high.toml   sigma' = 10^-1/4 ... 10^-1/128, from mode1_lefm_high.toml
+
+    python3 scripts/lefm_sweep.py          # from the repository root
+
+Every length and time of the mode-I problem scales with tau' c_R and tau', and tau' with
+sigma'^-2 (2.67), so each load ratio's domain, refinement zones, end time and reference energy
+are its base config's times s = (sigma'_base / sigma')^2 (the seed's sizing rule 2.5.2 with the
+base's alpha). Only the process zone keeps its size (11 um at rest), so the smallest edge does
+not scale: `adapt.min_edge` is chosen per load so that the tip's legs are 3.5 to 5 um, 2 to 3
+per process zone, as the base configs' (min_edge = 3 um); the lowest load keeps
+mode1_lefm_low.toml's 4.8 um (4.9 um legs), which costs five hours already.
+"""
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# (key, base value) of the keys that scale with s; lists scale entry by entry.
+LOW_BASE = {
+    "mesh.width": 5.5e-3,
+    "mesh.height": 2.4e-3,
+    "mesh.interface.0.from": [0.0, 1.2e-3],
+    "mesh.interface.0.to": [2.5e-3, 1.2e-3],
+    "mesh.interface.1.from": [2.5e-3, 1.2e-3],
+    "mesh.interface.1.to": [5.5e-3, 1.2e-3],
+    "time.end": 2.87e-6,
+    "adapt.reference_energy": 0.5,
+    "adapt.zone.0.from": [2.4e-3, 1.2e-3],
+    "adapt.zone.0.to": [4.0e-3, 1.2e-3],
+    "adapt.zone.0.radius": 0.4e-3,
+    "adapt.zone.0.max_edge": 0.2e-3,
+    "adapt.zone.1.from": [2.5e-3, 1.2e-3],
+    "adapt.zone.1.to": [3.8e-3, 1.2e-3],
+    "adapt.zone.1.radius": 0.1e-3,
+    "adapt.zone.1.max_edge": 50e-6,
+}
+HIGH_BASE = {
+    "mesh.width": 1.8e-3,
+    "mesh.height": 1.0e-3,
+    "mesh.interface.0.from": [0.0, 0.5e-3],
+    "mesh.interface.0.to": [0.5e-3, 0.5e-3],
+    "mesh.interface.1.from": [0.5e-3, 0.5e-3],
+    "mesh.interface.1.to": [1.8e-3, 0.5e-3],
+    "time.end": 6.47e-7,
+    "adapt.reference_energy": 6.0,
+    "adapt.zone.0.from": [0.45e-3, 0.5e-3],
+    "adapt.zone.0.to": [1.8e-3, 0.5e-3],
+    "adapt.zone.0.radius": 0.1e-3,
+    "adapt.zone.0.max_edge": 25e-6,
+    "adapt.zone.1.from": [0.5e-3, 0.5e-3],
+    "adapt.zone.1.to": [1.0e-3, 0.5e-3],
+    "adapt.zone.1.radius": 0.04e-3,
+    "adapt.zone.1.max_edge": 12.5e-6,
+}
+METRICS = [
+    "lefm.onset_time",
+    "lefm.tip_error_max",
+    "lefm.energy_release_over_phi",
+    "crack.max_speed_over_c_r",
+    "crack.final_length",
+    "energy.balance_residual_rel",
+    "patches",
+    "wall_time_s",
+]
+
+
+def number(x):
+    return repr(x)
+
+
+def scaled(value, s):
+    if isinstance(value, list):
+        return "[" + ", ".join(number(v * s) for v in value) + "]"
+    return number(value * s)
+
+
+def write(name, base, ratio_base, exponents, base_values, min_edge, compare_from, head):
+    ratios = [10.0**e for e in exponents]
+    scales = [(ratio_base / r) ** 2 for r in ratios]
+    lines = [f"# {line}" if line else "#" for line in head.strip().split("\n")]
+    lines += [
+        "# Written by scripts/lefm_sweep.py: edit that, not this file.",
+        "#",
+        f"#   sdg study configs/studies/{name}.toml --output results/{name}",
+        f'base = "../{base}"',
+        "metrics = [" + ", ".join(f'"{m}"' for m in METRICS) + "]",
+        "",
+        "[axes]",
+        '"loading.load_ratio" = { values = ['
+        + ", ".join(repr(r) for r in ratios)
+        + "], with = {",
+    ]
+    with_lines = [f'    "adapt.min_edge" = [{", ".join(number(m) for m in min_edge)}],']
+    for key, value in base_values.items():
+        with_lines.append(f'    "{key}" = [{", ".join(scaled(value, s) for s in scales)}],')
+    lines += with_lines
+    lines += ["} }", "", "[set]", '"output.png" = false', f'"loading.compare_from" = {compare_from}', ""]
+    # TOML inline tables are one line: join the with-table's lines.
+    text = "\n".join(lines)
+    start = text.index('"loading.load_ratio"')
+    end = text.index("} }", start) + 3
+    text = text[:start] + " ".join(x.strip() for x in text[start:end].split("\n")) + text[end:]
+    (ROOT / "configs" / "studies" / f"{name}.toml").write_text(text)
+
+
+write(
+    "lefm_sweep_low",
+    "mode1_lefm.toml",
+    0.1,
+    [-1.5, -1.25, -1.0, -0.75, -0.5],
+    LOW_BASE,
+    [4.8e-6, 3e-6, 3e-6, 2.5e-6, 2e-6],
+    3.0,
+    """
+The seed's low load ratios (2.5.3, Figs. 2.6, 2.7, 2.9a, 2.10a): sigma' = 10^-3/2 to 10^-1/2,
+each on mode1_lefm.toml scaled by s = (0.1 / sigma')^2 (scripts/lefm_sweep.py says why), run
+to t' = 3.5. summary.json's `lefm` compares the tip with LEFM from t' = 3 and the energy
+released per unit extension from there. The lowest load alone takes about five hours on 2 cores.
+""",
+)
+write(
+    "lefm_sweep_high",
+    "mode1_lefm_high.toml",
+    10.0 ** (-1.0 / 128.0),
+    [-1 / 4, -1 / 8, -1 / 16, -1 / 32, -1 / 64, -1 / 128],
+    HIGH_BASE,
+    [3e-6] * 6,
+    40.0,
+    """
+The seed's high load ratios (2.5.3, Figs. 2.8, 2.9b): sigma' = 10^-1/4 to 10^-1/128, each on
+mode1_lefm_high.toml scaled by s = (10^-1/128 / sigma')^2 (scripts/lefm_sweep.py), run to
+t' = 60. The seed's points: the speed stays below c_R, and the energy released per unit
+extension stays below phi once the crack runs (compared from t' = 40).
+""",
+)
