@@ -772,6 +772,9 @@ def branching_study(runs):
         m = g["metrics"]
         fork_t = m.get("fracture.macro_branching.time")
         fork_d = m.get("fracture.macro_branching.distance")
+        angle = m.get("fracture.macro_branching.angle")
+        short_t = m.get("fracture.short_macro_branching.time")
+        short_d = m.get("fracture.short_macro_branching.distance")
         speed = m.get("crack.max_branch_speed_over_c_r")
         over = m.get("crack.states_over_c_r")
         balance = m.get("energy.balance_residual_rel")
@@ -783,6 +786,9 @@ def branching_study(runs):
                 f"{forked} of {g['done']}",
                 interval(fork_t, 1e6, "us", 3),
                 interval(fork_d, 1e3, "mm", 2),
+                interval(angle, 1.0, "deg", 0),
+                interval(short_t, 1e6, "us", 3),
+                interval(short_d, 1e3, "mm", 2),
                 f"{speed['mean']:.2f} ({speed['min']:.2f} to {speed['max']:.2f})" if speed else "",
                 f"{sum_of(folder, 'crack.states_over_c_r', g):,}" if over else "",
                 e(balance["max"], 1) if balance else "",
@@ -797,6 +803,9 @@ def branching_study(runs):
             "forked (two arms past 1 mm)",
             "fork time, mean [95% interval]",
             "fork distance from the notch",
+            "angle between its arms (at 1 mm)",
+            "first fork with 0.2 mm arms: time",
+            "its distance",
             "largest branch speed / `c_R`: mean (least to largest) over draws",
             "tip states above `c_R`, all draws",
             "largest energy balance residual",
