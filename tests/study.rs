@@ -12,7 +12,8 @@ use common::{CONFIG, sdg, stderr};
 
 /// Study files shipped in configs/studies/, each run by a test here (the branching
 /// convergence study and the LEFM sweeps, hours on 2 cores, are checked and listed only).
-const SHIPPED: [&str; 4] = [
+const SHIPPED: [&str; 5] = [
+    "branching_async.toml",
     "branching_convergence.toml",
     "lefm_sweep_high.toml",
     "lefm_sweep_low.toml",
@@ -94,6 +95,24 @@ fn the_branching_convergence_study_is_valid_and_lists_its_cases() {
         cases[23].contains("adapt.min_edge=1.5e-6, fracture.seed=8"),
         "{listing}"
     );
+}
+
+/// The asynchronous branching study: valid, eight draws of the asynchronous scheduler.
+#[test]
+fn the_asynchronous_branching_study_is_valid() {
+    let file = repo("configs/studies/branching_async.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = sdg(&[
+        "study",
+        file.to_str().unwrap(),
+        "--dry-run",
+        "--output",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let listing = String::from_utf8(out.stdout).unwrap();
+    assert!(listing.contains("scheduler.deterministic=false"), "{listing}");
+    assert_eq!(listing.lines().filter(|l| l.contains("pending")).count(), 8);
 }
 
 /// The LEFM sweeps (scripts/lefm_sweep.py writes them): every case's config is valid, and the
