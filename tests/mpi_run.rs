@@ -4,10 +4,9 @@
 
 mod common;
 
-use std::path::Path;
 use std::process::{Command, Output};
 
-use common::{sdg, stderr};
+use common::{run_args, sdg, stderr, summary_json as summary};
 
 /// `mpirun -n ranks sdg args`, as root, oversubscribed and over loopback (as in CI).
 fn mpirun(ranks: usize, args: &[&str]) -> Output {
@@ -25,43 +24,19 @@ fn mpirun(ranks: usize, args: &[&str]) -> Output {
         .expect("mpirun runs (OpenMPI installed: openmpi-bin)")
 }
 
-/// The `run` arguments of the shipped config `name` with `overrides`, writing into `out`.
-fn run_args(name: &str, overrides: &[&str], out: &Path) -> Vec<String> {
-    let config = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name);
-    let mut args = vec![
-        "run".to_string(),
-        config.display().to_string(),
-        "--quiet".into(),
-    ];
-    for o in overrides {
-        args.extend(["--set".to_string(), o.to_string()]);
-    }
-    args.extend(["--output".to_string(), out.display().to_string()]);
-    args
-}
-
-fn summary(out: &Path) -> serde_json::Value {
-    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
-    serde_json::from_str(&text).unwrap()
-}
-
 /// Runs `name` on one thread, then under `mpirun` for each `(ranks, partition)`, and checks
 /// the state hash, patches and ranks of each.
 fn check(name: &str, overrides: &[&str], cases: &[(usize, &str)]) {
     let dir = tempfile::tempdir().unwrap();
     let threads_out = dir.path().join("threads");
-    let mut args = run_args(name, overrides, &threads_out);
-    args.extend(["--threads".into(), "1".into()]);
+    let args = run_args(name, overrides, &["--threads", "1"], &threads_out);
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let result = sdg(&args);
     assert!(result.status.success(), "{}", stderr(&result));
     let threads = summary(&threads_out);
     for &(ranks, partition) in cases {
         let out = dir.path().join(format!("{ranks}-{partition}"));
-        let mut args = run_args(name, overrides, &out);
-        args.extend(["--mpi", "--partition", partition].map(String::from));
+        let args = run_args(name, overrides, &["--mpi", "--partition", partition], &out);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let result = mpirun(ranks, &args);
         assert!(
@@ -114,7 +89,7 @@ fn frictional_interface_over_mpi_is_the_run_on_one_thread() {
 #[test]
 fn a_run_under_mpirun_without_mpi_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let args = run_args("plane_wave.toml", &[], dir.path());
+    let args = run_args("plane_wave.toml", &[], &[], dir.path());
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let result = mpirun(2, &args);
     assert_eq!(result.status.code(), Some(2));

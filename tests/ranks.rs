@@ -6,24 +6,16 @@ mod common;
 
 use std::path::Path;
 
-use common::{sdg, stderr};
+use common::{run_args, sdg, stderr, summary_json};
 
 /// Runs the shipped config `name` with `overrides` and `extra` arguments into `out`; returns
 /// its `summary.json`.
 fn run(name: &str, overrides: &[&str], extra: &[&str], out: &Path) -> serde_json::Value {
-    let config = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name);
-    let mut args = vec!["run", config.to_str().unwrap(), "--quiet"];
-    for o in overrides {
-        args.extend(["--set", o]);
-    }
-    args.extend(extra);
-    args.extend(["--output", out.to_str().unwrap()]);
+    let args = run_args(name, overrides, extra, out);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let result = sdg(&args);
     assert!(result.status.success(), "{args:?}: {}", stderr(&result));
-    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
-    serde_json::from_str(&text).unwrap()
+    summary_json(out)
 }
 
 /// Cells of a VTU file written in any of its encodings.

@@ -269,24 +269,14 @@ fn finish(
     let history = history(problem, &summary, initial_energy);
     let snapshots = end_snapshots(problem, front, solution, dir);
     summary.snapshots = snapshots.as_ref().map_or(Vec::new(), |s| s.clone());
-    let mut written = vec![
+    let written = vec![
         snapshots.map(drop),
         write_output(dir, "history.csv", history.as_bytes()).map(drop),
     ];
     if config.output.png {
         crate::plot::write_history_png(dir, &history);
     }
-    let mut failures = written.drain(..).filter_map(Result::err);
-    if let Some(first) = failures.next() {
-        for e in failures {
-            tracing::error!("not written either: {e}");
-        }
-        return Err(first);
-    }
-    summary.timings.output_s += finishing.elapsed().as_secs_f64();
-    let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
-    write_output(dir, "summary.json", json.as_bytes())?;
-    Ok((summary, dir.to_path_buf()))
+    crate::solve::finish::write_summary(dir, written, summary, finishing)
 }
 
 /// The partition of `mesh` over `ranks` ranks of `kind`; one that cannot be made (more ranks
@@ -472,13 +462,7 @@ fn summarize(
         timings.assembly_s += r.assembly_s;
         timings.solve_s += r.solve_s;
         timings.evaluation_s += r.evaluation_s;
-        totals.boundary_work += r.boundary_work;
-        totals.interface_work += r.interface_work;
-        totals.friction_dissipation += r.friction_dissipation;
-        totals.fracture_work += r.fracture_work;
-        totals.dissipation += r.dissipation;
-        totals.momentum_imbalance = totals.momentum_imbalance.max(r.momentum_imbalance);
-        totals.momentum_flux = totals.momentum_flux.max(r.momentum_flux);
+        totals.accumulate(r);
         if r.newton_iterations > 0 {
             nonlinear += 1;
             newton += r.newton_iterations as u64;

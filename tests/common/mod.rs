@@ -307,6 +307,28 @@ pub fn sdg(args: &[&str]) -> Output {
         .expect("the sdg binary runs")
 }
 
+/// The `sdg run` arguments of the shipped config `name` (in `configs/`) with `overrides` and
+/// `extra` arguments, quiet, writing into `out`.
+pub fn run_args(name: &str, overrides: &[&str], extra: &[&str], out: &Path) -> Vec<String> {
+    let config = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(name);
+    let mut args = vec!["run".to_string(), config.display().to_string()];
+    args.push("--quiet".into());
+    for o in overrides {
+        args.extend(["--set".to_string(), o.to_string()]);
+    }
+    args.extend(extra.iter().map(|a| a.to_string()));
+    args.extend(["--output".to_string(), out.display().to_string()]);
+    args
+}
+
+/// The `summary.json` in `out`, parsed.
+pub fn summary_json(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
 /// The standard error of a finished command, as text.
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()

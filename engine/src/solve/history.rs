@@ -26,21 +26,12 @@ impl Solve<'_> {
         book.timings.evaluation_s += report.evaluation_s;
         book.elements += report.elements as u64;
         book.dofs += report.dofs as u64;
-        book.totals.energy_in += report.energy_in;
-        book.totals.energy_out += report.energy_out;
-        book.totals.boundary_work += report.boundary_work;
-        book.totals.interface_work += report.interface_work;
-        book.totals.friction_dissipation += report.friction_dissipation;
-        book.totals.fracture_work += report.fracture_work;
-        book.totals.dissipation += report.dissipation;
+        book.totals.accumulate(report);
         if report.newton_iterations > 0 {
             book.nonlinear_patches += 1;
             book.newton_iterations += report.newton_iterations as u64;
             book.newton_max = book.newton_max.max(report.newton_iterations);
         }
-        let totals = &mut book.totals;
-        totals.momentum_imbalance = totals.momentum_imbalance.max(report.momentum_imbalance);
-        totals.momentum_flux = totals.momentum_flux.max(report.momentum_flux);
         book.energy_max = book
             .energy_max
             .max(book.initial_energy + book.totals.boundary_work);
