@@ -42,7 +42,10 @@ pub use partition::{Partition, PartitionError, Rank};
 pub use pitching::{
     Causality, CellKind, Options, PitchingError, RankReport, SolvedPatch, pitch_rank, run_threads,
 };
-pub use solving::{Physics, RankSolution, solve_rank, solve_threads};
+pub use solving::{
+    Observer, Physics, RankSolution, solve_rank, solve_rank_observed, solve_threads,
+    solve_threads_observed,
+};
 pub use transport::loopback::{Loopback, LoopbackOptions};
 #[cfg(feature = "mpi")]
 pub use transport::mpi::{MpiError, MpiOptions, MpiTransport};
