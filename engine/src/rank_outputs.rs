@@ -31,6 +31,10 @@
 //! The first row is the initial front's, the last the end front's (energy summed in triangle
 //! order, as on threads): those two are the threaded run's but for the accounts' order of
 //! summation. Rows that would repeat the last row's time and patches are left out.
+//!
+//! # Memory
+//! Per rank: the slices of its elements for the snapshots not yet written, and three exact sums
+//! (a few values each) per history time; no element is kept beyond the run's own.
 
 use sdg_distributed::{LocalView, Observer, Partition, SolvedPatch};
 use sdg_mesh::{Front, Tent};
