@@ -1,5 +1,7 @@
 //! `mpirun -n R sdg run CONFIG --mpi`: one rank per MPI process gives the state hash and patch
-//! count of `sdg run --threads 1`, and a run under `mpirun` without `--mpi` is refused. Built
+//! count of `sdg run --threads 1`, the `history.csv` of the run over in-process ranks and
+//! snapshot pieces holding the threaded run's slices; a run under `mpirun` without `--mpi` is
+//! refused. Built
 //! only with the feature `mpi`; needs OpenMPI's `mpirun` on the PATH.
 
 mod common;
@@ -7,7 +9,7 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Output};
 
-use common::{sdg, stderr};
+use common::{pieces, run_args, sdg, slices, stderr, summary_json as summary};
 
 /// `mpirun -n ranks sdg args`, as root, oversubscribed and over loopback (as in CI).
 fn mpirun(ranks: usize, args: &[&str]) -> Output {
@@ -25,43 +27,24 @@ fn mpirun(ranks: usize, args: &[&str]) -> Output {
         .expect("mpirun runs (OpenMPI installed: openmpi-bin)")
 }
 
-/// The `run` arguments of the shipped config `name` with `overrides`, writing into `out`.
-fn run_args(name: &str, overrides: &[&str], out: &Path) -> Vec<String> {
-    let config = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name);
-    let mut args = vec![
-        "run".to_string(),
-        config.display().to_string(),
-        "--quiet".into(),
-    ];
-    for o in overrides {
-        args.extend(["--set".to_string(), o.to_string()]);
-    }
-    args.extend(["--output".to_string(), out.display().to_string()]);
-    args
-}
-
-fn summary(out: &Path) -> serde_json::Value {
-    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
-    serde_json::from_str(&text).unwrap()
-}
-
-/// Runs `name` on one thread, then under `mpirun` for each `(ranks, partition)`, and checks
-/// the state hash, patches and ranks of each.
+/// Runs `name` on one thread and over 2 in-process ranks, then under `mpirun` for each
+/// `(ranks, partition)`, and checks the state hash, patches, ranks, history and snapshots of
+/// each (snapshots written as ASCII).
 fn check(name: &str, overrides: &[&str], cases: &[(usize, &str)]) {
     let dir = tempfile::tempdir().unwrap();
-    let threads_out = dir.path().join("threads");
-    let mut args = run_args(name, overrides, &threads_out);
-    args.extend(["--threads".into(), "1".into()]);
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let result = sdg(&args);
-    assert!(result.status.success(), "{}", stderr(&result));
-    let threads = summary(&threads_out);
+    let run = |extra: &[&str], out: &Path| {
+        let args = run_args(name, overrides, extra, out);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let result = sdg(&args);
+        assert!(result.status.success(), "{}", stderr(&result));
+        summary(out)
+    };
+    let (threads_out, ranks_out) = (dir.path().join("threads"), dir.path().join("ranks"));
+    let threads = run(&["--threads", "1"], &threads_out);
+    run(&["--ranks", "2"], &ranks_out);
     for &(ranks, partition) in cases {
         let out = dir.path().join(format!("{ranks}-{partition}"));
-        let mut args = run_args(name, overrides, &out);
-        args.extend(["--mpi", "--partition", partition].map(String::from));
+        let args = run_args(name, overrides, &["--mpi", "--partition", partition], &out);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let result = mpirun(ranks, &args);
         assert!(
@@ -77,6 +60,16 @@ fn check(name: &str, overrides: &[&str], cases: &[(usize, &str)]) {
         assert_eq!(mpi["patches"], threads["patches"]);
         assert_eq!(mpi["ranks"], ranks);
         assert_eq!(mpi["energy"]["final"], threads["energy"]["final"]);
+        assert_eq!(
+            std::fs::read_to_string(out.join("history.csv")).unwrap(),
+            std::fs::read_to_string(ranks_out.join("history.csv")).unwrap(),
+            "history.csv of {ranks} MPI ranks ({partition}) and of 2 in-process ranks"
+        );
+        let snapshots = mpi["snapshots"].as_array().unwrap().len();
+        for index in 0..snapshots {
+            let threaded = slices(&[threads_out.join(format!("snapshot_{index:04}.vtu"))]);
+            assert_eq!(pieces(&out, index, ranks), threaded, "snapshot {index}");
+        }
     }
 }
 
@@ -86,8 +79,9 @@ fn plane_wave_over_mpi_is_the_run_on_one_thread() {
         "mesh.nx=8",
         "mesh.ny=8",
         "time.end=1e-6",
-        "output.snapshot_times=[1e-6]",
+        "output.snapshot_times=[5e-7, 1e-6]",
         "output.png=false",
+        "output.vtu=\"ascii\"",
     ];
     let cases = [
         (1, "coordinate"),
@@ -114,7 +108,7 @@ fn frictional_interface_over_mpi_is_the_run_on_one_thread() {
 #[test]
 fn a_run_under_mpirun_without_mpi_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let args = run_args("plane_wave.toml", &[], dir.path());
+    let args = run_args("plane_wave.toml", &[], &[], dir.path());
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let result = mpirun(2, &args);
     assert_eq!(result.status.code(), Some(2));

@@ -6,31 +6,112 @@ mod common;
 
 use std::path::Path;
 
-use common::{sdg, stderr};
+use common::{history_rows, pieces, run_args, sdg, slices, stderr, summary_json};
 
 /// Runs the shipped config `name` with `overrides` and `extra` arguments into `out`; returns
 /// its `summary.json`.
 fn run(name: &str, overrides: &[&str], extra: &[&str], out: &Path) -> serde_json::Value {
-    let config = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("configs")
-        .join(name);
-    let mut args = vec!["run", config.to_str().unwrap(), "--quiet"];
-    for o in overrides {
-        args.extend(["--set", o]);
-    }
-    args.extend(extra);
-    args.extend(["--output", out.to_str().unwrap()]);
+    let args = run_args(name, overrides, extra, out);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let result = sdg(&args);
     assert!(result.status.success(), "{args:?}: {}", stderr(&result));
-    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
-    serde_json::from_str(&text).unwrap()
+    summary_json(out)
 }
 
-/// Cells of a VTU file written in any of its encodings.
-fn cells(vtu: &Path) -> u64 {
-    let text = std::fs::read_to_string(vtu).unwrap();
-    let at = text.find("NumberOfCells=\"").expect("a piece") + "NumberOfCells=\"".len();
-    text[at..].split('"').next().unwrap().parse().unwrap()
+/// Runs the shipped config `name` with `overrides` (ASCII VTU, `snapshots` snapshots) on
+/// `--threads 2` and over each of `cases` (ranks, partition), and checks that every run over
+/// ranks writes the same `history.csv`, byte for byte, whose rows balance the energy, start
+/// with the threaded run's first row and end with its last front (time, patches, energy), and
+/// that each snapshot's pieces hold the threaded run's slices.
+fn assert_same_outputs_over_ranks(
+    name: &str,
+    overrides: &[&str],
+    snapshots: usize,
+    cases: &[(usize, &str)],
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let threads_out = dir.path().join("threads");
+    let threads = run(name, overrides, &["--threads", "2"], &threads_out);
+    let threads_rows = history_rows(&threads_out);
+    let mut first_history: Option<String> = None;
+    for &(ranks, partition) in cases {
+        let out = dir.path().join(format!("{ranks}-{partition}"));
+        let count = ranks.to_string();
+        let summary = run(
+            name,
+            overrides,
+            &["--ranks", &count, "--partition", partition],
+            &out,
+        );
+        assert_eq!(summary["state_hash"], threads["state_hash"]);
+        let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
+        match &first_history {
+            None => first_history = Some(history),
+            Some(first) => assert_eq!(&history, first, "{ranks} ranks, {partition}"),
+        }
+        let rows = history_rows(&out);
+        assert!(
+            rows.len() >= 4,
+            "rows between the first and the last: {rows:?}"
+        );
+        assert_eq!(rows[0], threads_rows[0], "the initial front's row");
+        let (last, threads_last) = (rows.last().unwrap(), threads_rows.last().unwrap());
+        assert_eq!(last[..5], threads_last[..5], "the end front's row");
+        let held = rows[0][2] + threads["energy"]["boundary_work"].as_f64().unwrap().abs();
+        for pair in rows.windows(2) {
+            assert!(
+                pair[0][0] < pair[1][0] && pair[0][1] < pair[1][1],
+                "{pair:?}"
+            );
+        }
+        for row in &rows {
+            assert!(row[10].abs() <= 1e-12 * held, "balance residual: {row:?}");
+        }
+        assert_eq!(summary["snapshots"].as_array().unwrap().len(), snapshots);
+        for index in 0..snapshots {
+            let threaded = slices(&[threads_out.join(format!("snapshot_{index:04}.vtu"))]);
+            assert!(!threaded.is_empty());
+            assert_eq!(
+                pieces(&out, index, ranks),
+                threaded,
+                "snapshot {index}, {ranks} ranks, {partition}"
+            );
+        }
+    }
+}
+
+#[test]
+fn history_and_snapshots_over_ranks_are_the_threaded_runs_for_every_partition() {
+    let overrides = [
+        "mesh.nx=8",
+        "mesh.ny=8",
+        "time.end=1e-6",
+        "output.snapshot_times=[0.0, 3e-7, 5e-7, 1e-6]",
+        "output.png=false",
+        "output.vtu=\"ascii\"",
+    ];
+    let cases = [
+        (1, "coordinate"),
+        (2, "random"),
+        (3, "coordinate"),
+        (4, "stripes"),
+    ];
+    assert_same_outputs_over_ranks("plane_wave.toml", &overrides, 4, &cases);
+}
+
+#[test]
+fn history_and_snapshots_of_a_frictional_interface_over_ranks_are_the_threaded_runs() {
+    let overrides = [
+        "mesh.nx=8",
+        "mesh.ny=8",
+        "time.end=4e-6",
+        "output.snapshot_times=[2e-6, 4e-6]",
+        "output.interface_probes=[]",
+        "output.png=false",
+        "output.vtu=\"ascii\"",
+    ];
+    let cases = [(2, "coordinate"), (3, "random")];
+    assert_same_outputs_over_ranks("stick_slip.toml", &overrides, 2, &cases);
 }
 
 /// Asserts that `ranks` is the run `threads` over ranks: the same state hash, patches, final
@@ -76,6 +157,7 @@ fn plane_wave_over_ranks_is_the_run_on_one_thread() {
         "time.end=1e-6",
         "output.snapshot_times=[1e-6]",
         "output.png=false",
+        "output.vtu=\"ascii\"",
     ];
     let threads = run(
         "plane_wave.toml",
@@ -97,17 +179,11 @@ fn plane_wave_over_ranks_is_the_run_on_one_thread() {
         let distributed = &summary["distributed"];
         assert_eq!(distributed["partition"], partition);
         assert!(distributed["updates_per_tent"].as_f64().unwrap() > 0.0);
-        // The end-time snapshot has every triangle once.
-        assert_eq!(summary["snapshots"][0][1], "snapshot_0000.vtu");
-        let snapshot = |d: &Path| cells(&d.join("snapshot_0000.vtu"));
-        assert_eq!(snapshot(&out), snapshot(&dir.path().join("threads")));
-        assert_eq!(snapshot(&out), summary["triangles"].as_u64().unwrap());
-        let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
-        let last = history.lines().last().unwrap();
-        assert!(
-            last.starts_with(&format!("1e-6,{},", summary["patches"])),
-            "{last}"
-        );
+        // The end-time snapshot has every triangle once, in the pieces of the ranks.
+        assert_eq!(summary["snapshots"][0][1], "snapshot_0000.pvtu");
+        let threads_slices = slices(&[dir.path().join("threads/snapshot_0000.vtu")]);
+        assert_eq!(threads_slices.len() as u64, summary["triangles"]);
+        assert_eq!(pieces(&out, 0, ranks.parse().unwrap()), threads_slices);
     }
 }
 

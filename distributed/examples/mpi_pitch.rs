@@ -13,12 +13,13 @@
 //! the update messages per tent. Exit code 0 when every rank's tents are the serial ones, 1
 //! when any differ or the run failed, 2 for bad arguments.
 
+mod common;
+
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use sdg_distributed::{
-    Causality, LocalView, MpiOptions, MpiTransport, Options, Partition, RankReport, Transport,
-    pitch_rank,
+    Causality, LocalView, MpiTransport, Options, Partition, RankReport, Transport, pitch_rank,
 };
 use sdg_mesh::{Diagonal, Front, Mesh, Pitcher, Rectangle, VertexId};
 use sdg_scheduler::run_serial;
@@ -31,34 +32,6 @@ const CAUSALITY: Causality = Causality {
 
 /// Per vertex, the bit patterns of `(t_old, t_new)` of its tents in order.
 type Sequences = Vec<Vec<(u64, u64)>>;
-
-/// The command line: cells along x and the partition's name.
-struct Args {
-    cells: u32,
-    partition: String,
-}
-
-fn parse_args() -> Result<Args, String> {
-    let mut args = std::env::args().skip(1);
-    let cells = match args.next() {
-        None => 48,
-        Some(s) => s
-            .parse::<u32>()
-            .ok()
-            .filter(|&n| (5..=2000).contains(&n))
-            .ok_or(format!("CELLS: `{s}` is not a whole number in 5..=2000"))?,
-    };
-    let partition = args.next().unwrap_or_else(|| "coordinate".to_string());
-    if !["coordinate", "striped", "random"].contains(&partition.as_str()) {
-        return Err(format!(
-            "PARTITION: `{partition}` is not one of coordinate, striped, random"
-        ));
-    }
-    if let Some(extra) = args.next() {
-        return Err(format!("unexpected argument `{extra}`"));
-    }
-    Ok(Args { cells, partition })
-}
 
 fn rectangle(cells: u32) -> Result<Mesh, String> {
     Rectangle {
@@ -136,29 +109,14 @@ fn differing(report: &RankReport, partition: &Partition, reference: &Sequences) 
 }
 
 fn main() -> ExitCode {
-    let args = match parse_args() {
-        Ok(args) => args,
-        Err(e) => {
-            eprintln!("mpi_pitch: {e}\nusage: mpirun -n RANKS mpi_pitch [CELLS] [PARTITION]");
-            return ExitCode::from(2);
-        }
-    };
-    let mut transport = match MpiTransport::start(MpiOptions::default()) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("mpi_pitch: {e}");
-            return ExitCode::from(1);
-        }
+    let (args, mut transport) = match common::start("mpi_pitch", 48, 5..=2000) {
+        Ok(started) => started,
+        Err(code) => return code,
     };
     let rank = transport.rank();
     let ranks = transport.ranks();
     let outcome = rectangle(args.cells).and_then(|mesh| {
-        let partition = match args.partition.as_str() {
-            "striped" => Partition::striped(&mesh, ranks),
-            "random" => Partition::random(&mesh, ranks, 17),
-            _ => Partition::coordinate(&mesh, ranks),
-        }
-        .map_err(|e| e.to_string())?;
+        let partition = common::partition(&mesh, &args, &transport)?;
         let (report, elapsed) = pitch(&mesh, &partition, &mut transport)?;
         let reference = serial(&mesh)?;
         let differ = differing(&report, &partition, &reference);

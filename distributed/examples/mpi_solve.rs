@@ -14,44 +14,18 @@
 //! tent. Exit code 0 when every rank's elements are the serial ones, 1 when any differ or the
 //! run failed, 2 for bad arguments.
 
+mod common;
+
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use sdg_distributed::{
-    Causality, LocalView, LoopbackOptions, MpiOptions, MpiTransport, Options, Partition, Physics,
-    RankReport, RankSolution, Transport, solve_rank, solve_threads,
+    Causality, LocalView, LoopbackOptions, MpiTransport, Options, Partition, Physics, RankReport,
+    RankSolution, Transport, solve_rank, solve_threads,
 };
 use sdg_engine::{LoadedConfig, Problem, causality, physics};
 use sdg_mesh::{Front, Pitcher};
 use sdg_solver::element::FrontSolution;
-
-/// The command line: cells along each side and the partition's name.
-struct Args {
-    cells: u32,
-    partition: String,
-}
-
-fn parse_args() -> Result<Args, String> {
-    let mut args = std::env::args().skip(1);
-    let cells = match args.next() {
-        None => 16,
-        Some(s) => s
-            .parse::<u32>()
-            .ok()
-            .filter(|&n| (2..=512).contains(&n))
-            .ok_or(format!("CELLS: `{s}` is not a whole number in 2..=512"))?,
-    };
-    let partition = args.next().unwrap_or_else(|| "coordinate".to_string());
-    if !["coordinate", "striped", "random"].contains(&partition.as_str()) {
-        return Err(format!(
-            "PARTITION: `{partition}` is not one of coordinate, striped, random"
-        ));
-    }
-    if let Some(extra) = args.next() {
-        return Err(format!("unexpected argument `{extra}`"));
-    }
-    Ok(Args { cells, partition })
-}
 
 /// The shipped plane-wave config on `cells` x `cells` cells.
 fn plane_wave(cells: u32) -> Result<Problem, String> {
@@ -142,30 +116,15 @@ fn differing(view: &LocalView, solution: &FrontSolution, reference: &RankSolutio
 }
 
 fn main() -> ExitCode {
-    let args = match parse_args() {
-        Ok(args) => args,
-        Err(e) => {
-            eprintln!("mpi_solve: {e}\nusage: mpirun -n RANKS mpi_solve [CELLS] [PARTITION]");
-            return ExitCode::from(2);
-        }
-    };
-    let mut transport = match MpiTransport::start(MpiOptions::default()) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("mpi_solve: {e}");
-            return ExitCode::from(1);
-        }
+    let (args, mut transport) = match common::start("mpi_solve", 16, 2..=512) {
+        Ok(started) => started,
+        Err(code) => return code,
     };
     let rank = transport.rank();
     let ranks = transport.ranks();
     let outcome = plane_wave(args.cells).and_then(|problem| {
         let mesh = &problem.mesh;
-        let partition = match args.partition.as_str() {
-            "striped" => Partition::striped(mesh, ranks),
-            "random" => Partition::random(mesh, ranks, 17),
-            _ => Partition::coordinate(mesh, ranks),
-        }
-        .map_err(|e| e.to_string())?;
+        let partition = common::partition(mesh, &args, &transport)?;
         let (view, report, solution, elapsed) = solve(&problem, &partition, &mut transport)?;
         let reference = serial(&problem)?;
         let differ = differing(&view, &solution, &reference);

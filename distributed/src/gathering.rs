@@ -29,11 +29,14 @@ enum Part {
     Cells = 0,
     /// Tents (`[t_old, t_new, slope, report...]` by global vertex) and owned front times.
     Tents = 1,
-    /// The rank's message counts.
+    /// The rank's message counts and its outputs ([`RankReport::outputs`]).
     Counts = 2,
 }
 
 const PARTS: usize = 3;
+
+/// Values of the counts part before the rank's [`RankReport::outputs`].
+const COUNTS: usize = 6;
 
 /// Values of a [`PatchReport`] in a tent's cell.
 const REPORT_VALUES: usize = 17;
@@ -145,7 +148,7 @@ impl Gathered {
             v if v == Part::Counts as u32 => {
                 let values = &update.elements.values;
                 let report = (self.reports.get_mut(from as usize))
-                    .filter(|_| values.len() == 6)
+                    .filter(|_| values.len() >= COUNTS)
                     .ok_or_else(|| bad("counts of the wrong size or rank"))?;
                 *report = RankReport {
                     rank: from,
@@ -155,6 +158,7 @@ impl Gathered {
                     updates_stale: values[3] as u64,
                     boundary_vertices: values[4] as usize,
                     waited: Duration::from_secs_f64(values[5]),
+                    outputs: values[COUNTS..].to_vec(),
                     ..RankReport::default()
                 };
             }
@@ -274,7 +278,10 @@ fn parts(
             report.updates_stale as f64,
             report.boundary_vertices as f64,
             report.waited.as_secs_f64(),
-        ],
+        ]
+        .into_iter()
+        .chain(report.outputs.iter().copied())
+        .collect(),
     };
     let update = |part: Part, elements, faces| {
         Message::Update(Update {

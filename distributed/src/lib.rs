@@ -18,14 +18,15 @@
 //! - [`solving`]: the same pitching with each tent's patch solved on its rank by the patch
 //!   solver, the updates carrying the elements and interface faces the receiver reads as
 //!   inflow, each with its generation, whose elements and faces are bitwise the serial run's
-//!   (with interface laws, without mesh-changing events or fracture);
+//!   (with interface laws, without mesh-changing events or fracture), telling an [`Observer`] of
+//!   each tent solved (the engine writes its outputs from it);
 //! - [`gathering`]: the ranks' results gathered on rank 0, each element and face once (from
 //!   the owner of its triangle's first corner or its edge's first end), with every tent's
-//!   patch report, through messages of the same transport.
+//!   patch report and the values the caller reports, through messages of the same transport.
 //!
 //! Not built yet: METIS (the `metis` crate behind a feature), mesh-changing events and
-//! fracture across ranks, deterministic rounds over ranks, outputs and checkpoints per rank,
-//! `sdg run` over MPI (`sdg run --ranks` uses [`Loopback`]). See `distributed/README.md`.
+//! fracture across ranks, deterministic rounds over ranks, checkpoints per rank. `sdg run
+//! --ranks` uses [`Loopback`], `sdg run --mpi` the MPI transport. See `distributed/README.md`.
 
 pub mod gathering;
 pub mod partition;
@@ -42,7 +43,10 @@ pub use partition::{Partition, PartitionError, Rank};
 pub use pitching::{
     Causality, CellKind, Options, PitchingError, RankReport, SolvedPatch, pitch_rank, run_threads,
 };
-pub use solving::{Physics, RankSolution, solve_rank, solve_threads};
+pub use solving::{
+    Observer, Physics, RankSolution, solve_rank, solve_rank_observed, solve_threads,
+    solve_threads_observed,
+};
 pub use transport::loopback::{Loopback, LoopbackOptions};
 #[cfg(feature = "mpi")]
 pub use transport::mpi::{MpiError, MpiOptions, MpiTransport};

@@ -212,6 +212,9 @@ pub struct RankReport {
     /// With patches solved ([`crate::solve_rank`]), one per tent in the order of `tents`; empty
     /// for pitching alone.
     pub patches: Vec<SolvedPatch>,
+    /// Values the caller sets after the run (its observer's results, see
+    /// [`crate::solving::Observer`]), which [`crate::gather`] carries to rank 0 as they are.
+    pub outputs: Vec<f64>,
 }
 
 /// What a solved patch adds to a run's totals.

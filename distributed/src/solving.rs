@@ -100,9 +100,24 @@ pub struct RankSolution {
     pub solution: FrontSolution,
 }
 
+/// What a rank's caller records of each of the rank's tents as it is solved (outputs such as
+/// snapshot slices and history sums), through [`solve_rank_observed`].
+pub trait Observer {
+    /// Called right after the patch of `tent` (at an owned local vertex of `view`) is stored in
+    /// `solution` (local ids), with `front` at the tent's new time. By the pitching rule the
+    /// times of the tent's neighbours in `front` are their current ones.
+    fn solved(&mut self, view: &LocalView, front: &Front, solution: &FrontSolution, tent: &Tent);
+}
+
+/// Observes nothing.
+impl Observer for () {
+    fn solved(&mut self, _: &LocalView, _: &Front, _: &FrontSolution, _: &Tent) {}
+}
+
 /// A rank's patch solves: the [`Work`] of [`solve_rank`].
-struct Patches<'a> {
+struct Patches<'a, O> {
     solver: PatchSolver,
+    observer: &'a mut O,
     physics: Physics<'a>,
     solution: &'a FrontSolution,
     /// Per local triangle, tents at its corners so far, as far as this rank has heard.
@@ -126,7 +141,7 @@ fn spokes(mesh: &Mesh, v: VertexId) -> impl Iterator<Item = EdgeId> + '_ {
         .filter_map(move |&w| mesh.edge_between(v, w))
 }
 
-impl Work for Patches<'_> {
+impl<O: Observer> Work for Patches<'_, O> {
     fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError> {
         let report = self
             .solver
@@ -156,6 +171,7 @@ impl Work for Patches<'_> {
                 self.edge_generation[e as usize] += 1;
             }
         }
+        self.observer.solved(view, front, self.solution, tent);
         Ok(())
     }
 
@@ -287,6 +303,19 @@ pub fn solve_rank<T: Transport>(
     transport: &mut T,
     options: &Options,
 ) -> Result<RankReport, PitchingError> {
+    let (rank, observer) = ((view, pitcher, front, solution), &mut ());
+    solve_rank_observed(rank, physics, transport, observer, options)
+}
+
+/// [`solve_rank`] on `(view, pitcher, front, solution)` telling `observer` of each tent
+/// solved.
+pub fn solve_rank_observed<T: Transport, O: Observer>(
+    (view, pitcher, front, solution): (&LocalView, &sdg_mesh::Pitcher, &Front, &FrontSolution),
+    physics: Physics<'_>,
+    transport: &mut T,
+    observer: &mut O,
+    options: &Options,
+) -> Result<RankReport, PitchingError> {
     let max_star = view
         .owned()
         .map(|v| view.mesh().vertex_triangles(v).len())
@@ -321,6 +350,7 @@ pub fn solve_rank<T: Transport>(
     }
     let patches = Patches {
         solver,
+        observer,
         physics,
         solution,
         generation: vec![0; triangles],
@@ -342,6 +372,20 @@ pub fn solve_threads(
     delays: LoopbackOptions,
     options: &Options,
 ) -> Result<Vec<RankSolution>, PitchingError> {
+    let mut observers = vec![(); partition.ranks()];
+    let run = (causality, physics, delays);
+    solve_threads_observed(mesh, partition, run, &mut observers, options)
+}
+
+/// [`solve_threads`] with `(causality, physics, delays)`, rank `r` telling `observers[r]` of
+/// each tent it solved.
+pub fn solve_threads_observed<O: Observer + Send>(
+    mesh: &Mesh,
+    partition: &Partition,
+    (causality, physics, delays): (Causality, Physics<'_>, LoopbackOptions),
+    observers: &mut [O],
+    options: &Options,
+) -> Result<Vec<RankSolution>, PitchingError> {
     let views = LocalView::all(mesh, partition)?;
     let start = vec![0.0; mesh.vertices().len()];
     let ranks = views
@@ -351,15 +395,16 @@ pub fn solve_threads(
             Ok((pitcher, front, physics.initial_solution(view)))
         })
         .collect::<Result<Vec<_>, PitchingError>>()?;
+    let observers: Vec<std::sync::Mutex<&mut O>> =
+        observers.iter_mut().map(std::sync::Mutex::new).collect();
     let reports = on_threads(&views, delays, |rank, end| {
         let (pitcher, front, solution) = &ranks[rank];
-        solve_rank(
-            &views[rank],
-            pitcher,
-            front,
-            solution,
+        let mut observer = observers[rank].lock().unwrap_or_else(|e| e.into_inner());
+        solve_rank_observed(
+            (&views[rank], pitcher, front, solution),
             physics,
             end,
+            &mut **observer,
             options,
         )
     })?;

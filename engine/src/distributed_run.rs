@@ -4,11 +4,12 @@
 //! with the same tents, elements and interface states as a run on threads.
 //!
 //! Each rank pitches and solves the tents at the vertices it owns
-//! ([`sdg_distributed::solve_rank`]); at the end the elements are gathered on rank 0
-//! ([`sdg_distributed::gathering`]), each from the rank owning its triangle's first corner (an
-//! interface face from the owner of its edge's first end), and rank 0 writes the outputs:
-//! `summary.json` with the state hash, energy totals summed in the serial order of the tents,
-//! `history.csv` (its first and last rows) and the snapshots at the end time.
+//! ([`sdg_distributed::solve_rank_observed`]), writing its pieces of the snapshots and summing
+//! the history's energies as it goes ([`crate::rank_outputs`]); at the end the elements are
+//! gathered on rank 0 ([`sdg_distributed::gathering`]), each from the rank owning its
+//! triangle's first corner (an interface face from the owner of its edge's first end), and rank
+//! 0 writes `summary.json` with the state hash and energy totals summed in the serial order of
+//! the tents, and `history.csv`.
 //!
 //! What cannot be honoured yet is refused as bad input (exit 2), naming the key and why:
 //! mesh-changing events (`[adapt]`, `[fracture]`), deterministic rounds, checkpoints and
@@ -21,17 +22,16 @@ use sdg_distributed::{
     Causality, Gathered, LoopbackOptions, Options, Partition, Physics, RankReport, SolvedPatch,
 };
 use sdg_mesh::Front;
-use sdg_solver::element::{FrontSolution, Geometry};
+use sdg_solver::element::FrontSolution;
 use sdg_solver::norms::{FrontEnergy, front_energy, slice_errors};
 use sdg_solver::patch::{Initial, Newton, PatchReport, PatchSolver};
 
 use crate::error::EngineError;
 use crate::job::RunOptions;
-use crate::output::snapshot::Snapshots;
 use crate::output::write_output;
 use crate::problem::Problem;
+use crate::rank_outputs::{RankOutputs, history_csv};
 use crate::solve::context::initial_state;
-use crate::solve::history::point_values;
 use crate::solve::start::Start;
 use crate::solve::summary::state_hash;
 use crate::solve::tent::momentum_residual;
@@ -79,7 +79,7 @@ const RANDOM_SEED: u64 = 1;
 const IDLE_LIMIT: Duration = Duration::from_secs(120);
 
 /// `sdg run` over `ranks.ranks` in-process ranks: solves `problem` to the end time and writes
-/// `summary.json`, `history.csv` and the end-time snapshots into the output folder. Returns the
+/// `summary.json`, `history.csv` and the snapshots into the output folder. Returns the
 /// summary and the folder. Errors: what the ranks cannot do yet, and bad `options` (a restart,
 /// a trace, a wall-time limit), as [`EngineError::Input`] (exit 2); a failed rank as
 /// [`EngineError::Runtime`] (exit 1).
@@ -119,18 +119,36 @@ pub fn solve_ranks(
         max_delay: Duration::ZERO,
         fifo: true,
     };
-    let run = Options {
-        seed: 0,
-        idle_limit: IDLE_LIMIT,
-    };
-    let solved = sdg_distributed::solve_threads(mesh, &partition, causality, physics, delays, &run)
-        .and_then(|solved| sdg_distributed::gather_threads(mesh, &solved))
-        .map_err(|e| EngineError::Runtime(format!("the run over ranks failed: {e}")))?;
+    let mut outputs: Vec<RankOutputs> = (0..ranks.ranks as u32)
+        .map(|rank| RankOutputs::new(problem, &partition, rank, &dir))
+        .collect();
+    let failed = |e| EngineError::Runtime(format!("the run over ranks failed: {e}"));
+    let run = (causality, physics, delays);
+    let mut solved = sdg_distributed::solve_threads_observed(
+        mesh,
+        &partition,
+        run,
+        &mut outputs,
+        &Options {
+            seed: 0,
+            idle_limit: IDLE_LIMIT,
+        },
+    )
+    .map_err(failed)?;
     let wall_time_s = started.elapsed().as_secs_f64();
+    let mut snapshots = Vec::new();
+    for (rank, outputs) in solved.iter_mut().zip(outputs) {
+        let (values, written) = outputs.finish()?;
+        rank.report.outputs = values;
+        if rank.view.rank() == 0 {
+            snapshots = written;
+        }
+    }
+    let gathered = sdg_distributed::gather_threads(mesh, &solved).map_err(failed)?;
     finish(
         problem,
         &dir,
-        (ranks.partition, &solved),
+        (ranks.partition, &gathered, snapshots),
         wall_time_s,
         estimate,
     )
@@ -198,16 +216,17 @@ pub fn solve_mpi(
         .sum(&[0])
         .map_err(|e| failed(sdg_distributed::PitchingError::Transport { rank, source: e }))?;
     let started = Instant::now();
-    let report = sdg_distributed::solve_rank(
-        &view,
-        &pitcher,
-        &front,
-        &solution,
+    let mut outputs = RankOutputs::new(problem, &partition_of, rank, &dir);
+    let mut report = sdg_distributed::solve_rank_observed(
+        (&view, &pitcher, &front, &solution),
         physics,
         &mut transport,
+        &mut outputs,
         &run,
     )
     .map_err(failed)?;
+    let (values, snapshots) = outputs.finish()?;
+    report.outputs = values;
     transport
         .sum(&[0])
         .map_err(|e| failed(sdg_distributed::PitchingError::Transport { rank, source: e }))?;
@@ -221,19 +240,25 @@ pub fn solve_mpi(
     )
     .map_err(failed)?;
     match gathered {
-        Some(gathered) => {
-            finish(problem, &dir, (partition, &gathered), wall_time_s, estimate).map(Some)
-        }
+        Some(gathered) => finish(
+            problem,
+            &dir,
+            (partition, &gathered, snapshots),
+            wall_time_s,
+            estimate,
+        )
+        .map(Some),
         None => Ok(None),
     }
 }
 
 /// Writes the outputs of a run over ranks that ended with `gathered` after `wall_time_s` on
-/// the `partition`, and its `summary.json` into `dir`. Returns the summary and the folder.
+/// the `partition`, with the `snapshots` (time in s, file name) rank 0 wrote, and its
+/// `summary.json` into `dir`. Returns the summary and the folder.
 fn finish(
     problem: &Problem,
     dir: &Path,
-    (partition, gathered): (PartitionKind, &Gathered),
+    (partition, gathered, snapshots): (PartitionKind, &Gathered, Vec<(f64, String)>),
     wall_time_s: f64,
     estimate: crate::estimate::Estimate,
 ) -> Result<(RunSummary, PathBuf), EngineError> {
@@ -241,9 +266,8 @@ fn finish(
     let mesh = &problem.mesh;
     let finishing = Instant::now();
     let (front, solution) = (&gathered.front, &gathered.solution);
-    let patches: Vec<SolvedPatch> = (gathered.in_serial_order().into_iter())
-        .map(|(_, p)| p)
-        .collect();
+    let serial = gathered.in_serial_order();
+    let patches: Vec<SolvedPatch> = serial.iter().map(|(_, p)| *p).collect();
     let ranks = gathered.reports.len();
     tracing::info!(patches = patches.len(), wall_time_s, "solve finished");
     let initial_energy = {
@@ -255,38 +279,31 @@ fn finish(
         );
         energy_on(problem, &initial_front, &empty, ranks)
     };
+    let energy = energy_on(problem, front, solution, ranks);
     let mut summary = summarize(
         problem,
         (front, solution),
         &patches,
         &gathered.reports,
-        initial_energy,
+        (initial_energy, &energy),
         estimate,
     )?;
     summary.wall_time_s = wall_time_s;
     summary.patches_per_second = patches.len() as f64 / wall_time_s.max(f64::MIN_POSITIVE);
     summary.distributed = Some(distributed_summary(partition, gathered));
-    let history = history(problem, &summary, initial_energy);
-    let snapshots = end_snapshots(problem, front, solution, dir);
-    summary.snapshots = snapshots.as_ref().map_or(Vec::new(), |s| s.clone());
-    let mut written = vec![
-        snapshots.map(drop),
-        write_output(dir, "history.csv", history.as_bytes()).map(drop),
-    ];
+    summary.snapshots = snapshots;
+    let outputs: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
+    let history = history_csv(
+        problem,
+        &serial,
+        &outputs,
+        (&initial_energy, front, &energy),
+    )?;
+    let written = vec![write_output(dir, "history.csv", history.as_bytes()).map(drop)];
     if config.output.png {
         crate::plot::write_history_png(dir, &history);
     }
-    let mut failures = written.drain(..).filter_map(Result::err);
-    if let Some(first) = failures.next() {
-        for e in failures {
-            tracing::error!("not written either: {e}");
-        }
-        return Err(first);
-    }
-    summary.timings.output_s += finishing.elapsed().as_secs_f64();
-    let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
-    write_output(dir, "summary.json", json.as_bytes())?;
-    Ok((summary, dir.to_path_buf()))
+    crate::solve::finish::write_summary(dir, written, summary, finishing)
 }
 
 /// The partition of `mesh` over `ranks` ranks of `kind`; one that cannot be made (more ranks
@@ -390,6 +407,12 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
             "crack_tips.csv and the summary's crack block are not written by a run over ranks yet"
         );
     }
+    if config.output.png && !config.output.snapshot_times.is_empty() {
+        tracing::warn!(
+            "snapshots over ranks are written as pieces (snapshot_NNNN_R.vtu) and not drawn: no \
+             snapshot_NNNN.png"
+        );
+    }
     if config.checkpoint.every_wall_s.is_finite() {
         tracing::info!(
             every_wall_s = config.checkpoint.every_wall_s,
@@ -436,15 +459,15 @@ fn energy_on(
     )
 }
 
-/// The summary of a run that left `front` and `solution` after `patches` (in serial order)
-/// from the `energy0` of the initial front, with the `estimate` made before; the wall time is
-/// the caller's to fill in.
+/// The summary of a run that left `front` and `solution` (with the energy `e` on it) after
+/// `patches` (in serial order) from the `energy0` of the initial front, with the `estimate`
+/// made before; the wall time is the caller's to fill in.
 fn summarize(
     problem: &Problem,
     (front, solution): (&Front, &FrontSolution),
     patches: &[SolvedPatch],
     ranks: &[RankReport],
-    energy0: FrontEnergy,
+    (energy0, e): (FrontEnergy, &FrontEnergy),
     estimate: crate::estimate::Estimate,
 ) -> Result<RunSummary, EngineError> {
     let config = &problem.loaded.config;
@@ -455,7 +478,6 @@ fn summarize(
     let solver = PatchSolver::new(system.clone(), config.solver.order, 0);
     let (basis, width) = (solver.basis(), solver.width());
     let threads = ranks.len();
-    let e = energy_on(problem, front, solution, threads);
     let mut totals = PatchReport::default();
     let (mut slope, mut nonlinear, mut newton, mut newton_max) = (0.0_f64, 0_u64, 0_u64, 0);
     let (mut elements, mut dofs) = (0_u64, 0_u64);
@@ -472,13 +494,7 @@ fn summarize(
         timings.assembly_s += r.assembly_s;
         timings.solve_s += r.solve_s;
         timings.evaluation_s += r.evaluation_s;
-        totals.boundary_work += r.boundary_work;
-        totals.interface_work += r.interface_work;
-        totals.friction_dissipation += r.friction_dissipation;
-        totals.fracture_work += r.fracture_work;
-        totals.dissipation += r.dissipation;
-        totals.momentum_imbalance = totals.momentum_imbalance.max(r.momentum_imbalance);
-        totals.momentum_flux = totals.momentum_flux.max(r.momentum_flux);
+        totals.accumulate(r);
         if r.newton_iterations > 0 {
             nonlinear += 1;
             newton += r.newton_iterations as u64;
@@ -582,88 +598,4 @@ fn distributed_summary(partition: PartitionKind, gathered: &Gathered) -> Distrib
         bytes_per_tent: per_tent(reports.iter().map(|r| r.update_bytes).sum()),
         waited_s: reports.iter().map(|r| r.waited.as_secs_f64()).sum(),
     }
-}
-
-/// `history.csv` of a run over ranks from its summary and the energy of the initial front
-/// (scaled units): the row of the initial front and the row of the final one (a row in between
-/// needs the whole front at one moment, which no rank holds).
-fn history(problem: &Problem, summary: &RunSummary, energy0: FrontEnergy) -> String {
-    let config = &problem.loaded.config;
-    let rho = problem.material.density();
-    let e = &summary.energy;
-    let balance = e.initial + e.boundary_work - e.r#final - e.dissipation - e.interface_work;
-    format!(
-        "time_s,patches,front_energy_j,kinetic_j,strain_j,boundary_work_j,dissipation_j,\
-         interface_work_j,friction_dissipation_j,fracture_energy_j,balance_residual_j\n\
-         {:e},0,{:e},{:e},{:e},0e0,0e0,0e0,0e0,0e0,0e0\n\
-         {:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
-        config.time.clock(0.0),
-        rho * energy0.total,
-        rho * energy0.kinetic,
-        rho * energy0.strain,
-        summary.final_time,
-        summary.patches,
-        e.r#final,
-        e.final_kinetic,
-        e.final_strain,
-        e.boundary_work,
-        e.dissipation,
-        e.interface_work,
-        e.friction_dissipation,
-        e.fracture_energy,
-        balance,
-    )
-}
-
-/// Writes the snapshots of `output.snapshot_times` at the end time from the final elements;
-/// earlier ones are not written over ranks yet (a warning says so). Returns the files written.
-fn end_snapshots(
-    problem: &Problem,
-    front: &Front,
-    solution: &FrontSolution,
-    dir: &Path,
-) -> Result<Vec<(f64, String)>, EngineError> {
-    let config = &problem.loaded.config;
-    let t_end = config.time.span();
-    let at_end = |t: &f64| (config.time.elapsed(*t) - t_end).abs() <= 8.0 * f64::EPSILON * t_end;
-    let (end, earlier): (Vec<f64>, Vec<f64>) = (config.output.snapshot_times.iter().copied())
-        .filter(|t| config.time.elapsed(*t) <= t_end || at_end(t))
-        .partition(at_end);
-    if !earlier.is_empty() {
-        tracing::warn!(
-            ?earlier,
-            "output.snapshot_times before the end time are not written by a run over ranks yet"
-        );
-    }
-    if end.is_empty() {
-        return Ok(Vec::new());
-    }
-    let c_max = problem.material.max_wave_speed();
-    let absolute = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
-    let mut snapshots = Snapshots::on_clock(&end, config.time.start, c_max, absolute)
-        .with_png(config.output.png)
-        .with_vtu(config.output.vtu);
-    let solver = PatchSolver::new(problem.system.clone(), config.solver.order, 0);
-    let (basis, width) = (solver.basis(), solver.width());
-    let (mut phi, mut values) = (vec![0.0; basis.len()], vec![0.0; width]);
-    let mut geometry = Geometry::default();
-    let mut coefficients = vec![0.0; basis.len() * width];
-    for t in 0..solution.len() {
-        if solution.load(t, &mut geometry, &mut coefficients) {
-            snapshots.add_element(&geometry.vertices(), |x| {
-                point_values(
-                    &problem.material,
-                    (&problem.system, basis),
-                    &geometry,
-                    &coefficients,
-                    x,
-                    &mut phi,
-                    &mut values,
-                )
-            });
-        }
-    }
-    snapshots.flush(front.min_time())?;
-    snapshots.finish()?;
-    Ok(snapshots.written().to_vec())
 }

@@ -307,6 +307,99 @@ pub fn sdg(args: &[&str]) -> Output {
         .expect("the sdg binary runs")
 }
 
+/// The `sdg run` arguments of the shipped config `name` (in `configs/`) with `overrides` and
+/// `extra` arguments, quiet, writing into `out`.
+pub fn run_args(name: &str, overrides: &[&str], extra: &[&str], out: &Path) -> Vec<String> {
+    let config = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(name);
+    let mut args = vec!["run".to_string(), config.display().to_string()];
+    args.push("--quiet".into());
+    for o in overrides {
+        args.extend(["--set".to_string(), o.to_string()]);
+    }
+    args.extend(extra.iter().map(|a| a.to_string()));
+    args.extend(["--output".to_string(), out.display().to_string()]);
+    args
+}
+
+/// The `summary.json` in `out`, parsed.
+pub fn summary_json(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+/// The cells of the ASCII VTU files `paths` of snapshots, each as the text of its points'
+/// coordinates and point values and its area, sorted: the same for the same slices in any
+/// order and split among any files.
+pub fn slices(paths: &[std::path::PathBuf]) -> Vec<String> {
+    let mut all = Vec::new();
+    for path in paths {
+        let text = std::fs::read_to_string(path).unwrap();
+        let at = text.find("NumberOfCells=\"").expect("a piece") + "NumberOfCells=\"".len();
+        let cells: usize = text[at..].split('"').next().unwrap().parse().unwrap();
+        // (values per cell, the values) of each array but the cells' connectivity.
+        let mut arrays: Vec<(usize, Vec<&str>)> = Vec::new();
+        for part in text.split("<DataArray ").skip(1) {
+            let (attrs, rest) = part.split_once(">\n").unwrap();
+            assert!(
+                attrs.contains("format=\"ascii\""),
+                "{}: ASCII",
+                path.display()
+            );
+            if ["connectivity", "offsets", "types"]
+                .iter()
+                .any(|n| attrs.contains(&format!("Name=\"{n}\"")))
+            {
+                continue;
+            }
+            let values: Vec<&str> = rest
+                .split("</DataArray>")
+                .next()
+                .unwrap()
+                .split_whitespace()
+                .collect();
+            assert_eq!(values.len() % cells.max(1), 0, "{attrs}");
+            arrays.push((values.len() / cells.max(1), values));
+        }
+        for c in 0..cells {
+            let cell: Vec<&str> = (arrays.iter())
+                .flat_map(|(n, values)| values[c * n..(c + 1) * n].iter().copied())
+                .collect();
+            all.push(cell.join(" "));
+        }
+    }
+    all.sort();
+    all
+}
+
+/// The slices of snapshot `index` in the pieces of `ranks` ranks in `out`, after checking that
+/// its `.pvtu` lists those pieces and the collection lists the `.pvtu`.
+pub fn pieces(out: &Path, index: usize, ranks: usize) -> Vec<String> {
+    let names: Vec<String> = (0..ranks)
+        .map(|r| format!("snapshot_{index:04}_{r}.vtu"))
+        .collect();
+    let pvtu = std::fs::read_to_string(out.join(format!("snapshot_{index:04}.pvtu"))).unwrap();
+    let listed: Vec<&str> = (pvtu.split("<Piece Source=\"").skip(1))
+        .map(|rest| rest.split('"').next().unwrap())
+        .collect();
+    assert_eq!(listed, names, "the pieces of {}", out.display());
+    let pvd = std::fs::read_to_string(out.join("snapshots.pvd")).unwrap();
+    assert!(
+        pvd.contains(&format!("file=\"snapshot_{index:04}.pvtu\"")),
+        "{pvd}"
+    );
+    slices(&names.iter().map(|n| out.join(n)).collect::<Vec<_>>())
+}
+
+/// The rows of `history.csv` in `out` as numbers.
+pub fn history_rows(out: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    (text.lines().skip(1))
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect()
+}
+
 /// The standard error of a finished command, as text.
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()

@@ -216,6 +216,37 @@ impl UnstructuredGrid {
             .push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
         out.s
     }
+    /// A parallel VTK file (`.pvtu`) for grids with this grid's fields, whose pieces are the
+    /// `.vtu` files `pieces` (names relative to the `.pvtu`). Every field is `Float64`.
+    pub fn to_pvtu(&self, pieces: &[String]) -> String {
+        let mut s = String::from(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" \
+             byte_order=\"LittleEndian\" header_type=\"UInt64\">\n\
+             <PUnstructuredGrid GhostLevel=\"0\">\n",
+        );
+        for (tag, data) in [
+            ("PPointData", &self.point_data),
+            ("PCellData", &self.cell_data),
+        ] {
+            let _ = writeln!(s, "<{tag}>");
+            for f in data {
+                let _ = writeln!(
+                    s,
+                    "<PDataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\"/>",
+                    f.name, f.components
+                );
+            }
+            let _ = writeln!(s, "</{tag}>");
+        }
+        s.push_str(
+            "<PPoints>\n<PDataArray type=\"Float64\" NumberOfComponents=\"3\"/>\n</PPoints>\n",
+        );
+        for piece in pieces {
+            let _ = writeln!(s, "<Piece Source=\"{piece}\"/>");
+        }
+        s.push_str("</PUnstructuredGrid>\n</VTKFile>\n");
+        s
+    }
 }
 
 /// A value type of a `DataArray`: its VTK name, decimal form and little-endian bytes.

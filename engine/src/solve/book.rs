@@ -13,6 +13,14 @@ use crate::progress::Progress;
 /// of the end time (and at the end).
 const HISTORY_ROWS: usize = 100;
 
+/// The times (s) that each give a history row when the whole front has passed them, before
+/// the end time `t_end` (s), increasing.
+pub(crate) fn history_times(t_end: f64) -> Vec<f64> {
+    (1..HISTORY_ROWS)
+        .map(|k| t_end * k as f64 / HISTORY_ROWS as f64)
+        .collect()
+}
+
 /// Times the whole front must pass before something happens, with a count of the vertices whose
 /// recorded time is still below each.
 #[derive(Debug, serde::Serialize, serde::Deserialize)]
@@ -45,8 +53,8 @@ impl Milestones {
         intervention: Option<f64>,
     ) -> Self {
         let checkpoints = checkpoint_every.map_or(0, |dt| (t_end / dt).ceil() as usize);
-        let mut times: Vec<(f64, Milestone)> = (1..HISTORY_ROWS)
-            .map(|k| (t_end * k as f64 / HISTORY_ROWS as f64, Milestone::History))
+        let mut times: Vec<(f64, Milestone)> = (history_times(t_end).into_iter())
+            .map(|t| (t, Milestone::History))
             .chain(snapshots.iter().map(|&t| (t, Milestone::Snapshot)))
             .chain(
                 (1..checkpoints)

@@ -132,7 +132,7 @@ impl Solve<'_> {
             )
         });
         let (min_edge, max_edge) = mesh.edge_length_range();
-        let mut summary = RunSummary {
+        let summary = RunSummary {
             command: "run",
             config_file: problem.loaded.file.clone(),
             vertices: mesh.vertices().len(),
@@ -203,16 +203,28 @@ impl Solve<'_> {
         }
         written.push(self.write_fracture(state, &book.fracture_events, dir));
         written.push(self.write_trace(options));
-        let mut failures = written.into_iter().filter_map(Result::err);
-        if let Some(first) = failures.next() {
-            for e in failures {
-                tracing::error!("not written either: {e}");
-            }
-            return Err(first);
-        }
-        summary.timings.output_s += finishing.elapsed().as_secs_f64();
-        let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
-        write_output(dir, "summary.json", json.as_bytes())?;
-        Ok((summary, dir.to_path_buf()))
+        write_summary(dir, written, summary, finishing)
     }
+}
+
+/// The end of a run's outputs: when every file of `written` was written, adds the time since
+/// `finishing` to the summary's output time and writes `summary.json` into `dir`; returns the
+/// summary and the folder. Otherwise the first failure, the others logged (no `summary.json`).
+pub(crate) fn write_summary(
+    dir: &Path,
+    written: Vec<Result<(), EngineError>>,
+    mut summary: RunSummary,
+    finishing: Instant,
+) -> Result<(RunSummary, PathBuf), EngineError> {
+    let mut failures = written.into_iter().filter_map(Result::err);
+    if let Some(first) = failures.next() {
+        for e in failures {
+            tracing::error!("not written either: {e}");
+        }
+        return Err(first);
+    }
+    summary.timings.output_s += finishing.elapsed().as_secs_f64();
+    let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
+    write_output(dir, "summary.json", json.as_bytes())?;
+    Ok((summary, dir.to_path_buf()))
 }

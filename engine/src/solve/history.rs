@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering;
 use sdg_mesh::TriangleId;
 use sdg_solver::basis::Basis;
 use sdg_solver::element::{FrontSolution, Geometry, evaluate};
-use sdg_solver::norms::front_energy;
+use sdg_solver::norms::{FrontEnergy, front_energy};
 use sdg_solver::patch::PatchReport;
 use sdg_solver::system::{MAX_FIELDS, System};
 use sdg_solver::{Material, Plane};
@@ -26,21 +26,12 @@ impl Solve<'_> {
         book.timings.evaluation_s += report.evaluation_s;
         book.elements += report.elements as u64;
         book.dofs += report.dofs as u64;
-        book.totals.energy_in += report.energy_in;
-        book.totals.energy_out += report.energy_out;
-        book.totals.boundary_work += report.boundary_work;
-        book.totals.interface_work += report.interface_work;
-        book.totals.friction_dissipation += report.friction_dissipation;
-        book.totals.fracture_work += report.fracture_work;
-        book.totals.dissipation += report.dissipation;
+        book.totals.accumulate(report);
         if report.newton_iterations > 0 {
             book.nonlinear_patches += 1;
             book.newton_iterations += report.newton_iterations as u64;
             book.newton_max = book.newton_max.max(report.newton_iterations);
         }
-        let totals = &mut book.totals;
-        totals.momentum_imbalance = totals.momentum_imbalance.max(report.momentum_imbalance);
-        totals.momentum_flux = totals.momentum_flux.max(report.momentum_flux);
         book.energy_max = book
             .energy_max
             .max(book.initial_energy + book.totals.boundary_work);
@@ -89,13 +80,10 @@ impl Solve<'_> {
             .clock(state.front.min_time());
         // The same front and books as the last row (the end's milestone and the final row):
         // the row would repeat it.
-        let key = format!("{time:e},{},", book.patches);
-        let last = book.history.trim_end().lines().next_back().unwrap_or("");
-        if last.starts_with(&key) {
+        if repeats_last_row(&book.history, time, book.patches) {
             return;
         }
         let system = &self.problem.system;
-        let rho = self.problem.material.density();
         let e = front_energy(
             &state.mesh,
             &state.front,
@@ -105,25 +93,16 @@ impl Solve<'_> {
             self.threads,
             |x| initial_state(self.problem, self.initial, x),
         );
-        let totals = &book.totals;
-        let balance = book.initial_energy + totals.boundary_work
-            - e.total
-            - totals.dissipation
-            - totals.interface_work;
-        let j = |v: f64| format!("{:e}", rho * v);
-        book.history.push_str(&table::line([
-            format!("{time:e}"),
-            book.patches.to_string(),
-            j(e.total),
-            j(e.kinetic),
-            j(e.strain),
-            j(totals.boundary_work),
-            j(totals.dissipation),
-            j(totals.interface_work),
-            j(totals.friction_dissipation),
-            j(totals.fracture_work),
-            j(balance),
-        ]));
+        let rho = self.problem.material.density();
+        let row = history_line(
+            time,
+            book.patches,
+            &e,
+            &book.totals,
+            book.initial_energy,
+            rho,
+        );
+        book.history.push_str(&row);
         // Progress for batch jobs, which have no progress bar: one line per history row.
         tracing::info!(
             front_min_time_s = time,
@@ -134,6 +113,60 @@ impl Solve<'_> {
             "progress"
         );
     }
+}
+
+/// The header row of `history.csv`.
+pub(crate) fn history_header() -> String {
+    table::line([
+        "time_s",
+        "patches",
+        "front_energy_j",
+        "kinetic_j",
+        "strain_j",
+        "boundary_work_j",
+        "dissipation_j",
+        "interface_work_j",
+        "friction_dissipation_j",
+        "fracture_energy_j",
+        "balance_residual_j",
+    ])
+}
+
+/// True when a `history.csv` row at `time` (s) after `patches` patches would repeat the last
+/// row of `history`: the same front and books.
+pub(crate) fn repeats_last_row(history: &str, time: f64, patches: u64) -> bool {
+    let key = format!("{time:e},{patches},");
+    let last = history.trim_end().lines().next_back().unwrap_or("");
+    last.starts_with(&key)
+}
+
+/// The `history.csv` row at `time` (s, the config's clock) after `patches` patches, with the
+/// energy `e` on the front, the accounts `totals` so far and the `initial` energy (scaled
+/// units, made J/m by the density `rho`, kg/m^3).
+pub(crate) fn history_line(
+    time: f64,
+    patches: u64,
+    e: &FrontEnergy,
+    totals: &PatchReport,
+    initial: f64,
+    rho: f64,
+) -> String {
+    let balance =
+        initial + totals.boundary_work - e.total - totals.dissipation - totals.interface_work;
+    let j = |v: f64| format!("{:e}", rho * v);
+    table::line([
+        format!("{time:e}"),
+        patches.to_string(),
+        j(e.total),
+        j(e.kinetic),
+        j(e.strain),
+        j(totals.boundary_work),
+        j(totals.dissipation),
+        j(totals.interface_work),
+        j(totals.friction_dissipation),
+        j(totals.fracture_work),
+        j(balance),
+    ])
 }
 
 /// Physical field values at the scaled point `x` of an element of `system` on `basis`, for

@@ -5,7 +5,6 @@ use super::context::{Intervention, Solve, initial_state};
 use super::summary::Timings;
 use super::work::deadline;
 use crate::output::snapshot::Snapshots;
-use crate::output::table;
 use crate::progress::Progress;
 use crate::trace::Tracer;
 use parking_lot::Mutex;
@@ -231,19 +230,7 @@ impl<'a> Solve<'a> {
                     after,
                 ),
                 passed: Vec::new(),
-                history: table::line([
-                    "time_s",
-                    "patches",
-                    "front_energy_j",
-                    "kinetic_j",
-                    "strain_j",
-                    "boundary_work_j",
-                    "dissipation_j",
-                    "interface_work_j",
-                    "friction_dissipation_j",
-                    "fracture_energy_j",
-                    "balance_residual_j",
-                ]),
+                history: super::history::history_header(),
                 progress: Progress::new(
                     options.progress,
                     state.mesh.vertices().len() as f64 * t_end,

@@ -215,16 +215,7 @@ impl PatchSolver {
         };
         for i in 0..d {
             let r = self.element_post(i, boundary);
-            report.energy_in += r.energy_in;
-            report.energy_out += r.energy_out;
-            report.boundary_work += r.boundary_work;
-            report.interface_work += r.interface_work;
-            report.friction_dissipation += r.friction_dissipation;
-            report.fracture_work += r.fracture_work;
-            report.dissipation += r.dissipation;
-            report.momentum_residual = report.momentum_residual.max(r.momentum_residual);
-            report.momentum_imbalance = report.momentum_imbalance.max(r.momentum_imbalance);
-            report.momentum_flux = report.momentum_flux.max(r.momentum_flux);
+            report.accumulate(&PatchReport::from(&r));
             self.reports[i] = r;
             self.displacement(i);
         }

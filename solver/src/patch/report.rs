@@ -86,6 +86,42 @@ pub struct PatchReport {
     pub evaluation_s: f64,
 }
 
+impl PatchReport {
+    /// Adds `other`'s energy terms to these totals and keeps the largest of each momentum
+    /// diagnostic; sums in the order of the calls.
+    pub fn accumulate(&mut self, other: &PatchReport) {
+        self.energy_in += other.energy_in;
+        self.energy_out += other.energy_out;
+        self.boundary_work += other.boundary_work;
+        self.interface_work += other.interface_work;
+        self.friction_dissipation += other.friction_dissipation;
+        self.fracture_work += other.fracture_work;
+        self.dissipation += other.dissipation;
+        self.momentum_residual = self.momentum_residual.max(other.momentum_residual);
+        self.momentum_imbalance = self.momentum_imbalance.max(other.momentum_imbalance);
+        self.momentum_flux = self.momentum_flux.max(other.momentum_flux);
+    }
+}
+
+impl From<&ElementReport> for PatchReport {
+    /// The energy terms and momentum diagnostics of one element, as a patch of no elements.
+    fn from(r: &ElementReport) -> Self {
+        Self {
+            energy_in: r.energy_in,
+            energy_out: r.energy_out,
+            boundary_work: r.boundary_work,
+            interface_work: r.interface_work,
+            friction_dissipation: r.friction_dissipation,
+            fracture_work: r.fracture_work,
+            dissipation: r.dissipation,
+            momentum_residual: r.momentum_residual,
+            momentum_imbalance: r.momentum_imbalance,
+            momentum_flux: r.momentum_flux,
+            ..Self::default()
+        }
+    }
+}
+
 /// The state of a contact interface at one point, physical units, in the frame of the face
 /// (normal, tangential; each value is the same whichever side the normal points from).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -2,7 +2,9 @@
 //! solved and written as VTK triangle grids (`snapshot_NNNN.vtu`) with a ParaView collection
 //! (`snapshots.pvd`). Crack surfaces (contact, cohesive and damage interfaces) are cut the same
 //! way: their vertical faces give segments on the plane, written as `cracks_NNNN.vtu` (lines)
-//! beside the triangles and listed in the collection as its part 1.
+//! beside the triangles and listed in the collection as its part 1. In a run over ranks each
+//! rank cuts the elements it solved and writes them as its piece of each snapshot
+//! (`snapshot_NNNN_R.vtu`), and rank 0 the `snapshot_NNNN.pvtu` that joins them ([`Piece`]).
 //!
 //! # Slicing rule
 //! A snapshot at `t_s` is the plane `tau = tau_s = c_ref t_s`. Each element vertex is classified
@@ -34,4 +36,4 @@ mod snapshots;
 pub(crate) use files::remove_earlier;
 pub(crate) use slicing::cut_face;
 pub use slicing::{InterfaceValues, PointValues};
-pub use snapshots::Snapshots;
+pub use snapshots::{Piece, Snapshots};

@@ -82,6 +82,21 @@ pub struct Snapshots {
     /// on disk never lists the missing file.
     #[serde(skip)]
     failed: bool,
+    /// In a run over ranks, this rank's part: its slices only, as pieces.
+    #[serde(skip)]
+    piece: Option<Piece>,
+}
+
+/// One rank's part of the snapshots of a run over `ranks` ranks: it writes the slices of the
+/// elements it solved as `snapshot_NNNN_R.vtu` (`R` its rank), without pictures or crack cuts;
+/// rank 0 also writes `snapshot_NNNN.pvtu`, which lists every rank's piece, and the collection
+/// `snapshots.pvd` of those.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Piece {
+    /// This rank.
+    pub rank: u32,
+    /// Ranks of the run, at least 1.
+    pub ranks: u32,
 }
 
 impl std::fmt::Debug for Snapshots {
@@ -146,6 +161,7 @@ impl Snapshots {
             vtu: VtuFormat::default(),
             writer: None,
             failed: false,
+            piece: None,
         }
     }
 
@@ -197,6 +213,12 @@ impl Snapshots {
     /// Also draw each snapshot as `snapshot_NNNN.png` (velocity magnitude, interfaces in red).
     pub fn with_png(mut self, png: bool) -> Self {
         self.png = png;
+        self
+    }
+
+    /// Writes only `piece`'s part of each snapshot (a run over ranks).
+    pub fn with_piece(mut self, piece: Piece) -> Self {
+        self.piece = Some(piece);
         self
     }
 
@@ -390,6 +412,12 @@ impl Snapshots {
             };
             let segments = std::mem::take(&mut snap.segments);
             let (index, time) = (snap.index, snap.label.unwrap_or(snap.time));
+            if let Some(piece) = self.piece {
+                self.write_piece(piece, index, time, triangles);
+                self.next += 1;
+                count += 1;
+                continue;
+            }
             let name = format!("snapshot_{index:04}.vtu");
             self.written.push((time, name.clone()));
             let cracks = format!("cracks_{index:04}.vtu");
@@ -419,13 +447,33 @@ impl Snapshots {
             self.next += 1;
             count += 1;
         }
-        if count > 0 {
+        if count > 0 && self.piece.is_none_or(|p| p.rank == 0) {
             let (dir, pvd) = (self.dir.clone(), self.pvd());
             self.submit(Box::new(move || {
                 write_output(&dir, "snapshots.pvd", pvd.as_bytes()).map(drop)
             }));
         }
         Ok(count)
+    }
+
+    /// Hands the writer `piece`'s part of snapshot number `index` at `time` (s): its
+    /// `triangles`, and on rank 0 the `.pvtu` of every rank's part.
+    fn write_piece(&mut self, piece: Piece, index: usize, time: f64, triangles: Vec<Triangle>) {
+        let name = |rank: u32| format!("snapshot_{index:04}_{rank}.vtu");
+        let own = name(piece.rank);
+        let pvtu = (piece.rank == 0).then(|| format!("snapshot_{index:04}.pvtu"));
+        self.written
+            .push((time, pvtu.clone().unwrap_or_else(|| own.clone())));
+        let (dir, vtu) = (self.dir.clone(), self.vtu);
+        let pieces: Vec<String> = (0..piece.ranks).map(name).collect();
+        self.submit(Box::new(move || {
+            let grid = triangles_grid(&triangles);
+            write_output(&dir, &own, grid.to_vtu(vtu).as_bytes())?;
+            if let Some(pvtu) = pvtu {
+                write_output(&dir, &pvtu, grid.to_pvtu(&pieces).as_bytes())?;
+            }
+            Ok(())
+        }));
     }
 
     /// Snapshot files written so far: (time in s, file name).

@@ -11,6 +11,9 @@ fn an_earlier_run_s_snapshot_files_are_removed_and_nothing_else() {
         "snapshot_12345.vtu",
         "cracks_0003.vtu",
         "snapshots.pvd",
+        "snapshot_0004.pvtu",
+        "snapshot_0004_0.vtu",
+        "snapshot_0004_12.vtu",
     ];
     let kept = [
         "summary.json",
@@ -20,6 +23,9 @@ fn an_earlier_run_s_snapshot_files_are_removed_and_nothing_else() {
         "cracks_0003.png",
         "my_snapshot_0001.vtu",
         "crack_path.png",
+        "snapshot_0004_x.vtu",
+        "snapshot_0004_1.png",
+        "snapshot_0004_1_2.vtu",
     ];
     for name in removed.iter().chain(&kept) {
         std::fs::write(dir.path().join(name), b"x").unwrap();

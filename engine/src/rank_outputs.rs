@@ -1,0 +1,305 @@
+//! The outputs of a run over ranks as it goes: each rank cuts the elements it solves by the
+//! snapshot planes and writes its piece of every snapshot once its own vertices have passed the
+//! plane, and sums the front's energy at each history time; rank 0 writes `history.csv` from
+//! those sums and the gathered tents at the end.
+//!
+//! # Snapshots: one piece per rank
+//! Every element is left by exactly one tent, solved on one rank: the ranks' slices together are
+//! the threaded run's, each once. A rank writes `snapshot_NNNN_R.vtu` when all the vertices it
+//! owns are at or past the plane (no later tent of its can cross it); rank 0 writes the
+//! `snapshot_NNNN.pvtu` that joins the pieces and `snapshots.pvd`. Pieces rather than one file
+//! from rank 0: no slice travels, memory stays per rank, and the threaded run's own file is not
+//! the same from run to run (its cells come in the order the threads solved them), so one file
+//! would be no closer to it. Snapshots are not drawn (`output.png`) and have no crack cuts.
+//!
+//! # History rows: those of the serial reference order
+//! On threads a row is taken when the front's earliest time has passed `t_k = k t_end / 100`,
+//! from the front as it is when the row's event runs, which depends on the threads' timing. Over
+//! ranks the row of `t_k` is the serial reference order's (tents by `(t_old, id)`), the same for
+//! every partition and timing: the front right after the last tent with `t_old < t_k`, where
+//! every vertex is at the end of its tent crossing `t_k` (`t_old < t_k <= t_new`). Its columns:
+//! - `patches`: the tents with `t_old < t_k`; the accounts: their reports summed in that order
+//!   on rank 0 from the gathered tents;
+//! - `time_s`: the smallest `t_new` of the crossing tents;
+//! - the front's energy: per triangle, the top-facet energy of the element left by the last of
+//!   its corners' crossing tents. Tents at neighbours run in `(t_old, id)` order, so that tent is
+//!   the one whose triangle's other corners are at or past `t_k` already when it is solved
+//!   (current on its rank by the pitching rule). Each rank adds those energies into exact sums
+//!   ([`ExactSum`]) that rank 0 merges: the total is the correctly rounded sum, whatever the
+//!   partition.
+//!
+//! The first row is the initial front's, the last the end front's (energy summed in triangle
+//! order, as on threads): those two are the threaded run's but for the accounts' order of
+//! summation. Rows that would repeat the last row's time and patches are left out.
+//!
+//! # Memory
+//! Per rank: the slices of its elements for the snapshots not yet written, and three exact sums
+//! (a few values each) per history time; no element is kept beyond the run's own.
+
+use sdg_distributed::{LocalView, Observer, Partition, SolvedPatch};
+use sdg_mesh::{Front, Tent};
+use sdg_solver::basis::Basis;
+use sdg_solver::element::{FrontSolution, Geometry};
+use sdg_solver::norms::FrontEnergy;
+use sdg_solver::patch::{PatchReport, PatchSolver};
+
+use crate::error::EngineError;
+use crate::exact_sum::ExactSum;
+use crate::output::snapshot::{Piece, Snapshots};
+use crate::problem::Problem;
+use crate::solve::book::{Milestone, Milestones, history_times};
+use crate::solve::history::{history_header, history_line, point_values, repeats_last_row};
+
+/// Snapshot files written: (time in s, file name).
+type Written = Vec<(f64, String)>;
+
+/// Parts of a front facet's energy: kinetic, strain, flux (scaled units).
+const PARTS: usize = 3;
+
+/// What one rank records of its tents for the outputs: the [`Observer`] of a run over ranks.
+pub(crate) struct RankOutputs<'p> {
+    problem: &'p Problem,
+    basis: Basis,
+    snapshots: Snapshots,
+    /// The snapshot times with the rank's owned vertices below each.
+    milestones: Milestones,
+    passed: Vec<(f64, Milestone)>,
+    /// The history times `t_k` (s) and the energy parts of the front at each, summed over the
+    /// triangles whose last crossing tent this rank solved.
+    times: Vec<f64>,
+    sums: Vec<[ExactSum; PARTS]>,
+    geometry: Geometry,
+    coefficients: Vec<f64>,
+    phi: Vec<f64>,
+    values: Vec<f64>,
+    /// The first failure (a snapshot not written, an element without its energy).
+    error: Option<EngineError>,
+}
+
+impl<'p> RankOutputs<'p> {
+    /// The outputs of rank `rank` of `partition` for `problem`, written into `dir`.
+    pub(crate) fn new(
+        problem: &'p Problem,
+        partition: &Partition,
+        rank: u32,
+        dir: &std::path::Path,
+    ) -> Self {
+        let config = &problem.loaded.config;
+        let t_end = config.time.span();
+        let solver = PatchSolver::new(problem.system.clone(), config.solver.order, 0);
+        let (basis, width) = (solver.basis().clone(), solver.width());
+        let snapshot_times: Vec<f64> = (config.output.snapshot_times.iter())
+            .map(|&t| config.time.elapsed(t))
+            .collect();
+        let owned = partition.owners().iter().filter(|&&r| r == rank).count();
+        let absolute = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+        let piece = Piece {
+            rank,
+            ranks: partition.ranks() as u32,
+        };
+        let times = history_times(t_end);
+        Self {
+            problem,
+            snapshots: Snapshots::on_clock(
+                &config.output.snapshot_times,
+                config.time.start,
+                problem.material.max_wave_speed(),
+                absolute,
+            )
+            .with_vtu(config.output.vtu)
+            .with_piece(piece),
+            milestones: Milestones::new(owned, t_end, &snapshot_times, None, None),
+            passed: Vec::new(),
+            sums: vec![Default::default(); times.len()],
+            times,
+            geometry: Geometry::default(),
+            coefficients: vec![0.0; basis.len() * width],
+            phi: vec![0.0; basis.len()],
+            values: vec![0.0; width],
+            basis,
+            error: None,
+        }
+    }
+
+    /// Writes the snapshots left (those at the end time), waits for every file, and returns
+    /// the history sums as values for [`sdg_distributed::RankReport::outputs`] (per history
+    /// time and part, the number of partials, then the partials) with the snapshot files this
+    /// rank wrote (time in s, file name).
+    pub(crate) fn finish(mut self) -> Result<(Vec<f64>, Written), EngineError> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        let t_end = self.problem.loaded.config.time.span();
+        self.snapshots.flush(t_end)?;
+        self.snapshots.finish()?;
+        let mut values = Vec::new();
+        for sum in self.sums.iter().flatten() {
+            values.push(sum.partials().len() as f64);
+            values.extend_from_slice(sum.partials());
+        }
+        Ok((values, self.snapshots.written().to_vec()))
+    }
+
+    /// Cuts the elements of `triangles` (local ids) by the pending snapshot planes.
+    fn slice(&mut self, solution: &FrontSolution, triangles: &[u32]) {
+        let problem = self.problem;
+        for &t in triangles {
+            if !solution.load(t as usize, &mut self.geometry, &mut self.coefficients) {
+                continue;
+            }
+            let (geometry, coefficients) = (&self.geometry, &self.coefficients);
+            let (phi, values, basis) = (&mut self.phi, &mut self.values, &self.basis);
+            self.snapshots.add_element(&geometry.vertices(), |x| {
+                point_values(
+                    &problem.material,
+                    (&problem.system, basis),
+                    geometry,
+                    coefficients,
+                    x,
+                    phi,
+                    values,
+                )
+            });
+        }
+    }
+}
+
+impl Observer for RankOutputs<'_> {
+    fn solved(&mut self, view: &LocalView, front: &Front, solution: &FrontSolution, tent: &Tent) {
+        let mesh = view.mesh();
+        let v = tent.vertex;
+        let star = mesh.vertex_triangles(v);
+        let (lo, hi) = (mesh.vertex_neighbors(v).iter())
+            .map(|&w| front.time(w))
+            .fold((tent.t_old, tent.t_new), |(lo, hi), t| {
+                (lo.min(t), hi.max(t))
+            });
+        if self.snapshots.pending_within(lo, hi) {
+            self.slice(solution, star);
+        }
+        // The history times this tent crosses: for each triangle of its star whose other
+        // corners have crossed already, the element just stored is the one at that time.
+        let first = self.times.partition_point(|&t| t <= tent.t_old);
+        let last = self.times.partition_point(|&t| t <= tent.t_new);
+        for k in first..last {
+            let t_k = self.times[k];
+            for &t in star {
+                let corners = mesh.triangles()[t as usize];
+                if corners.iter().any(|&w| w != v && front.time(w) < t_k) {
+                    continue;
+                }
+                match solution.energy(t as usize) {
+                    Some(parts) => {
+                        for (sum, part) in self.sums[k].iter_mut().zip(parts) {
+                            sum.add(part);
+                        }
+                    }
+                    None => {
+                        self.error.get_or_insert_with(|| {
+                            EngineError::Runtime(format!(
+                                "rank {}: the element of triangle {} has no energy",
+                                view.rank(),
+                                view.global_triangle(t)
+                            ))
+                        });
+                    }
+                }
+            }
+        }
+        self.milestones
+            .advance(tent.t_old, tent.t_new, &mut self.passed);
+        for (t, kind) in std::mem::take(&mut self.passed) {
+            if kind == Milestone::Snapshot
+                && let Err(e) = self.snapshots.flush(t)
+            {
+                self.error.get_or_insert(e);
+            }
+        }
+    }
+}
+
+/// `history.csv` of a run over ranks on rank 0: the row of the initial front with energy
+/// `energy0`, a row per history time from the `tents` in serial order and the ranks' history
+/// sums `outputs` (from [`RankOutputs::finish`]), and the row of the end `front` with energy
+/// `energy` (all scaled units). Errors: outputs of the wrong form, as a runtime error.
+pub(crate) fn history_csv(
+    problem: &Problem,
+    tents: &[(Tent, SolvedPatch)],
+    outputs: &[&[f64]],
+    (energy0, front, energy): (&FrontEnergy, &Front, &FrontEnergy),
+) -> Result<String, EngineError> {
+    let config = &problem.loaded.config;
+    let rho = problem.material.density();
+    let initial = energy0.total;
+    let times = history_times(config.time.span());
+    let sums = merged_sums(outputs, times.len())?;
+    let mut history = history_header();
+    let zero = PatchReport::default();
+    history.push_str(&history_line(
+        config.time.clock(0.0),
+        0,
+        energy0,
+        &zero,
+        initial,
+        rho,
+    ));
+    // The earliest end among the tents crossing each history time.
+    let mut earliest = vec![f64::INFINITY; times.len()];
+    for (tent, _) in tents {
+        let first = times.partition_point(|&t| t <= tent.t_old);
+        let last = times.partition_point(|&t| t <= tent.t_new);
+        for e in &mut earliest[first..last] {
+            *e = e.min(tent.t_new);
+        }
+    }
+    let mut totals = PatchReport::default();
+    let mut done = 0;
+    for (k, &t_k) in times.iter().enumerate() {
+        while done < tents.len() && tents[done].0.t_old < t_k {
+            totals.accumulate(&tents[done].1.report);
+            done += 1;
+        }
+        // After every tent, the front is the end front: its row is the last.
+        let time = config.time.clock(earliest[k]);
+        if done == tents.len() || repeats_last_row(&history, time, done as u64) {
+            continue;
+        }
+        let [kinetic, strain, flux] = sums[k].each_ref().map(ExactSum::value);
+        let e = FrontEnergy {
+            kinetic,
+            strain,
+            flux,
+            total: kinetic + strain + flux,
+        };
+        history.push_str(&history_line(time, done as u64, &e, &totals, initial, rho));
+    }
+    for (_, patch) in &tents[done..] {
+        totals.accumulate(&patch.report);
+    }
+    let time = config.time.clock(front.min_time());
+    if !repeats_last_row(&history, time, tents.len() as u64) {
+        let row = history_line(time, tents.len() as u64, energy, &totals, initial, rho);
+        history.push_str(&row);
+    }
+    Ok(history)
+}
+
+/// The ranks' history sums `outputs` merged: per history time (`times` of them), the sums of
+/// the energy parts.
+fn merged_sums(outputs: &[&[f64]], times: usize) -> Result<Vec<[ExactSum; PARTS]>, EngineError> {
+    let mut sums: Vec<[ExactSum; PARTS]> = vec![Default::default(); times];
+    for (rank, values) in outputs.iter().enumerate() {
+        let bad = || EngineError::Runtime(format!("rank {rank}: history sums of the wrong form"));
+        let mut at = 0;
+        for sum in sums.iter_mut().flatten() {
+            let n = *values.get(at).ok_or_else(bad)? as usize;
+            let partials = values.get(at + 1..at + 1 + n).ok_or_else(bad)?;
+            sum.merge(&ExactSum::from_partials(partials));
+            at += 1 + n;
+        }
+        if at != values.len() {
+            return Err(bad());
+        }
+    }
+    Ok(sums)
+}
