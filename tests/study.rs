@@ -111,7 +111,10 @@ fn the_asynchronous_branching_study_is_valid() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let listing = String::from_utf8(out.stdout).unwrap();
-    assert!(listing.contains("scheduler.deterministic=false"), "{listing}");
+    assert!(
+        listing.contains("scheduler.deterministic=false"),
+        "{listing}"
+    );
     assert_eq!(listing.lines().filter(|l| l.contains("pending")).count(), 8);
 }
 
