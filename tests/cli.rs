@@ -896,6 +896,19 @@ fn a_traced_run_replays_on_more_workers() {
         text.lines().filter(|l| l.contains(",round,")).count() as u64,
         rounds
     );
+    // Each round's tents are settled in chunks of 16, listed before the round's end.
+    let (mut tents, mut chunks) = (0usize, 0usize);
+    for kind in text.lines().skip(1).filter_map(|l| l.split(',').nth(1)) {
+        match kind {
+            "patch" | "newton" | "rejected" | "coarsen" => tents += 1,
+            "settle" => chunks += 1,
+            "round" => {
+                assert_eq!(chunks, tents.div_ceil(16), "{tents} tents");
+                (tents, chunks) = (0, 0);
+            }
+            _ => {}
+        }
+    }
     let out = sdg(&["scaling", trace.to_str().unwrap(), "--workers", "1,2"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let table = String::from_utf8(out.stdout).unwrap();

@@ -106,9 +106,18 @@ pub trait Work<'a>: Sync {
         events: &Events<'a, Self::State>,
     ) -> Result<(f64, Self::Outcome), Self::Error>;
 
-    /// Records a finished tent (outputs, energy sums). Asynchronous mode: called by the worker
-    /// while it still holds the claim. Deterministic mode: called on one thread after each round,
-    /// in the round's order. May queue events.
+    /// Completes a finished tent's `outcome` with what [`Work::record`] reads from the state
+    /// around `v`, so that recording is left with what must go in order. Asynchronous mode:
+    /// called by the worker just before [`Work::record`]. Deterministic mode: called once every
+    /// tent of the round has run, on any worker, with the state as the round left it (which
+    /// [`Work::record`] sees too).
+    fn settle(&self, state: &Self::State, v: VertexId, outcome: &mut Self::Outcome) {
+        let _ = (state, v, outcome);
+    }
+
+    /// Records a finished and settled tent (outputs, energy sums). Asynchronous mode: called by
+    /// the worker while it still holds the claim. Deterministic mode: called on one thread
+    /// after each round, in the round's order. May queue events.
     fn record(
         &'a self,
         state: &Self::State,
@@ -125,9 +134,16 @@ pub trait Work<'a>: Sync {
         false
     }
 
+    /// Deterministic mode: called by a worker after it settled a chunk of a round's tents and
+    /// checked which of the vertices they took are ready for the next round, with the time that
+    /// took, `busy`, for a trace of the rounds. The chunks are the same for any thread count.
+    fn settled(&self, busy: Duration) {
+        let _ = busy;
+    }
+
     /// Deterministic mode: called after each round and its events with the time the calling
     /// thread spent on the round alone, `serial` (choosing its vertices and recording its
-    /// tents; not the events), for a trace of the rounds.
+    /// settled tents in order; not the events), for a trace of the rounds.
     fn round(&self, serial: Duration) {
         let _ = serial;
     }

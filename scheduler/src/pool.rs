@@ -345,7 +345,8 @@ fn tent<'a, W: Work<'a>>(
         let work = shared.work;
         Some(
             work.tent(&mut lease, scratch, v, &shared.events)
-                .and_then(|(t, outcome)| {
+                .and_then(|(t, mut outcome)| {
+                    work.settle(lease.state(), v, &mut outcome);
                     work.record(lease.state(), v, outcome, &shared.events)
                         .map(|()| t)
                 }),

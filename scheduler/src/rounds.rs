@@ -4,13 +4,16 @@
 //! only those whose neighbourhood the last round or its events changed are examined), sorts them by
 //! `(time, id)` and greedily takes every vertex none of whose neighbours is taken. The taken
 //! tents do not read each other's data (they are not neighbours), so solving them in parallel in
-//! any order gives the same bits; their outcomes are recorded in the round's order, and queued
-//! events then run in the order they were queued, with the state held exclusively. The result
-//! depends only on the inputs.
+//! any order gives the same bits. Once all have run, the workers settle their outcomes
+//! ([`Work::settle`]) and check which of the vertices they took are ready for the next round, in
+//! parallel: both only read the state as the round left it. The calling thread then records the
+//! outcomes in the round's order, and queued events run in the order they were queued, with the
+//! state held exclusively. The result depends only on the inputs.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Barrier;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::Instant;
 
 use parking_lot::{Mutex, RwLock};
 
@@ -22,10 +25,20 @@ use crate::{
 /// What a worker's tent gave: its outcome or error, or the message of its panic.
 type Tried<O, E> = Result<Result<O, E>, String>;
 
+/// Chosen tents per work item of a round's settling: items of a fixed size make the trace the
+/// same for any thread count.
+const CHUNK: usize = 16;
+
 /// Shared state of one round.
 struct Round<O, E> {
     chosen: Vec<VertexId>,
+    /// The vertices the chosen ones took, each chosen vertex with its neighbours not taken
+    /// before: `chosen[i]` took `touched[ends[i - 1]..ends[i]]` (from 0 for the first).
+    touched: Vec<VertexId>,
+    ends: Vec<usize>,
+    /// The next chosen tent to solve, and the next chunk of them to settle.
     next: AtomicUsize,
+    next_chunk: AtomicUsize,
     results: Vec<Mutex<Option<Tried<O, E>>>>,
 }
 
@@ -41,11 +54,14 @@ pub(crate) fn run<'a, W: Work<'a>>(
     let events: Events<'a, W::State> = Events::default();
     let round: RwLock<Round<W::Outcome, W::Error>> = RwLock::new(Round {
         chosen: Vec::with_capacity(n),
+        touched: Vec::with_capacity(n),
+        ends: Vec::with_capacity(n),
         next: AtomicUsize::new(0),
+        next_chunk: AtomicUsize::new(0),
         results: Vec::new(),
     });
-    // The calling thread chooses and records the rounds and solves its share of each: with
-    // `threads` threads in all, a run never has more threads than workers.
+    // The calling thread chooses the rounds, solves and settles its share of each and records
+    // them: with `threads` threads in all, a run never has more threads than workers.
     let barrier = Barrier::new(threads);
     let done = AtomicBool::new(false);
     let mut stats = Stats {
@@ -56,21 +72,29 @@ pub(crate) fn run<'a, W: Work<'a>>(
     let (event_time, wait_time) = (Clock::default(), Clock::default());
     // The ready vertices with their times. A round takes every ready vertex (it is chosen or
     // beside a chosen one) and changes the front only at its chosen vertices, so the next
-    // round's ready vertices are among the taken ones (listed in `touched`). After events
-    // (which may renumber vertices) the whole front is scanned again.
+    // round's ready vertices are among the taken ones, which the workers check and list in
+    // `found`, one list per worker. After events (which may renumber vertices) the calling
+    // thread scans the whole front again.
     let mut ready: Vec<(f64, VertexId)> = Vec::with_capacity(n);
+    let found: Vec<Mutex<Vec<(f64, VertexId)>>> = (0..threads)
+        .map(|_| Mutex::new(Vec::with_capacity(n)))
+        .collect();
     let mut taken = vec![false; n];
-    let mut touched: Vec<VertexId> = Vec::with_capacity(n);
     let mut scan_all = true;
-    // Solves chosen tents of the round until none is left, then waits at the round's end.
+    let wait = |barrier: &Barrier| {
+        let idle = Instant::now();
+        barrier.wait();
+        wait_time.add_since(idle);
+    };
+    // Solves chosen tents of the round until none is left and waits for the others, then
+    // settles chunks of them until none is left and waits again.
     let share = |id: usize, scratch: &mut W::Scratch| {
         {
             let r = round.read();
             let state = state.read();
-            let chosen = &r.chosen;
             loop {
                 let i = r.next.fetch_add(1, Ordering::Relaxed);
-                let Some(&v) = chosen.get(i) else { break };
+                let Some(&v) = r.chosen.get(i) else { break };
                 // A panic is handed to the calling thread, which ends the run; the solving
                 // thread goes on to the barrier so that nobody waits for it.
                 let result = catch_unwind(AssertUnwindSafe(|| {
@@ -82,20 +106,53 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 per_thread[id].fetch_add(1, Ordering::Relaxed);
             }
         }
-        let idle = std::time::Instant::now();
-        barrier.wait();
-        wait_time.add_since(idle);
+        wait(&barrier);
+        {
+            let r = round.read();
+            let state = state.read();
+            let mut found = found[id].lock();
+            loop {
+                let c = r.next_chunk.fetch_add(1, Ordering::Relaxed);
+                let start = c * CHUNK;
+                if start >= r.chosen.len() {
+                    break;
+                }
+                let begun = Instant::now();
+                let end = (start + CHUNK).min(r.chosen.len());
+                for (i, &v) in r.chosen.iter().enumerate().take(end).skip(start) {
+                    let mut slot = r.results[i].lock();
+                    // A panic is the calling thread's to report when it records.
+                    let panicked = match slot.as_mut() {
+                        Some(Ok(Ok(outcome))) => catch_unwind(AssertUnwindSafe(|| {
+                            work.settle(&**state, v, outcome);
+                        }))
+                        .err(),
+                        _ => None,
+                    };
+                    if let Some(payload) = panicked {
+                        *slot = Some(Err(panic_message(payload)));
+                    }
+                }
+                let from = if start == 0 { 0 } else { r.ends[start - 1] };
+                found.extend(
+                    r.touched[from..r.ends[end - 1]]
+                        .iter()
+                        .filter(|&&v| is_ready(&**state, t_end, v))
+                        .map(|&v| (state.front().time(v), v)),
+                );
+                work.settled(begun.elapsed());
+            }
+        }
+        wait(&barrier);
     };
     let mut scratch = scratch.into_iter();
     let mut own = scratch.next().expect("at least one thread");
     let outcome = std::thread::scope(|s| {
         for (id, mut scratch) in scratch.enumerate() {
-            let (barrier, done, wait_time, share) = (&barrier, &done, &wait_time, &share);
+            let (barrier, done, wait, share) = (&barrier, &done, &wait, &share);
             s.spawn(move || {
                 loop {
-                    let idle = std::time::Instant::now();
-                    barrier.wait();
-                    wait_time.add_since(idle);
+                    wait(barrier);
                     if done.load(Ordering::Acquire) {
                         return;
                     }
@@ -106,22 +163,26 @@ pub(crate) fn run<'a, W: Work<'a>>(
         // A panic here leaves the workers at the round's first barrier, as an error does.
         let result = catch_unwind(AssertUnwindSafe(|| {
             loop {
-                let choosing = std::time::Instant::now();
+                let choosing = Instant::now();
                 let guard = state.read();
                 let s: &W::State = &guard;
+                let mut r = round.write();
+                ready.clear();
+                for found in &found {
+                    let mut found = found.lock();
+                    if !scan_all {
+                        ready.extend_from_slice(&found);
+                    }
+                    found.clear();
+                }
                 if scan_all {
-                    touched.clear();
-                    touched.extend(0..n as VertexId);
+                    ready.extend(
+                        (0..n as VertexId)
+                            .filter(|&v| is_ready(s, t_end, v))
+                            .map(|v| (s.front().time(v), v)),
+                    );
                     scan_all = false;
                 }
-                ready.clear();
-                ready.extend(
-                    touched
-                        .iter()
-                        .filter(|&&v| is_ready(s, t_end, v))
-                        .map(|&v| (s.front().time(v), v)),
-                );
-                touched.clear();
                 if ready.is_empty() {
                     let remaining = below_end(s, t_end);
                     return if remaining == 0 {
@@ -134,33 +195,41 @@ pub(crate) fn run<'a, W: Work<'a>>(
                     return Ok(true);
                 }
                 ready.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                {
-                    let mut r = round.write();
-                    r.chosen.clear();
-                    taken.fill(false);
-                    for &(_, v) in &ready {
-                        if !taken[v as usize] {
-                            r.chosen.push(v);
-                            taken[v as usize] = true;
-                            touched.push(v);
-                            for &w in s.mesh().vertex_neighbors(v) {
-                                if !taken[w as usize] {
-                                    taken[w as usize] = true;
-                                    touched.push(w);
-                                }
+                let Round {
+                    chosen,
+                    touched,
+                    ends,
+                    ..
+                } = &mut *r;
+                chosen.clear();
+                touched.clear();
+                ends.clear();
+                taken.fill(false);
+                for &(_, v) in &ready {
+                    if !taken[v as usize] {
+                        chosen.push(v);
+                        taken[v as usize] = true;
+                        touched.push(v);
+                        for &w in s.mesh().vertex_neighbors(v) {
+                            if !taken[w as usize] {
+                                taken[w as usize] = true;
+                                touched.push(w);
                             }
                         }
+                        ends.push(touched.len());
                     }
-                    let len = r.chosen.len();
-                    r.results.resize_with(len, || Mutex::new(None));
-                    r.next.store(0, Ordering::Relaxed);
                 }
-                // The round-setup lock is released before the workers start.
+                let len = r.chosen.len();
+                r.results.resize_with(len, || Mutex::new(None));
+                r.next.store(0, Ordering::Relaxed);
+                r.next_chunk.store(0, Ordering::Relaxed);
+                // The round-setup locks are released before the workers start.
+                drop(r);
                 drop(guard);
                 let mut serial = choosing.elapsed();
-                barrier.wait();
+                wait(&barrier);
                 share(0, &mut own);
-                let recording = std::time::Instant::now();
+                let recording = Instant::now();
                 let mut r = round.write();
                 let chosen = std::mem::take(&mut r.chosen);
                 {
@@ -192,7 +261,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 drop(r);
                 serial += recording.elapsed();
                 let mut guard = state.write();
-                let running = std::time::Instant::now();
+                let running = Instant::now();
                 for event in events.take() {
                     event.run_alone(&mut **guard, &events);
                     stats.events += 1;

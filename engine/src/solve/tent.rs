@@ -149,6 +149,8 @@ impl Solve<'_> {
             report,
             interface: self.interface_records(mesh, solver),
             extension,
+            retries: Vec::new(),
+            span: (tent.t_old, t_new),
             unresolved,
             slope,
         };
@@ -180,6 +182,12 @@ pub(crate) enum Outcome {
         interface: InterfaceRecords,
         /// The crack tip at the vertex extends.
         extension: Option<Extension>,
+        /// The neighbours' tips whose pending extensions to try again, as the state is after
+        /// the tent (set by [`Work::settle`](sdg_scheduler::Work::settle)).
+        retries: Vec<(VertexId, Extension)>,
+        /// The least and greatest front time of the star's elements, s (before and after the
+        /// tent; set by [`Work::settle`](sdg_scheduler::Work::settle)).
+        span: (f64, f64),
         /// The indicator over the tolerance when it was above and no star triangle could be
         /// bisected.
         unresolved: Option<f64>,

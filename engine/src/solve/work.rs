@@ -79,6 +79,30 @@ impl<'a> Work<'a> for Solve<'a> {
         result
     }
 
+    fn settle(&self, state: &Frontier, v: VertexId, o: &mut Outcome) {
+        let Outcome::Accepted {
+            t_old,
+            t_new,
+            retries,
+            span,
+            ..
+        } = o
+        else {
+            return;
+        };
+        // The star's elements span the old and new front times of `v` and its neighbours.
+        let neighbours = state.mesh.vertex_neighbors(v);
+        *span = (neighbours.iter())
+            .map(|&w| state.front.time(w))
+            .fold((*t_old, *t_new), |(lo, hi), t| (lo.min(t), hi.max(t)));
+        if self.problem.fracture.is_some() {
+            // The tent changed the front over the triangles of its neighbours' stars.
+            retries.extend(
+                (neighbours.iter()).filter_map(|&u| Extension::retry(state, u).map(|e| (u, e))),
+            );
+        }
+    }
+
     fn record(
         &'a self,
         state: &Frontier,
@@ -86,7 +110,7 @@ impl<'a> Work<'a> for Solve<'a> {
         o: Outcome,
         events: &Events<'a, Frontier>,
     ) -> Result<(), EngineError> {
-        let (t_old, t_new, pitching_s, report, slope) = match o {
+        let (t_old, t_new, pitching_s, report, slope, span) = match o {
             Outcome::Accepted {
                 t_old,
                 t_new,
@@ -94,6 +118,8 @@ impl<'a> Work<'a> for Solve<'a> {
                 report,
                 interface,
                 extension,
+                retries,
+                span,
                 unresolved,
                 slope,
             } => {
@@ -111,15 +137,10 @@ impl<'a> Work<'a> for Solve<'a> {
                 if let Some(extension) = extension {
                     self.push_extension(events, v, extension);
                 }
-                if self.problem.fracture.is_some() {
-                    // The tent changed the front over the triangles of its neighbours' stars.
-                    for &u in state.mesh.vertex_neighbors(v) {
-                        if let Some(retry) = Extension::retry(state, u) {
-                            self.push_extension(events, u, retry);
-                        }
-                    }
+                for (u, retry) in retries {
+                    self.push_extension(events, u, retry);
                 }
-                (t_old, t_new, pitching_s, report, slope)
+                (t_old, t_new, pitching_s, report, slope, span)
             }
             Outcome::Coarsen {
                 coarsening,
@@ -164,13 +185,7 @@ impl<'a> Work<'a> for Solve<'a> {
         book.timings.pitching_s += pitching_s;
         book.max_slope_ratio = book.max_slope_ratio.max(slope);
         let started = Instant::now();
-        // The star's elements span the old and new front times of `v` and its neighbours.
-        let (lo, hi) = mesh
-            .vertex_neighbors(v)
-            .iter()
-            .map(|&w| state.front.time(w))
-            .fold((t_old, t_new), |(lo, hi), t| (lo.min(t), hi.max(t)));
-        if book.snapshots.pending_within(lo, hi) {
+        if book.snapshots.pending_within(span.0, span.1) {
             self.add_to_snapshots(book, &state.solution, mesh.vertex_triangles(v));
         }
         book.progress.advance(t_new - t_old, book.patches);
@@ -198,6 +213,12 @@ impl<'a> Work<'a> for Solve<'a> {
         passed.clear();
         book.passed = passed;
         Ok(())
+    }
+
+    fn settled(&self, busy: Duration) {
+        if let Some(tracer) = &self.tracer {
+            tracer.settled(busy);
+        }
     }
 
     fn round(&self, serial: Duration) {

@@ -22,8 +22,11 @@ pub enum Kind {
     /// A scheduler event that changes the mesh only around some vertices (refinement,
     /// coarsening, crack extension); its dependencies are the tents and events there.
     Region,
+    /// A chunk of a deterministic round's tents that a worker settled after they all ran, with
+    /// the readiness checks of the vertices they took; the workers share the chunks.
+    Settle,
     /// The end of a deterministic round: the time the scheduler spent on it alone (choosing its
-    /// vertices, recording its tents), after its tents and events.
+    /// vertices, recording its settled tents in order), after its tents, settling and events.
     Round,
 }
 
@@ -36,6 +39,7 @@ impl Kind {
             Self::Coarsen => "coarsen",
             Self::Event => "event",
             Self::Region => "region",
+            Self::Settle => "settle",
             Self::Round => "round",
         }
     }
@@ -48,6 +52,7 @@ impl Kind {
             Self::Coarsen,
             Self::Event,
             Self::Region,
+            Self::Settle,
             Self::Round,
         ]
         .into_iter()
@@ -56,6 +61,14 @@ impl Kind {
 }
 
 impl Kind {
+    /// A tent, whatever its patch did.
+    pub(super) fn is_tent(self) -> bool {
+        matches!(
+            self,
+            Self::Patch | Self::Newton | Self::Rejected | Self::Coarsen
+        )
+    }
+
     /// Events of either kind: deterministic rounds run them alone, after the round's tents.
     pub(super) fn is_event(self) -> bool {
         matches!(self, Self::Event | Self::Region)

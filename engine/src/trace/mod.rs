@@ -13,11 +13,13 @@
 //! and each free worker takes the ready tent that came first in the trace, paying a fixed claim
 //! overhead per tent; a `region` event, like a tent, waits only for its dependencies and takes
 //! one worker while the others go on solving, as the scheduler runs regional events; an `event`
-//! waits for every tent before it and runs alone. A trace of a deterministic run also marks the
-//! end of each round (`round`, with the
-//! time the scheduler spent on it alone: choosing its vertices and recording its tents), and is
-//! replayed as those rounds, which are the same for any thread count: a round's tents go to the
-//! first free worker in trace order, then its events and the scheduler's own time run alone.
+//! waits for every tent before it and runs alone. A trace of a deterministic run also lists the
+//! chunks of each round's tents that the workers settled once they had all run (`settle`: what
+//! recording reads from the state, and which vertices are ready next) and marks the end of each
+//! round (`round`, with the time the scheduler spent on it alone: choosing its vertices and
+//! recording its settled tents in order), and is replayed as those rounds, which are the same
+//! for any thread count: a round's tents go to the first free worker in trace order, then its
+//! settling chunks the same way, then its events and the scheduler's own time run alone.
 //! Either way the replay predicts the wall time, the critical path (the time with unlimited
 //! workers) and the mean number of ready tents. The costs are those measured in the traced run,
 //! so the model leaves out what more threads do to each tent (shared caches and memory

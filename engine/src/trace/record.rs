@@ -1,7 +1,7 @@
 //! Recording a trace while a run goes (`sdg run --trace FILE`).
 
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use parking_lot::Mutex;
 use sdg_mesh::{Mesh, VertexId};
@@ -193,16 +193,26 @@ impl Tracer {
         });
     }
 
+    /// Traces a chunk of a deterministic round's tents that a worker settled in `busy`.
+    pub(crate) fn settled(&self, busy: Duration) {
+        self.just_ended(Kind::Settle, busy);
+    }
+
     /// Traces the end of a deterministic round that kept the scheduler busy alone for `serial`.
-    pub(crate) fn round(&self, serial: std::time::Duration) {
+    pub(crate) fn round(&self, serial: Duration) {
+        self.just_ended(Kind::Round, serial);
+    }
+
+    /// Traces an item of `kind` without vertex nor dependencies that ended now after `busy`.
+    fn just_ended(&self, kind: Kind, busy: Duration) {
         let id = self.ids.lock().take();
-        let start = self.started.elapsed().saturating_sub(serial);
+        let start = self.started.elapsed().saturating_sub(busy);
         self.entries.lock().push(Entry {
             id,
-            kind: Kind::Round,
+            kind,
             vertex: None,
             start_s: start.as_secs_f64(),
-            duration_s: serial.as_secs_f64(),
+            duration_s: busy.as_secs_f64(),
             deps: Vec::new(),
         });
     }

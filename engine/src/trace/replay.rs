@@ -57,14 +57,16 @@ fn replay_between(entries: &[Entry], workers: usize, overhead_s: f64) -> Predict
 
 /// The rounds of a deterministic trace: the tents of a round (all ready when it starts, none
 /// depending on another) go in trace order to the first free worker, each paying `overhead_s`,
-/// as the scheduler's shared counter hands them out; then the round's events and the
-/// scheduler's own time on it run alone. The rounds are the same for any number of threads, so
-/// the model needs no dependencies.
+/// as the scheduler's shared counter hands them out; once all have run, the chunks that settle
+/// them go the same way (without the overhead); then the round's events and the scheduler's
+/// own time on it run alone. The rounds are the same for any number of threads, so the model
+/// needs no dependencies.
 fn replay_rounds(entries: &[Entry], workers: usize, overhead_s: f64) -> Prediction {
     let (mut clock, mut ready_area) = (0.0, 0.0);
     for round in entries.split_inclusive(|e| e.kind == Kind::Round) {
         let (span, area) = list_schedule(round_tents(round), workers, overhead_s);
-        clock += span + serial_time(round);
+        let (settling, _) = list_schedule(of_kind(round, Kind::Settle), workers, 0.0);
+        clock += span + settling + serial_time(round);
         ready_area += area;
     }
     Prediction {
@@ -78,7 +80,15 @@ fn replay_rounds(entries: &[Entry], workers: usize, overhead_s: f64) -> Predicti
 fn round_tents(round: &[Entry]) -> impl Iterator<Item = f64> + Clone + '_ {
     round
         .iter()
-        .filter(|e| !(e.kind.is_event() || e.kind == Kind::Round))
+        .filter(|e| e.kind.is_tent())
+        .map(|e| e.duration_s)
+}
+
+/// The durations of the items of `kind` in `round`, s, in trace order.
+fn of_kind(round: &[Entry], kind: Kind) -> impl Iterator<Item = f64> + Clone + '_ {
+    round
+        .iter()
+        .filter(move |e| e.kind == kind)
         .map(|e| e.duration_s)
 }
 
@@ -132,7 +142,8 @@ pub struct CriticalPath {
     /// Events that run alone: in an asynchronous trace all but the regional ones, in a
     /// deterministic one all.
     pub events_s: f64,
-    /// The deterministic scheduler's own time on its rounds (0 for an asynchronous trace).
+    /// The deterministic scheduler's own time on its rounds: what the calling thread does
+    /// alone, and the longest chunk of settling of each round (0 for an asynchronous trace).
     pub scheduler_s: f64,
 }
 
@@ -146,18 +157,20 @@ pub fn critical_path_parts(entries: &[Entry], overhead_s: f64) -> CriticalPath {
     };
     let scheduler_s = time_of(Kind::Round);
     if rounds(entries) > 0 {
-        let tents_s = entries
+        let longest = |durations: &mut dyn Iterator<Item = f64>| durations.fold(0.0, f64::max);
+        let (tents_s, settling_s) = entries
             .split_inclusive(|e| e.kind == Kind::Round)
             .map(|round| {
-                round_tents(round)
-                    .map(|d| d + overhead_s)
-                    .fold(0.0, f64::max)
+                (
+                    longest(&mut round_tents(round).map(|d| d + overhead_s)),
+                    longest(&mut of_kind(round, Kind::Settle)),
+                )
             })
-            .sum();
+            .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
         return CriticalPath {
             tents_s,
             events_s: time_of(Kind::Event) + time_of(Kind::Region),
-            scheduler_s,
+            scheduler_s: scheduler_s + settling_s,
         };
     }
     CriticalPath {

@@ -109,6 +109,35 @@ fn the_rounds_replay_hands_each_round_s_tents_to_free_workers() {
 }
 
 #[test]
+fn the_rounds_replay_shares_the_settling_chunks_after_the_tents() {
+    let marker = |id: u64, duration_s: f64, kind: Kind| Entry {
+        kind,
+        vertex: None,
+        ..tent(id, duration_s, &[])
+    };
+    // One round: two unit tents, three settling chunks of 0.5, 0.5 and 0.25 s, then 0.25 s of
+    // the scheduler alone.
+    let entries = vec![
+        tent(0, 1.0, &[]),
+        tent(1, 1.0, &[]),
+        marker(2, 0.5, Kind::Settle),
+        marker(3, 0.5, Kind::Settle),
+        marker(4, 0.25, Kind::Settle),
+        marker(5, 0.25, Kind::Round),
+    ];
+    let wall = |workers| replay(&entries, workers, 0.0).wall_time_s;
+    assert_eq!(wall(1), 3.5);
+    assert_eq!(wall(2), 2.0);
+    assert_eq!(wall(8), 1.75);
+    let parts = critical_path_parts(&entries, 0.0);
+    assert_eq!(
+        (parts.tents_s, parts.events_s, parts.scheduler_s),
+        (1.0, 0.0, 0.75)
+    );
+    assert_eq!(critical_path(&entries, 0.0), 1.75);
+}
+
+#[test]
 fn a_written_trace_reads_back_and_bad_ones_are_refused() {
     let tracer = Tracer::new();
     let mesh = sdg_mesh::Rectangle {
@@ -137,6 +166,7 @@ fn a_written_trace_reads_back_and_bad_ones_are_refused() {
     tracer.end(c, 0, Kind::Patch, true);
     let d = tracer.begin(&mesh, 5);
     tracer.end(d, 5, Kind::Patch, true);
+    tracer.settled(std::time::Duration::from_micros(2));
     tracer.round(std::time::Duration::from_micros(3));
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("trace.csv");
@@ -153,10 +183,12 @@ fn a_written_trace_reads_back_and_bad_ones_are_refused() {
             Kind::Region,
             Kind::Patch,
             Kind::Patch,
+            Kind::Settle,
             Kind::Round
         ]
     );
-    assert_eq!(entries[7].duration_s, 3e-6);
+    assert_eq!(entries[7].duration_s, 2e-6);
+    assert_eq!(entries[8].duration_s, 3e-6);
     assert_eq!(rounds(&entries), 1);
     // Tents depend on the last tents at their vertex and its neighbours (vertices 0, 1, 3
     // and 4 of the 3 x 3 grid are neighbours), across an event that holds the whole state.
