@@ -329,16 +329,19 @@ fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
         "--set",
         "time.end=1e-6",
         "--set",
+        "output.snapshot_times=[]",
+        "--set",
         "output.png=false",
     ];
     let job = |id: u32, tasks: &str, out: &Path, env: &[(&str, &str)]| {
-        let mut job = slurm.job("mpi.sbatch", id, &args, env);
-        job.env("SLURM_NTASKS", tasks)
+        let mut job = slurm.job("mpi.sbatch", id, &args, &[]);
+        job.env_remove("SDG_CONFIG")
+            .env_remove("SDG_LAUNCHER")
+            .env_remove("SDG_SRUN_MPI")
+            .env("SLURM_NTASKS", tasks)
             .env("SDG_OUT", out)
             .envs(common::mpirun::MPIRUN_ENV)
-            .env_remove("SDG_CONFIG")
-            .env_remove("SDG_LAUNCHER")
-            .env_remove("SDG_SRUN_MPI");
+            .envs(env.iter().copied());
         finish(job.spawn().unwrap())
     };
     let ranks = |out: &Path| {
@@ -375,7 +378,8 @@ fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
     let out = slurm.path("pmi2");
     let (code, text) = job(302, "3", &out, &[("SDG_SRUN_MPI", "pmi2")]);
     assert_eq!(code, 0, "{text}");
-    assert!(slurm.calls("srun.log")[1].starts_with("--mpi=pmi2 "));
+    let calls = slurm.calls("srun.log");
+    assert!(calls[1].starts_with("--mpi=pmi2 "), "{calls:?}");
 
     let out = slurm.path("mpirun");
     let (code, text) = job(303, "2", &out, &[("SDG_LAUNCHER", "mpirun")]);
