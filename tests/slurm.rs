@@ -317,7 +317,8 @@ fn sweep_sbatch_requeues_a_stopped_task_and_resumes_it() {
 /// `mpi.sbatch` on 3 tasks, a plane wave of a microsecond. With the feature `mpi`: through the
 /// stand-in `srun` (the default plugin `--mpi=pmix`, and `SDG_SRUN_MPI`), then with
 /// `SDG_LAUNCHER=mpirun` on 2 tasks, each run finishing with `ranks` = the task count in
-/// `summary.json`; an unknown launcher exits 2. Without: exit 2 before any rank starts.
+/// `summary.json`; an unknown launcher exits 2. Without: exit 2 before any rank starts, as for
+/// a binary that does not run.
 #[test]
 fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
     let slurm = Slurm::new();
@@ -349,6 +350,12 @@ fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
             serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
         summary["ranks"].clone()
     };
+
+    let out = slurm.path("missing");
+    let (code, text) = job(300, "3", &out, &[("SDG", "/nonexistent/sdg")]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("cannot run SDG=/nonexistent/sdg"), "{text}");
+    assert!(!out.exists(), "nothing written");
 
     if !cfg!(feature = "mpi") {
         let out = slurm.path("refused");
