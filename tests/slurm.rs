@@ -399,4 +399,5 @@ fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
     let (code, text) = job(304, "2", &out, &[("SDG_LAUNCHER", "ssh")]);
     assert_eq!(code, 2, "{text}");
     assert!(text.contains("must be srun or mpirun"), "{text}");
+    assert!(!out.exists(), "nothing written");
 }
