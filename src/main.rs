@@ -20,9 +20,17 @@ use std::sync::Arc;
 
 use sdg_engine::{Control, EngineError, LoadedConfig, Problem, RunOptions};
 
+/// `sdg --version`: the version, and `(features: mpi)` in a build with the cargo feature `mpi`
+/// (job scripts check it before they start ranks: examples/slurm/mpi.sbatch).
+const VERSION: &str = if cfg!(feature = "mpi") {
+    concat!(env!("CARGO_PKG_VERSION"), " (features: mpi)")
+} else {
+    env!("CARGO_PKG_VERSION")
+};
+
 /// Adaptive spacetime DG simulation of dynamic fracture on tent-pitched meshes.
 #[derive(Debug, Parser)]
-#[command(name = "sdg", version, about)]
+#[command(name = "sdg", version = VERSION, about)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

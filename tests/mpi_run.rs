@@ -9,6 +9,7 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Output};
 
+use common::mpirun::MPIRUN_ENV;
 use common::{pieces, run_args, sdg, slices, stderr, summary_json as summary};
 
 /// `mpirun -n ranks sdg args`, as root, oversubscribed and over loopback (as in CI).
@@ -18,11 +19,7 @@ fn mpirun(ranks: usize, args: &[&str]) -> Output {
         .arg(ranks.to_string())
         .arg(env!("CARGO_BIN_EXE_sdg"))
         .args(args)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .env("OMPI_MCA_btl", "self,vader")
-        .env("OMPI_MCA_oob_tcp_if_include", "lo")
+        .envs(MPIRUN_ENV)
         .output()
         .expect("mpirun runs (OpenMPI installed: openmpi-bin)")
 }

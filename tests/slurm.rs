@@ -3,7 +3,11 @@
 //! the test sets, `sbatch` and `scontrol` record how they were called. Checked: the time left
 //! becomes `--max-wall-time`, SIGTERM to the batch shell reaches sdg, exit 3 resubmits
 //! (`run.sbatch`) or requeues (`sweep.sbatch`) and the next job resumes with `--restart`
-//! until the run finishes, and the caps on resubmissions hold.
+//! until the run finishes, and the caps on resubmissions hold. `mpi.sbatch` (issue 68) runs
+//! under a stand-in `srun` that starts the ranks with `mpirun` on this machine, or, with an
+//! sdg built without the feature `mpi`, refuses before starting any.
+
+mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -17,8 +21,8 @@ fn repo() -> &'static Path {
 }
 
 /// A fake Slurm in a temporary folder: `bin/` with the stand-ins, `left` (what `squeue -o %L`
-/// prints), `sbatch.log` and `scontrol.log` (one line per call: `SDG_RESUBMIT=N ARGS...` and
-/// `ARGS...`).
+/// prints), `sbatch.log`, `scontrol.log` and `srun.log` (one line per call: `SDG_RESUBMIT=N
+/// ARGS...`, `ARGS...` and `ARGS...`).
 struct Slurm(tempfile::TempDir);
 
 impl Slurm {
@@ -34,6 +38,13 @@ impl Slurm {
 echo "Submitted batch job 999""#,
             ),
             ("scontrol", r#"echo "$*" >>"$FAKE_SLURM/scontrol.log""#),
+            // Records its options, then starts the command on SLURM_NTASKS ranks here.
+            (
+                "srun",
+                r#"echo "$*" >>"$FAKE_SLURM/srun.log"
+while [ "${1#-}" != "$1" ]; do shift; done
+exec mpirun -n "$SLURM_NTASKS" "$@""#,
+            ),
         ];
         for (name, body) in stubs {
             let path = bin.join(name);
@@ -301,4 +312,92 @@ fn sweep_sbatch_requeues_a_stopped_task_and_resumes_it() {
         jobs(&task),
         ["job 201: sdg exited 3", "job 202: sdg exited 3"]
     );
+}
+
+/// `mpi.sbatch` on 3 tasks, a plane wave of a microsecond. With the feature `mpi`: through the
+/// stand-in `srun` (the default plugin `--mpi=pmix`, and `SDG_SRUN_MPI`), then with
+/// `SDG_LAUNCHER=mpirun` on 2 tasks, each run finishing with `ranks` = the task count in
+/// `summary.json`; an unknown launcher exits 2. Without: exit 2 before any rank starts, as for
+/// a binary that does not run.
+#[test]
+fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
+    let slurm = Slurm::new();
+    let args = [
+        "--set",
+        "mesh.nx=8",
+        "--set",
+        "mesh.ny=8",
+        "--set",
+        "time.end=1e-6",
+        "--set",
+        "output.snapshot_times=[]",
+        "--set",
+        "output.png=false",
+    ];
+    let job = |id: u32, tasks: &str, out: &Path, env: &[(&str, &str)]| {
+        let mut job = slurm.job("mpi.sbatch", id, &args, &[]);
+        job.env_remove("SDG_CONFIG")
+            .env_remove("SDG_LAUNCHER")
+            .env_remove("SDG_SRUN_MPI")
+            .env("SLURM_NTASKS", tasks)
+            .env("SDG_OUT", out)
+            .envs(common::mpirun::MPIRUN_ENV)
+            .envs(env.iter().copied());
+        finish(job.spawn().unwrap())
+    };
+    let ranks = |out: &Path| {
+        let summary: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        summary["ranks"].clone()
+    };
+
+    let out = slurm.path("missing");
+    let (code, text) = job(300, "3", &out, &[("SDG", "/nonexistent/sdg")]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("cannot run SDG=/nonexistent/sdg"), "{text}");
+    assert!(!out.exists(), "nothing written");
+
+    if !cfg!(feature = "mpi") {
+        let out = slurm.path("refused");
+        let (code, text) = job(301, "3", &out, &[]);
+        assert_eq!(code, 2, "{text}");
+        assert!(text.contains("built without MPI"), "{text}");
+        assert!(slurm.calls("srun.log").is_empty(), "no rank started");
+        assert!(!out.exists(), "nothing written");
+        return;
+    }
+
+    let out = slurm.path("srun");
+    let (code, text) = job(301, "3", &out, &[]);
+    assert_eq!(code, 0, "{text}");
+    assert!(text.contains("finished:"), "{text}");
+    assert_eq!(ranks(&out), 3);
+    assert_eq!(jobs(&out), ["job 301: sdg exited 0 (3 ranks)"]);
+    let sdg = env!("CARGO_BIN_EXE_sdg");
+    let call = format!(
+        "--mpi=pmix --kill-on-bad-exit=1 {sdg} run configs/plane_wave.toml --mpi --output {} \
+         --log-level info {}",
+        out.display(),
+        args.join(" ")
+    );
+    assert_eq!(slurm.calls("srun.log"), [call]);
+
+    let out = slurm.path("pmi2");
+    let (code, text) = job(302, "3", &out, &[("SDG_SRUN_MPI", "pmi2")]);
+    assert_eq!(code, 0, "{text}");
+    let calls = slurm.calls("srun.log");
+    assert!(calls[1].starts_with("--mpi=pmi2 "), "{calls:?}");
+
+    let out = slurm.path("mpirun");
+    let (code, text) = job(303, "2", &out, &[("SDG_LAUNCHER", "mpirun")]);
+    assert_eq!(code, 0, "{text}");
+    assert!(text.contains("mpirun -n 2 "), "{text}");
+    assert_eq!(ranks(&out), 2);
+    assert_eq!(slurm.calls("srun.log").len(), 2, "srun not used");
+
+    let out = slurm.path("unknown");
+    let (code, text) = job(304, "2", &out, &[("SDG_LAUNCHER", "ssh")]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("must be srun or mpirun"), "{text}");
+    assert!(!out.exists(), "nothing written");
 }

@@ -7,6 +7,12 @@
 use std::path::PathBuf;
 use std::process::Command;
 
+// As root (containers, CI), on more ranks than cores, and over loopback only: the root crate's
+// tests use the same file.
+#[path = "../../tests/common/mpirun.rs"]
+mod mpirun_env;
+use mpirun_env::MPIRUN_ENV;
+
 /// The binary of example `name`, which `cargo test` builds beside the test binaries' folder.
 fn example(name: &str) -> PathBuf {
     let exe = std::env::current_exe().expect("the test binary's path");
@@ -38,12 +44,7 @@ fn run(name: &str, ranks: usize, args: &[&str], success: &str) -> String {
         .arg(ranks.to_string())
         .arg(example(name))
         .args(args)
-        // As root (containers, CI), on more ranks than cores, and over loopback only.
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .env("OMPI_MCA_btl", "self,vader")
-        .env("OMPI_MCA_oob_tcp_if_include", "lo")
+        .envs(MPIRUN_ENV)
         .output()
         .expect("mpirun runs (OpenMPI installed: openmpi-bin)");
     let stdout = String::from_utf8_lossy(&output.stdout);

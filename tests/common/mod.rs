@@ -10,6 +10,8 @@ use std::process::{Command, Output, Stdio};
 
 use sdg_engine::{Config, LoadedConfig, Problem, RunOptions, RunSummary};
 
+pub mod mpirun;
+
 /// Parses `text` with `overrides`, solves it in deterministic mode on two threads with outputs in
 /// a fresh temporary folder, and returns the summary and the folder (kept alive by the returned
 /// guard).
