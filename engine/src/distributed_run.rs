@@ -5,7 +5,7 @@
 //!
 //! Each rank pitches and solves the tents at the vertices it owns
 //! ([`sdg_distributed::solve_rank_observed`]), writing its pieces of the snapshots and summing
-//! the history's energies as it goes ([`crate::rank_outputs`]); at the end the elements are
+//! the history's energies as it goes (module `rank_outputs`); at the end the elements are
 //! gathered on rank 0 ([`sdg_distributed::gathering`]), each from the rank owning its
 //! triangle's first corner (an interface face from the owner of its edge's first end), and rank
 //! 0 writes `summary.json` with the state hash and energy totals summed in the serial order of
