@@ -379,11 +379,13 @@ fn a_killed_study_resumes_to_the_same_table() {
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!out.join("study.csv").exists());
-    // Its run of the third case notices and exits.
+    // Its run of the third case notices and exits, unless it finished first (a case takes
+    // about 0.1 s, the check for the parent as long): then it counts as finished.
     std::thread::sleep(Duration::from_millis(300));
     let err = study(&[&file, "--output", o, "--threads", "1"]);
     assert!(
-        err.contains("6 cases, 2 finished before; running 4"),
+        err.contains("6 cases, 2 finished before; running 4")
+            || err.contains("6 cases, 3 finished before; running 3"),
         "{err}"
     );
     assert_eq!(read(&out.join("study.csv")), read(&whole.join("study.csv")));
