@@ -52,6 +52,20 @@ fn study(args: &[&str]) -> String {
     err
 }
 
+/// `sdg study FILE --dry-run` into a scratch folder, expecting success; returns its listing.
+fn dry_run(file: &Path) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let out = sdg(&[
+        "study",
+        file.to_str().unwrap(),
+        "--dry-run",
+        "--output",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}: {}", file.display(), stderr(&out));
+    String::from_utf8(out.stdout).unwrap()
+}
+
 fn read(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
@@ -75,16 +89,7 @@ fn every_shipped_study_is_run_here() {
 #[test]
 fn the_branching_convergence_study_is_valid_and_lists_its_cases() {
     let file = repo("configs/studies/branching_convergence.toml");
-    let dir = tempfile::tempdir().unwrap();
-    let out = sdg(&[
-        "study",
-        file.to_str().unwrap(),
-        "--dry-run",
-        "--output",
-        dir.path().to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let listing = String::from_utf8(out.stdout).unwrap();
+    let listing = dry_run(&file);
     let cases: Vec<&str> = listing.lines().filter(|l| l.contains("pending")).collect();
     assert_eq!(cases.len(), 24, "{listing}");
     assert!(
@@ -101,16 +106,7 @@ fn the_branching_convergence_study_is_valid_and_lists_its_cases() {
 #[test]
 fn the_asynchronous_branching_study_is_valid() {
     let file = repo("configs/studies/branching_async.toml");
-    let dir = tempfile::tempdir().unwrap();
-    let out = sdg(&[
-        "study",
-        file.to_str().unwrap(),
-        "--dry-run",
-        "--output",
-        dir.path().to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let listing = String::from_utf8(out.stdout).unwrap();
+    let listing = dry_run(&file);
     assert!(
         listing.contains("scheduler.deterministic=false"),
         "{listing}"
@@ -132,16 +128,7 @@ fn the_lefm_sweeps_are_valid_and_list_the_seed_s_load_ratios() {
         ),
     ] {
         let file = repo(&format!("configs/studies/{name}"));
-        let dir = tempfile::tempdir().unwrap();
-        let out = sdg(&[
-            "study",
-            file.to_str().unwrap(),
-            "--dry-run",
-            "--output",
-            dir.path().to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{name}: {}", stderr(&out));
-        let listing = String::from_utf8(out.stdout).unwrap();
+        let listing = dry_run(&file);
         let ratios: Vec<f64> = (listing.lines())
             .filter_map(|l| l.split("loading.load_ratio=").nth(1))
             .map(|r| r.trim().parse().unwrap())
