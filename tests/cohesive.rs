@@ -459,52 +459,6 @@ fn mode1_high_scales() -> (f64, f64, f64) {
     mode1_scales_at(10f64.powf(-1.0 / 128.0), 0.5e-3)
 }
 
-/// At sigma' = 10^(-1/128) the crack starts as soon as the load reaches its sustained value
-/// (t' = 1), already fast, and does not outrun c_R (seed 2.5.3, Fig. 2.8): the start of
-/// `mode1_lefm_high.toml`, to t' = 6. The whole run is `mode1_crack_at_high_load_stays_below_c_r`.
-#[test]
-fn mode1_crack_at_high_load_starts_at_once() {
-    let (tau, t0, c_r) = mode1_high_scales();
-    let end = t0 + 6.0 * tau;
-    let problem = common::shipped("mode1_lefm_high.toml", &[&format!("time.end={end:e}")]);
-    let (summary, dir) = common::solve(&problem, 2, true);
-    let rows = tip_rows(dir.path());
-    let start = (rows[0].0 - t0) / tau;
-    let tips = common::csv_columns(
-        &dir.path().join("crack_tips.csv"),
-        &["x_m", "extension_m", "speed_m_s"],
-    );
-    let early = tips[tips.len() / 4][2] / c_r;
-    let fastest = tips.iter().map(|s| s[2]).fold(0.0, f64::max) / c_r;
-    eprintln!(
-        "first tip state at t' = {start:.3}, x = {:.4e} m; speed {early:.3} c_R a quarter of the \
-         way, at most {fastest:.3} c_R; extension {:.3e} m at t' = 6",
-        tips[0][0],
-        rows.last().unwrap().1
-    );
-    if rows.last().unwrap().1 > 1e-4 {
-        eprintln!(
-            "{}",
-            std::fs::read_to_string(dir.path().join("crack_tips.csv")).unwrap()
-        );
-    }
-    // The crack starts at the initial tip (x = 0.5 mm), within the 3 um of the refined path.
-    assert!((tips[0][0] - 0.5e-3).abs() < 3e-6, "{}", tips[0][0]);
-    // Deterministic, so the check is the same on every machine: the start is sensitive to the
-    // order of refinements near the tip (the interface there sits at 0.81 delta_c under the load
-    // alone and approaches delta_c slowly). Asynchronous 2-thread runs started between t' = 1.05
-    // and 1.36 over eleven runs, and once just before t' = 1 (2026-11-25/26, this machine).
-    // Measured (deterministic): t' = 1.055 (LEFM: 1.5) at x = 0.5004 mm; 0.71 c_R a quarter of
-    // the way; at most 0.83 c_R by t' = 6 (23 um of extension).
-    // "At once": after the load's ramp (t' = 1) and well before LEFM's 1.5, as the seed's
-    // cohesive cracks start near t' = 1 at high loads (2.5.3).
-    assert!((1.0..1.2).contains(&start), "{start}");
-    assert!(early > 0.5, "{early}");
-    assert!(fastest < 1.0, "{fastest}");
-    assert!(summary.energy.balance_residual_rel.abs() < 1e-6);
-    assert_fracture_energy_never_negative(dir.path());
-}
-
 /// The seed's point against Xu and Needleman (2.6): even at sigma' = 10^(-1/128) every recorded
 /// tip speed stays below c_R, to t' = 60. Reports the energy released per unit extension once
 /// the crack runs (seed Fig. 2.9b: below phi, part of it spent on the uniform stretch ahead).

@@ -11,10 +11,12 @@ use std::time::{Duration, Instant};
 use common::{CONFIG, sdg, stderr};
 
 /// Study files shipped in configs/studies/, each run by a test here (the branching
-/// convergence study and the LEFM sweeps, hours on 2 cores, are checked and listed only).
-const SHIPPED: [&str; 5] = [
+/// convergence study and the LEFM sweeps, hours on 2 cores, are checked and listed only; the
+/// reduced LEFM sweep runs in tests/lefm_sweep.rs).
+const SHIPPED: [&str; 6] = [
     "branching_async.toml",
     "branching_convergence.toml",
+    "lefm_sweep_ci.toml",
     "lefm_sweep_high.toml",
     "lefm_sweep_low.toml",
     "plate_draws.toml",
@@ -115,7 +117,7 @@ fn the_asynchronous_branching_study_is_valid() {
 }
 
 /// The LEFM sweeps (scripts/lefm_sweep.py writes them): every case's config is valid, and the
-/// load ratios are the seed's, lowest first.
+/// load ratios are the seed's, lowest first (the reduced sweep of CI: two low, one high).
 #[test]
 fn the_lefm_sweeps_are_valid_and_list_the_seed_s_load_ratios() {
     for (name, exponents) in [
@@ -126,6 +128,7 @@ fn the_lefm_sweeps_are_valid_and_list_the_seed_s_load_ratios() {
                 .map(|d| -1.0 / d)
                 .to_vec(),
         ),
+        ("lefm_sweep_ci.toml", vec![-0.75, -0.5, -1.0 / 128.0]),
     ] {
         let file = repo(&format!("configs/studies/{name}"));
         let listing = dry_run(&file);

@@ -7,6 +7,9 @@
 //! equation of motion (2.63) with `Gamma = phi` gives the normalized tip speed
 //! `da'/dt' = 1 - 1 / F(t')^2` once `F >= 1` (zero before); `t' = t / tau'`,
 //! `a' = a / (tau' c_R)`.
+//!
+//! The cohesive process zone against its steady-state estimate (seed 2.4.2, Fig. 2.10):
+//! [`ZoneEstimate`].
 
 use serde::Serialize;
 
@@ -79,6 +82,107 @@ pub fn initiation() -> f64 {
     0.5 * (lo + hi)
 }
 
+/// Rice's factor `zeta` of (2.52) for potential-based cohesive laws, with the seed's process
+/// zone from the nominal tip (`delta_c`) to the trailing edge (traction 1% of the strength).
+pub const ZETA: f64 = 9.0 / 16.0;
+
+/// Tip states are compared with [`ZoneEstimate`] from this speed on, over `c_R`: after the
+/// initial rapid acceleration, where the seed finds the estimate good (Fig. 2.10a), and the
+/// zone, much shorter than at rest, is no longer the distance to the crack's origin.
+pub const ZONE_FROM_SPEED: f64 = 0.5;
+
+/// The steady-state size of the cohesive process zone of mode I (seed (2.52)-(2.54)):
+/// `Lambda(v) = Lambda_0 / A_I(v)`, `Lambda_0 = zeta pi mu / (1 - nu) phi / sigma_c^2`.
+/// Written with the wave speeds, `1 / (1 - nu) = 2 (1 - c_s^2 / c_d^2)` in plane strain (and
+/// with `nu / (1 + nu)` for `nu` in plane stress, whose `c_d` this is).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ZoneEstimate {
+    /// `Lambda_0`, m: the quasi-static size.
+    pub quasi_static: f64,
+    /// Dilatational wave speed `c_d`, m/s.
+    pub c_d: f64,
+    /// Shear wave speed `c_s`, m/s.
+    pub c_s: f64,
+}
+
+impl ZoneEstimate {
+    /// The estimate for shear modulus `mu` (Pa), wave speeds `c_d`, `c_s` (m/s), work of
+    /// separation `phi` (J/m^2) and strength `sigma_c` (Pa), with [`ZETA`].
+    pub fn new(mu: f64, c_d: f64, c_s: f64, phi: f64, sigma_c: f64) -> Self {
+        let mu_over_one_minus_nu = 2.0 * mu * (1.0 - (c_s / c_d).powi(2));
+        Self {
+            quasi_static: ZETA * std::f64::consts::PI * mu_over_one_minus_nu * phi
+                / (sigma_c * sigma_c),
+            c_d,
+            c_s,
+        }
+    }
+
+    /// Freund's universal function `A_I(v)` (2.53): `A_I = v^2 alpha_d / ((1 - nu) c_s^2 R)`,
+    /// `alpha_{d,s} = sqrt(1 - v^2 / c_{d,s}^2)`, `R = 4 alpha_d alpha_s - (1 + alpha_s^2)^2`;
+    /// 1 at rest (the limit), infinite at `c_R` and beyond (`R <= 0`).
+    pub fn universal_a(&self, v: f64) -> f64 {
+        let (b, k2) = ((v / self.c_s).powi(2), (self.c_s / self.c_d).powi(2));
+        if b < 1e-12 {
+            return 1.0;
+        }
+        let alpha_d = (1.0 - b * k2).max(0.0).sqrt();
+        let alpha_s = (1.0 - b).max(0.0).sqrt();
+        let r = 4.0 * alpha_d * alpha_s - (2.0 - b).powi(2);
+        if r <= 0.0 {
+            return f64::INFINITY;
+        }
+        2.0 * (1.0 - k2) * b * alpha_d / r
+    }
+
+    /// `Lambda(v)`, m, at tip speed `v` (m/s): 0 from `c_R` on.
+    pub fn at(&self, v: f64) -> f64 {
+        self.quasi_static / self.universal_a(v)
+    }
+}
+
+/// Statistics of the process zone over its estimate, `Lambda / Lambda(v)`, over the tip
+/// states whose speed is at least [`ZONE_FROM_SPEED`] `c_R` and below `c_R`, and whose zone has
+/// a trailing edge (is shorter than the extension: before the first trailing-edge crossing
+/// `crack_tips.csv` measures it to the crack's origin).
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct ZoneRatio {
+    /// Tip states counted.
+    pub states: usize,
+    /// Least ratio.
+    pub min: f64,
+    /// Median ratio (the mean of the middle two for an even count).
+    pub median: f64,
+    /// Largest ratio.
+    pub max: f64,
+}
+
+/// One tip state as [`compare`] reads it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TipPoint {
+    /// Normalized time `t'`.
+    pub time: f64,
+    /// Extension, m.
+    pub extension: f64,
+    /// Speed, m/s; NaN where none was fitted.
+    pub speed: f64,
+    /// Process zone length, m (the nominal tip to the trailing edge).
+    pub process_zone: f64,
+}
+
+/// The scales [`compare`] works in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Units {
+    /// `tau' c_R`, m: the unit of normalized length.
+    pub length: f64,
+    /// Work of separation `phi`, J/m^2.
+    pub phi: f64,
+    /// Rayleigh wave speed `c_R`, m/s.
+    pub c_r: f64,
+    /// The process zone's steady-state estimate.
+    pub zone: ZoneEstimate,
+}
+
 /// `lefm` in `summary.json`: the computed tip of the `[loading]` interface against the LEFM
 /// tip history, in normalized time `t' = (t - t0) / tau'` (`t0` the waves' arrival).
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -97,19 +201,18 @@ pub struct LefmComparison {
     /// and the last, over the extension between them (the latest tip state at or before each
     /// row), over `phi`; none when the run ends before `compare_from` or the tip did not move.
     pub energy_release_over_phi: Option<f64>,
+    /// The process zone over its steady-state estimate ([`ZoneEstimate`], `zeta = 9/16`) once
+    /// the tip runs at [`ZONE_FROM_SPEED`] `c_R` or faster; none without such a state.
+    pub process_zone_over_estimate: Option<ZoneRatio>,
 }
 
-/// The comparison of the tip states `tips` (`t'`, extension m) and the history rows `work`
-/// (`t'`, work of the cohesive tractions J/m), both in time order, from `t' = from`; `unit`
-/// is `tau' c_R` (m), `phi` the work of separation (J/m^2).
-pub fn compare(
-    tips: &[(f64, f64)],
-    work: &[(f64, f64)],
-    from: f64,
-    unit: f64,
-    phi: f64,
-) -> LefmComparison {
-    let late: Vec<(f64, f64)> = tips.iter().copied().filter(|s| s.0 >= from).collect();
+/// The comparison of the tip states `tips` and the history rows `work` (`t'`, work of the
+/// cohesive tractions J/m), both in time order, from `t' = from`, in `units`.
+pub fn compare(tips: &[TipPoint], work: &[(f64, f64)], from: f64, units: &Units) -> LefmComparison {
+    let late: Vec<(f64, f64)> = (tips.iter())
+        .filter(|s| s.time >= from)
+        .map(|s| (s.time, s.extension))
+        .collect();
     let end = late.last().map_or(0.0, |s| s.0);
     let reference = tip_history(end, (end * 200.0).ceil() as usize);
     let lefm_at = |t: f64| {
@@ -118,7 +221,7 @@ pub fn compare(
             .clamp(1, reference.len() - 1);
         let ((t0, a0, _), (t1, a1, _)) = (reference[i - 1], reference[i]);
         let s = if t1 > t0 { (t - t0) / (t1 - t0) } else { 0.0 };
-        (a0 + s * (a1 - a0)) * unit
+        (a0 + s * (a1 - a0)) * units.length
     };
     let tip_error_max = late
         .iter()
@@ -126,29 +229,80 @@ pub fn compare(
         .reduce(f64::max);
     let extension = |t: f64| {
         tips.iter()
-            .take_while(|s| s.0 <= t)
+            .take_while(|s| s.time <= t)
             .last()
-            .map_or(0.0, |s| s.1)
+            .map_or(0.0, |s| s.extension)
     };
     let energy_release_over_phi = match (work.iter().find(|r| r.0 >= from), work.last()) {
         (Some(&(t0, w0)), Some(&(t1, w1))) if extension(t1) > extension(t0) => {
-            Some((w1 - w0) / (extension(t1) - extension(t0)) / phi)
+            Some((w1 - w0) / (extension(t1) - extension(t0)) / units.phi)
         }
         _ => None,
     };
     LefmComparison {
-        onset_time: tips.first().map(|s| s.0),
+        onset_time: tips.first().map(|s| s.time),
         lefm_onset_time: initiation(),
         compare_from: from,
         tip_states_compared: late.len(),
         tip_error_max,
         energy_release_over_phi,
+        process_zone_over_estimate: zone_ratio(tips, units),
     }
+}
+
+/// [`ZoneRatio`] of `tips`.
+fn zone_ratio(tips: &[TipPoint], units: &Units) -> Option<ZoneRatio> {
+    let mut ratios: Vec<f64> = (tips.iter())
+        .filter(|s| s.speed >= ZONE_FROM_SPEED * units.c_r && s.speed < units.c_r)
+        .filter(|s| s.process_zone < s.extension * (1.0 - 1e-9))
+        .map(|s| s.process_zone / units.zone.at(s.speed))
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    let n = ratios.len();
+    (n > 0).then(|| ZoneRatio {
+        states: n,
+        min: ratios[0],
+        median: 0.5 * (ratios[(n - 1) / 2] + ratios[n / 2]),
+        max: ratios[n - 1],
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use sdg_solver::material::{Material, Plane};
+
+    /// PMMA of `configs/mode1_lefm.toml` in `plane` and its Xu-Needleman law (strength
+    /// 324 MPa, `phi = e sigma_c delta_c` with `delta_c` = 0.4 um).
+    fn pmma(plane: Plane) -> (Material, ZoneEstimate) {
+        let m = Material::new(3.24e9, 0.35, 1190.0, plane).unwrap();
+        let sigma_c = 3.24e8;
+        let phi = std::f64::consts::E * sigma_c * 4e-7;
+        (m, ZoneEstimate::new(m.mu(), m.c_d(), m.c_s(), phi, sigma_c))
+    }
+
+    /// In the units of `pmma`, with `tau' c_R` = `length`.
+    fn units(length: f64) -> Units {
+        let (m, zone) = pmma(Plane::Strain);
+        Units {
+            length,
+            phi: 350.0,
+            c_r: m.c_r(),
+            zone,
+        }
+    }
+
+    fn points(tips: &[(f64, f64)]) -> Vec<TipPoint> {
+        (tips.iter())
+            .map(|&(time, extension)| TipPoint {
+                time,
+                extension,
+                speed: f64::NAN,
+                process_zone: 0.0,
+            })
+            .collect()
+    }
 
     #[test]
     fn a_tip_that_is_lefm_s_compares_exactly() {
@@ -162,20 +316,100 @@ mod tests {
             .map(|r| (r.0, r.1 * unit))
             .collect();
         let work: Vec<(f64, f64)> = tips.iter().map(|&(t, a)| (t, 350.0 * a + 1.0)).collect();
-        let c = compare(&tips, &work, 3.0, unit, 350.0);
+        let c = compare(&points(&tips), &work, 3.0, &units(unit));
         assert!(c.tip_error_max.unwrap() < 1e-6, "{c:?}");
         assert_eq!(c.tip_states_compared, 201);
         assert!((c.energy_release_over_phi.unwrap() - 1.0).abs() < 1e-12);
         assert!((c.onset_time.unwrap() - start).abs() < 0.02);
+        // No speeds: no process zone compared.
+        assert_eq!(c.process_zone_over_estimate, None);
         // 5% ahead everywhere: an error of 0.05; half the work: 0.5 phi.
         let ahead: Vec<(f64, f64)> = tips.iter().map(|&(t, a)| (t, 1.05 * a)).collect();
         let half: Vec<(f64, f64)> = work.iter().map(|&(t, w)| (t, 0.5 * w)).collect();
-        let c = compare(&ahead, &half, 3.0, unit, 350.0 * 1.05);
+        let wider = Units {
+            phi: 350.0 * 1.05,
+            ..units(unit)
+        };
+        let c = compare(&points(&ahead), &half, 3.0, &wider);
         assert!((c.tip_error_max.unwrap() - 0.05).abs() < 1e-5, "{c:?}");
         assert!((c.energy_release_over_phi.unwrap() - 0.5 / 1.05 / 1.05).abs() < 1e-12);
         // A run that ends before t' = 3: nothing to compare.
-        let c = compare(&tips[..10], &work[..10], 3.0, unit, 350.0);
+        let c = compare(&points(&tips[..10]), &work[..10], 3.0, &units(unit));
         assert_eq!((c.tip_error_max, c.energy_release_over_phi), (None, None));
+    }
+
+    #[test]
+    fn the_process_zone_estimate_is_the_seed_s() {
+        let (m, zone) = pmma(Plane::Strain);
+        let (mu, nu, c_d, c_s, c_r) = (m.mu(), m.poisson(), m.c_d(), m.c_s(), m.c_r());
+        // (2.52) with zeta = 9/16: 10.95 um for this PMMA (configs/mode1_lefm.toml: 11 um).
+        let phi = std::f64::consts::E * 3.24e8 * 4e-7;
+        let rest = 9.0 / 16.0 * std::f64::consts::PI * mu / (1.0 - nu) * phi / 3.24e8f64.powi(2);
+        assert!((zone.quasi_static / rest - 1.0).abs() < 1e-12, "{zone:?}");
+        assert!((zone.quasi_static - 10.95e-6).abs() < 0.01e-6, "{zone:?}");
+        // (2.53) as the seed writes it, with nu: the same A_I; 1 at rest, growing to infinity
+        // at c_R, so the zone shrinks to nothing there.
+        let freund = |v: f64| {
+            let (ad, a_s) = (
+                (1.0 - (v / c_d).powi(2)).sqrt(),
+                (1.0 - (v / c_s).powi(2)).sqrt(),
+            );
+            v * v * ad / ((1.0 - nu) * c_s * c_s * (4.0 * ad * a_s - (1.0 + a_s * a_s).powi(2)))
+        };
+        assert_eq!(zone.universal_a(0.0), 1.0);
+        assert!((zone.universal_a(1e-3 * c_r) - 1.0).abs() < 1e-5);
+        let mut last = 1.0;
+        for k in 1..100 {
+            let v = 0.01 * f64::from(k) * c_r;
+            let a = zone.universal_a(v);
+            assert!(
+                (a / freund(v) - 1.0).abs() < 1e-9,
+                "{k}: {a} vs {}",
+                freund(v)
+            );
+            assert!(a > last, "{k}: {a}");
+            last = a;
+        }
+        assert!(zone.universal_a(0.9999 * c_r) > 100.0);
+        assert_eq!(zone.at(c_r * (1.0 + 1e-9)), 0.0);
+        assert!((zone.at(0.5 * c_r) - zone.quasi_static / freund(0.5 * c_r)).abs() < 1e-18);
+        // Plane stress: mu / (1 - nu) with nu / (1 + nu) for nu is E / 2.
+        let (_, stress) = pmma(Plane::Stress);
+        let e_half = 9.0 / 16.0 * std::f64::consts::PI * 1.62e9 * phi / 3.24e8f64.powi(2);
+        assert!(
+            (stress.quasi_static / e_half - 1.0).abs() < 1e-12,
+            "{stress:?}"
+        );
+    }
+
+    #[test]
+    fn the_process_zone_is_compared_once_the_tip_runs() {
+        let u = units(1e-3);
+        let c_r = u.c_r;
+        // Tip states at 0.2 to 0.98 c_R: those at 0.5 c_R and faster count, each zone the
+        // estimate times 0.9, 1.0, 1.1, 1.2, ...; slower ones (and the NaN) would be far off,
+        // and so would the first, at 0.6 c_R, whose zone reaches the origin (no trailing edge).
+        let speeds = [0.6, 0.2, f64::NAN, 0.49, 0.5, 0.7, 0.9, 0.98, 1.01];
+        let tips: Vec<TipPoint> = (speeds.iter().enumerate())
+            .map(|(i, &s)| TipPoint {
+                time: i as f64,
+                extension: if i == 0 { 1.0 } else { 1e-3 },
+                speed: s * c_r,
+                process_zone: if s >= 0.5 && i > 0 {
+                    (0.5 + 0.1 * i as f64) * u.zone.at(s * c_r)
+                } else {
+                    1.0
+                },
+            })
+            .collect();
+        let c = compare(&tips, &[], 3.0, &u);
+        let zone = c
+            .process_zone_over_estimate
+            .expect("four states at 0.5 c_R or faster");
+        assert_eq!(zone.states, 4, "{zone:?}");
+        assert!((zone.min - 0.9).abs() < 1e-12, "{zone:?}");
+        assert!((zone.median - 1.05).abs() < 1e-12, "{zone:?}");
+        assert!((zone.max - 1.2).abs() < 1e-12, "{zone:?}");
     }
 
     #[test]

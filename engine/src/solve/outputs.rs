@@ -97,34 +97,57 @@ impl Solve<'_> {
     }
 
     /// With `[loading]`: its interface's tip states in `crack_tips` (the text of
-    /// `crack_tips.csv`) and the work of the cohesive tractions in `history` (of
-    /// `history.csv`) against LEFM; `None` without `[loading]` or either table.
+    /// `crack_tips.csv`: time, extension, speed and process zone) and the work of the cohesive
+    /// tractions in `history` (of `history.csv`) against LEFM; `None` without `[loading]` or
+    /// either table.
     pub(crate) fn lefm(&self, crack_tips: Option<&str>, history: &str) -> Option<LefmComparison> {
         let loading = self.problem.loading?;
         let config = &self.problem.loaded.config;
         let from = config.loading.as_ref()?.compare_from;
         let (t0, tau) = (config.time.clock(loading.arrival_time), loading.scales.tau);
-        let columns = |text: &str, names: [&str; 2]| -> Option<Vec<(f64, f64)>> {
+        let columns = |text: &str, names: &[&str]| -> Option<Vec<Vec<f64>>> {
             let table = ReadTable::parse(text, "").ok()?;
-            let [a, b] = names.map(|n| table.column(n));
+            let at: Vec<usize> = names
+                .iter()
+                .map(|n| table.column(n))
+                .collect::<Option<_>>()?;
             let tag = table.column("interface");
             let name = &config.loading.as_ref()?.interface;
             let rows = table
                 .rows()
                 .filter(|r| tag.is_none_or(|c| r.get(c) == Some(name)));
-            rows.map(|r| Some(((number(r.get(a?)) - t0) / tau, number(r.get(b?)))))
-                .collect()
+            let row = |r: &csv::StringRecord| at.iter().map(|&c| number(r.get(c))).collect();
+            Some(rows.map(row).collect())
         };
-        let tips = columns(crack_tips?, ["t_s", "extension_m"])?;
-        let work = columns(history, ["time_s", "fracture_energy_j"])?;
-        let unit = tau * loading.scales.c_r;
-        Some(lefm::compare(
-            &tips,
-            &work,
-            from,
-            unit,
-            loading.scales.work_of_separation,
-        ))
+        let normalized = |t: f64| (t - t0) / tau;
+        let tips = columns(
+            crack_tips?,
+            &["t_s", "extension_m", "speed_m_s", "process_zone_length_m"],
+        )?;
+        let tips: Vec<lefm::TipPoint> = (tips.iter())
+            .map(|r| lefm::TipPoint {
+                time: normalized(r[0]),
+                extension: r[1],
+                speed: r[2],
+                process_zone: r[3],
+            })
+            .collect();
+        let work = columns(history, &["time_s", "fracture_energy_j"])?;
+        let work: Vec<(f64, f64)> = work.iter().map(|r| (normalized(r[0]), r[1])).collect();
+        let (scales, material) = (loading.scales, &self.problem.material);
+        let units = lefm::Units {
+            length: tau * scales.c_r,
+            phi: scales.work_of_separation,
+            c_r: scales.c_r,
+            zone: lefm::ZoneEstimate::new(
+                material.mu(),
+                material.c_d(),
+                material.c_s(),
+                scales.work_of_separation,
+                scales.sigma_bar / scales.load_ratio,
+            ),
+        };
+        Some(lefm::compare(&tips, &work, from, &units))
     }
 
     /// `crack_tips.csv` and its summary from the tip crossings recorded so far: per crack
