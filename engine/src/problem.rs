@@ -126,7 +126,7 @@ impl Problem {
             })
             .transpose()?;
         let fracture = config.fracture.as_ref().map(|f| {
-            Fracture::new(f, &mut mesh, |name| {
+            Fracture::new(f, &mut mesh, material.c_r(), |name| {
                 config.law_of(name).unwrap_or(Law::Bonded)
             })
         });

@@ -41,6 +41,14 @@ pub struct FractureConfig {
     /// and curl onto its own crack.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tangent_length: Option<f64>,
+    /// The fastest a crack surface tip may advance, as a fraction of the Rayleigh speed `c_R`
+    /// (> 0, default 1; `inf`: the seed's rule, one edge at every tent of the tip). A tip
+    /// extends only when its new edge's length over the time since the tip reached its vertex
+    /// is at most this speed; until then it waits for its next tent. Without it, a tip in
+    /// material loaded above `threshold` (around a nucleation) makes an edge at every tent, at
+    /// the mesh's pace `h / dt` rather than any crack's.
+    #[serde(default = "default_max_tip_speed")]
+    pub max_tip_speed: f64,
     /// No split for a crack leaves a piece of an edge shorter than this, m (> 0). Default
     /// `adapt.min_edge`, or without `[adapt]` a quarter of the initial mesh's shortest edge.
     /// Below `adapt.min_edge` the crack may split triangles the indicator no longer refines,
@@ -119,6 +127,10 @@ impl FractureConfig {
 
 fn default_snap() -> f64 {
     0.2
+}
+
+fn default_max_tip_speed() -> f64 {
+    1.0
 }
 
 #[cfg(test)]
@@ -211,6 +223,11 @@ shield_angle = 35.0
                 "fracture.floor_angle=-5.0",
                 "fracture.floor_angle",
                 "(0, 90]",
+            ),
+            (
+                "fracture.max_tip_speed=0.0",
+                "fracture.max_tip_speed",
+                "fraction of the Rayleigh speed",
             ),
             (
                 "fracture.min_piece=-1e-6",

@@ -429,6 +429,15 @@ impl Config {
                 format!("must be in (0, 90] degrees, got {angle}"),
             );
         }
+        if f.max_tip_speed.is_nan() || f.max_tip_speed <= 0.0 {
+            return fail(
+                "max_tip_speed",
+                format!(
+                    "must be a positive fraction of the Rayleigh speed (or inf), got {}",
+                    f.max_tip_speed
+                ),
+            );
+        }
         for (key, length) in [
             ("macro_length", f.macro_length),
             ("short_macro_length", f.short_macro_length),

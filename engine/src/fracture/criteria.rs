@@ -35,6 +35,8 @@ pub struct Fracture {
     /// Where no split may be made, the crack takes an edge within this angle of its
     /// direction, radians.
     pub floor_angle: f64,
+    /// The fastest a crack surface tip advances, m/s (infinite: one edge per tent).
+    pub max_tip_speed: f64,
     /// Length over which a tip's crack tangent is averaged, m; none: its last edge.
     pub tangent_length: Option<f64>,
     /// Mixity factor `beta` of the damage law of `tag`.
@@ -63,9 +65,17 @@ pub struct Nucleation {
 pub struct Tip {
     pub direction: f64,
     pub branch: u32,
+    /// When the crack reached the vertex, s (the front time of the extension that made the
+    /// tip; minus infinity for the tips of the initial cracks).
+    #[serde(default = "f64_neg_infinity")]
+    pub since: f64,
     /// The directions of the tip's last propagation test that the mesh could not take then.
     #[serde(default)]
     pub pending: Option<Pending>,
+}
+
+fn f64_neg_infinity() -> f64 {
+    f64::NEG_INFINITY
 }
 
 /// Directions (radians, unused entries NaN) a tip's propagation test chose when no extension
@@ -93,8 +103,14 @@ pub struct Crossing {
 
 impl Fracture {
     /// The settings of `config` on `mesh`, whose tag list gains `config.tag` if no edge has it
-    /// yet; `law` gives the law of a tag name (validated: `config.tag`'s is a damage law).
-    pub fn new(config: &FractureConfig, mesh: &mut Mesh, law: impl Fn(&str) -> Law) -> Self {
+    /// yet; `law` gives the law of a tag name (validated: `config.tag`'s is a damage law);
+    /// `c_r` is the material's Rayleigh speed, m/s.
+    pub fn new(
+        config: &FractureConfig,
+        mesh: &mut Mesh,
+        c_r: f64,
+        law: impl Fn(&str) -> Law,
+    ) -> Self {
         let tag = mesh.add_tag(&config.tag);
         let Law::Damage(damage) = law(&config.tag) else {
             unreachable!("validated: fracture.tag has a damage law")
@@ -110,6 +126,7 @@ impl Fracture {
             floor_angle: config
                 .floor_angle
                 .map_or(0.5 * config.shield_angle.to_radians(), f64::to_radians),
+            max_tip_speed: config.max_tip_speed * c_r,
             tangent_length: config.tangent_length,
             beta: damage.beta,
             delay: damage.delay,
@@ -141,6 +158,33 @@ impl Fracture {
         y.atan2(x)
     }
 
+    /// True when `tip` at vertex `v` may make its edges along `directions` (radians, NaN
+    /// entries unused) at time `t` (s): each edge, from `v` to where its direction crosses the
+    /// opposite edge, is at most [`Fracture::max_tip_speed`] times the time since the tip
+    /// reached `v`.
+    pub fn in_time(
+        &self,
+        mesh: &Mesh,
+        v: VertexId,
+        tip: Tip,
+        directions: [f64; 2],
+        t: f64,
+    ) -> bool {
+        if self.max_tip_speed == f64::INFINITY || tip.since == f64::NEG_INFINITY {
+            return true;
+        }
+        let reach = self.max_tip_speed * (t - tip.since);
+        directions.iter().filter(|d| d.is_finite()).all(|&d| {
+            crossing(mesh, v, d).is_none_or(|c| {
+                let [p, q] = mesh.edges()[c.edge as usize]
+                    .vertices
+                    .map(|w| mesh.vertex(w));
+                let at = [0, 1].map(|k| p[k] + c.fraction * (q[k] - p[k]));
+                geometry::distance(mesh.vertex(v), at) <= reach
+            })
+        })
+    }
+
     /// True when an edge with `tag` is a crack edge.
     pub fn is_crack(&self, tag: Option<TagId>) -> bool {
         tag.is_some_and(|t| self.cracks.contains(&t))
@@ -169,6 +213,7 @@ impl Fracture {
                 let tip = Tip {
                     direction: angle_of(mesh, other_end(mesh, edges[0], v), v),
                     branch,
+                    since: f64::NEG_INFINITY,
                     pending: None,
                 };
                 branch += 1;

@@ -72,7 +72,11 @@ impl Solve<'_> {
         let (directions, nucleation) = match state.tips[v as usize] {
             Some(tip) => {
                 let candidates = fracture.candidates(mesh, v, stress);
-                let directions = fracture.select(mesh, v, tip, &candidates);
+                let mut directions = fracture.select(mesh, v, tip, &candidates);
+                if !fracture.in_time(mesh, v, tip, directions, times[1]) {
+                    // Faster than a crack: the tip waits for its next tent.
+                    directions = [f64::NAN; 2];
+                }
                 if !candidates.is_empty() {
                     let [x, y] = mesh.vertex(v);
                     let degrees_mpa = |(d, s): (f64, f64)| (d.to_degrees(), s * 1e-6);
@@ -231,6 +235,7 @@ impl Solve<'_> {
                 state.tips[target as usize] = Some(Tip {
                     direction: fracture.tangent(tip.map(|t| t.direction), at, to),
                     branch,
+                    since: time,
                     pending: None,
                 });
             }
@@ -274,6 +279,7 @@ impl Solve<'_> {
         let tip = tip.unwrap_or(Tip {
             direction: d,
             branch: 0,
+            since: f64::NEG_INFINITY,
             pending: None,
         });
         // The edge's ends, the one nearer the crossing first.

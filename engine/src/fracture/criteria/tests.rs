@@ -29,6 +29,7 @@ pub(crate) fn notched() -> (Mesh, Fracture) {
         shield: 35f64.to_radians(),
         snap: 0.2,
         floor_angle: 17.5f64.to_radians(),
+        max_tip_speed: 1000.0,
         tangent_length: None,
         beta: 1.0,
         delay: 1e-8,
@@ -212,6 +213,38 @@ fn a_crack_nucleates_across_tension_where_weak_defects_are_and_nowhere_else() {
     );
 }
 
+/// A tip that reached its vertex at `since` extends along a direction only once the new edge
+/// (to the crossing with the opposite edge, here the grid's 0.25 m diagonal) over the time
+/// since is at most the speed limit; the initial cracks' tips and the seed's rule never wait.
+#[test]
+fn a_tip_waits_until_its_new_edge_is_within_the_speed_limit() {
+    let (mesh, mut fracture) = notched();
+    let v = vertex_at(&mesh, [0.5, 0.5]);
+    let mut tip = fracture.initial_tips(&mesh)[v as usize].unwrap();
+    let ahead = [0.0, f64::NAN];
+    let length = 0.25;
+    let time = length / fracture.max_tip_speed;
+    assert!(fracture.in_time(&mesh, v, tip, ahead, 0.0));
+    tip.since = 1.0;
+    for (t, allowed) in [
+        (1.0, false),
+        (1.0 + 0.99 * time, false),
+        (1.0 + 1.01 * time, true),
+    ] {
+        assert_eq!(
+            fracture.in_time(&mesh, v, tip, ahead, t),
+            allowed,
+            "t = {t}"
+        );
+    }
+    // Both directions of a branching must be in time: the diagonal one is longer.
+    let fork = [0.0, 45f64.to_radians()];
+    assert!(!fracture.in_time(&mesh, v, tip, fork, 1.0 + 1.01 * time));
+    assert!(fracture.in_time(&mesh, v, tip, fork, 1.0 + 1.42 * time));
+    fracture.max_tip_speed = f64::INFINITY;
+    assert!(fracture.in_time(&mesh, v, tip, fork, 1.0));
+}
+
 #[test]
 fn a_direction_crosses_the_opposite_edge_where_the_geometry_says() {
     let (mesh, _) = notched();
@@ -308,6 +341,7 @@ fn a_tip_s_pending_directions_survive_a_checkpoint() {
     let tip = Tip {
         direction: 0.25,
         branch: 3,
+        since: 2.5e-7,
         pending: Some(Pending {
             directions: [-0.5, f64::NAN],
             time: 1.25e-6,
