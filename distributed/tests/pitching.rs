@@ -66,10 +66,7 @@ fn sequences(vertices: usize, reports: &[RankReport], partition: &Partition) -> 
 }
 
 fn options(seed: u64) -> Options {
-    Options {
-        seed,
-        idle_limit: Duration::from_secs(10),
-    }
+    Options::new(seed, Duration::from_secs(10))
 }
 
 #[test]
@@ -159,6 +156,11 @@ impl Transport for Reversing {
             self.flush()?;
         }
         self.0.receive(timeout)
+    }
+
+    fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
+        self.flush()?;
+        self.0.sum(values)
     }
 
     fn is_fifo(&self) -> bool {
@@ -332,6 +334,10 @@ impl Transport for Lossy {
         self.0.receive(timeout)
     }
 
+    fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
+        self.0.sum(values)
+    }
+
     fn is_fifo(&self) -> bool {
         self.0.is_fifo()
     }
@@ -353,17 +359,14 @@ fn lost_updates_stall_with_an_error_and_a_stray_update_aborts_every_rank() {
         .map(|v| Pitcher::new(v.mesh(), 1.0, 0.5, 0.2).unwrap())
         .collect();
     let run = |ends: Vec<Lossy>| -> Vec<Result<RankReport, PitchingError>> {
-        let options = Options {
-            seed: 0,
-            idle_limit: Duration::from_millis(200),
-        };
+        let options = &Options::new(0, Duration::from_millis(200));
         std::thread::scope(|s| {
             let handles: Vec<_> = ends
                 .into_iter()
                 .enumerate()
                 .map(|(r, mut end)| {
                     let (view, pitcher, front) = (&views[r], &pitchers[r], &fronts[r]);
-                    s.spawn(move || pitch_rank(view, pitcher, front, &mut end, &options))
+                    s.spawn(move || pitch_rank(view, pitcher, front, &mut end, options))
                 })
                 .collect();
             handles.into_iter().map(|h| h.join().unwrap()).collect()

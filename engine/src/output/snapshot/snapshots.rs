@@ -476,6 +476,60 @@ impl Snapshots {
         }));
     }
 
+    /// The slices collected for the snapshots not written yet, as CBOR: what a checkpoint of a
+    /// run over ranks gathers from each rank ([`Self::add_pending`]).
+    pub(crate) fn pending_cbor(&self) -> Vec<u8> {
+        let mut cbor = Vec::new();
+        ciborium::into_writer(&self.snapshots[self.next..], &mut cbor)
+            .expect("slices encode in memory");
+        cbor
+    }
+
+    /// Adds another rank's slices, [`Self::pending_cbor`] of snapshots of the same times, to
+    /// the snapshots not written yet. Errors: bytes that are not such slices.
+    pub(crate) fn add_pending(&mut self, cbor: &[u8]) -> Result<(), String> {
+        let other: Vec<Pending> =
+            ciborium::from_reader(cbor).map_err(|e| format!("snapshot slices: {e}"))?;
+        for o in other {
+            let Some(p) = self.snapshots[self.next..]
+                .iter_mut()
+                .find(|p| p.index == o.index)
+            else {
+                return Err(format!(
+                    "slices of snapshot {} that is not pending",
+                    o.index
+                ));
+            };
+            p.triangles.extend(o.triangles);
+            p.fallback.extend(o.fallback);
+            p.segments.extend(o.segments);
+        }
+        Ok(())
+    }
+
+    /// A copy of the schedule, the files written and the slices collected, without the writer
+    /// or the piece: what a checkpoint stores.
+    pub(crate) fn to_stored(&self) -> Self {
+        let mut cbor = Vec::new();
+        ciborium::into_writer(self, &mut cbor).expect("snapshots encode in memory");
+        let mut copy: Self = ciborium::from_reader(&cbor[..]).expect("decoded as encoded");
+        copy.vtu = self.vtu;
+        copy
+    }
+
+    /// Forgets the slices collected and the files written, keeping which snapshots are still
+    /// to come: the part of a rank other than 0 of a run over ranks resumed from a checkpoint
+    /// (rank 0 keeps the slices and the collection).
+    pub(crate) fn forget_collected(&mut self) {
+        self.written.clear();
+        self.crack_files.clear();
+        for p in &mut self.snapshots[self.next..] {
+            p.triangles.clear();
+            p.fallback.clear();
+            p.segments.clear();
+        }
+    }
+
     /// Snapshot files written so far: (time in s, file name).
     pub fn written(&self) -> &[(f64, String)] {
         &self.written
