@@ -35,7 +35,7 @@ use crate::output::write_output;
 use crate::problem::Problem;
 use crate::rank_checkpoint::Prior;
 use crate::rank_outputs::{history_csv, merged_sums};
-use crate::rank_run::{Failure, Shared, pause_request, run_rank};
+use crate::rank_run::{Failure, OTHER_RANK_STOPPED, Shared, pause_request, run_rank};
 use crate::solve::Control;
 use crate::solve::checkpoint::{self, Folder};
 use crate::solve::context::initial_state;
@@ -145,17 +145,23 @@ pub fn solve_ranks(
             })
             .collect()
     });
-    let mut aborted = None;
-    let mut done = None;
+    let mut own: Vec<EngineError> = Vec::new();
+    let (mut aborted, mut done) = (None, None);
     for result in results {
         match result {
             Ok(Some(d)) => done = Some(d),
             Ok(None) => {}
-            Err(Failure::Own(e)) => return Err(e),
+            Err(Failure::Own(e)) => own.push(e),
             Err(e) => aborted = aborted.or(Some(e.into_error())),
         }
     }
-    match (aborted, done) {
+    // A failure before a stop, and a stop with the reason of the rank that was asked.
+    let told = |e: &EngineError| match e {
+        EngineError::Checkpointed { reason, .. } => reason != OTHER_RANK_STOPPED,
+        _ => true,
+    };
+    own.sort_by_key(|e| (e.exit_code() == 3, !told(e)));
+    match (own.into_iter().next().or(aborted), done) {
         (Some(e), _) => Err(e),
         (None, Some(done)) => Ok(done),
         (None, None) => Err(EngineError::Runtime("rank 0 returned no summary".into())),

@@ -147,15 +147,17 @@ impl<'p> RankOutputs<'p> {
     }
 
     /// What a checkpoint gathers from this rank, once every file handed to the writer is on
-    /// disk: the history sums as [`Self::finish`] returns them, then the length in bytes of
-    /// the slices of the snapshots not written yet and those bytes, 8 to a value's bits.
+    /// disk: the history sums as [`Self::finish`] returns them, then the number of snapshots
+    /// it has written, the length in bytes of the slices of [`Snapshots::pending_cbor`] and
+    /// those bytes, 8 to a value's bits.
     pub(crate) fn checkpoint_values(&mut self) -> Result<Vec<f64>, EngineError> {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
         self.snapshots.finish()?;
         let mut values = self.sum_values();
-        let bytes = self.snapshots.pending_cbor();
+        let (next, bytes) = self.snapshots.pending_cbor();
+        values.push(next as f64);
         values.push(bytes.len() as f64);
         values.extend(bytes.chunks(8).map(|chunk| {
             let mut word = [0_u8; 8];
@@ -165,9 +167,16 @@ impl<'p> RankOutputs<'p> {
         Ok(values)
     }
 
-    /// A copy of this rank's snapshots as a checkpoint stores them.
-    pub(crate) fn stored_snapshots(&self) -> Snapshots {
-        self.snapshots.to_stored()
+    /// A copy of this rank's snapshots as a checkpoint stores them when every rank has
+    /// written the first `next` ([`Snapshots::rewound`]).
+    pub(crate) fn stored_snapshots(&self, next: usize) -> Snapshots {
+        self.snapshots.rewound(next)
+    }
+
+    /// Forgets what the snapshots keep for checkpoints of the first `next`, which every rank
+    /// has written.
+    pub(crate) fn checkpointed(&mut self, next: usize) {
+        self.snapshots.forget_kept(next);
     }
 
     /// The history sums as values: per history time and part, the number of partials, then the
@@ -382,19 +391,22 @@ pub(crate) fn merged_sums<'a>(
     Ok((sums, rests))
 }
 
-/// The snapshot slices a rank's [`RankOutputs::checkpoint_values`] put after its sums (`rest`)
-/// added to `snapshots`. Errors: values of the wrong form.
-pub(crate) fn add_pending(snapshots: &mut Snapshots, rest: &[f64]) -> Result<(), EngineError> {
-    let bad = |why: String| EngineError::Runtime(format!("snapshot slices of a rank: {why}"));
-    let (&len, words) = rest.split_first().ok_or_else(|| bad("none".into()))?;
-    let len = len as usize;
+/// The number of snapshots a rank has written, and its snapshot slices as CBOR, from the
+/// values [`RankOutputs::checkpoint_values`] put after its sums (`rest`). Errors: values of
+/// the wrong form.
+pub(crate) fn pending(rest: &[f64]) -> Result<(usize, Vec<u8>), EngineError> {
+    let bad = |why: &str| EngineError::Runtime(format!("snapshot slices of a rank: {why}"));
+    let [next, len, words @ ..] = rest else {
+        return Err(bad("none"));
+    };
+    let len = *len as usize;
     if words.len() != len.div_ceil(8) {
-        return Err(bad("of the wrong length".into()));
+        return Err(bad("of the wrong length"));
     }
     let mut bytes: Vec<u8> = words
         .iter()
         .flat_map(|w| w.to_bits().to_le_bytes())
         .collect();
     bytes.truncate(len);
-    snapshots.add_pending(&bytes).map_err(bad)
+    Ok((*next as usize, bytes))
 }

@@ -29,7 +29,7 @@ use crate::error::EngineError;
 use crate::estimate::Estimate;
 use crate::problem::Problem;
 use crate::rank_checkpoint::{self, Pausing, Prior};
-use crate::rank_outputs::{RankOutputs, add_pending, merged_sums};
+use crate::rank_outputs::{RankOutputs, merged_sums, pending};
 use crate::solve::book::history_times;
 use crate::solve::checkpoint::Folder;
 use crate::solve::work::deadline;
@@ -37,6 +37,9 @@ use crate::solve::{Control, RunSummary};
 
 /// Longest a rank waits for an update while it has vertices left, before it reports a stall.
 pub(crate) const IDLE_LIMIT: Duration = Duration::from_secs(120);
+
+/// The reason a rank gives for a stop that another rank was asked for.
+pub(crate) const OTHER_RANK_STOPPED: &str = "another rank was asked to stop";
 
 /// What every rank of a run shares.
 pub(crate) struct Shared<'a> {
@@ -228,7 +231,6 @@ pub(crate) fn run_rank<T: Transport>(
             next = next.map(|k| k + 1);
         }
         report.outputs = outputs.checkpoint_values()?;
-        let snapshots = (rank == 0).then(|| outputs.stored_snapshots());
         let gathered = gather(
             mesh,
             &view,
@@ -237,22 +239,19 @@ pub(crate) fn run_rank<T: Transport>(
             IDLE_LIMIT,
         )
         .map_err(|e| failed(ranks, e))?;
-        let outcome = match (gathered, snapshots) {
-            (Some(gathered), Some(snapshots)) => {
-                let gathered = collected.add(gathered);
-                let pausing = (gathered, snapshots, &energy0, shared.started.elapsed());
-                Some(write_checkpoint(shared, pausing, number))
-            }
-            _ => None,
-        };
-        let (ok, time) = match &outcome {
-            Some(Ok((_, _, time))) => (1, time.to_bits()),
-            Some(Err(_)) => (0, 0),
-            None => (0, 0),
+        let outcome = gathered.map(|gathered| {
+            let gathered = collected.add(gathered);
+            let pausing = (gathered, &outputs, &energy0, shared.started.elapsed());
+            write_checkpoint(shared, pausing, number)
+        });
+        let (ok, time, next_all) = match &outcome {
+            Some(Ok((_, _, time, next_all))) => (1, time.to_bits(), *next_all as u64),
+            _ => (0, 0, 0),
         };
         let status = transport
-            .sum(&[u64::from(rank == 0) - ok, time])
+            .sum(&[u64::from(rank == 0) - ok, time, next_all])
             .map_err(transport_failed)?;
+        outputs.checkpointed(status[2] as usize);
         if status[0] > 0 {
             return Err(match outcome {
                 Some(Err(e)) => Failure::Own(e),
@@ -261,7 +260,7 @@ pub(crate) fn run_rank<T: Transport>(
                 )),
             });
         }
-        if let Some(Ok((_, seconds, _))) = &outcome {
+        if let Some(Ok((_, seconds, _, _))) = &outcome {
             written.0 += 1;
             written.1 += seconds;
         }
@@ -273,7 +272,7 @@ pub(crate) fn run_rank<T: Transport>(
         ended = over;
         if met[2] > 0 && !over {
             return Err(Failure::Own(EngineError::Checkpointed {
-                reason: stop.unwrap_or_else(|| "another rank was asked to stop".into()),
+                reason: stop.unwrap_or_else(|| OTHER_RANK_STOPPED.into()),
                 time: config.time.clock(f64::from_bits(status[1])),
                 checkpoint: path,
             }));
@@ -282,25 +281,30 @@ pub(crate) fn run_rank<T: Transport>(
 }
 
 /// Writes checkpoint number `number` on rank 0 from the `gathered` state after `elapsed` since
-/// the (re)start, with `snapshots` (rank 0's, to which the other ranks' pending slices are
-/// added) and the initial front's energy `energy0`. Returns the path, the seconds it took and
-/// the front's least time (s).
+/// the (re)start, with the snapshots of rank 0's `outputs` and the other ranks' pending slices,
+/// and the initial front's energy `energy0`. Returns the path, the seconds it took, the
+/// front's least time (s) and the number of snapshots every rank has written.
 fn write_checkpoint(
     shared: &Shared<'_>,
-    (gathered, mut snapshots, energy0, elapsed): (
+    (gathered, outputs, energy0, elapsed): (
         &Gathered,
-        crate::output::snapshot::Snapshots,
+        &RankOutputs<'_>,
         &sdg_solver::norms::FrontEnergy,
         Duration,
     ),
     number: u64,
-) -> Result<(PathBuf, f64, f64), EngineError> {
+) -> Result<(PathBuf, f64, f64, usize), EngineError> {
     let problem = shared.problem;
-    let outputs: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
+    let values: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
     let times = history_times(problem.loaded.config.time.span()).len();
-    let (sums, rests) = merged_sums(&outputs, times)?;
-    for rest in rests.iter().skip(1) {
-        add_pending(&mut snapshots, rest)?;
+    let (sums, rests) = merged_sums(&values, times)?;
+    let pending: Vec<(usize, Vec<u8>)> = rests.into_iter().map(pending).collect::<Result<_, _>>()?;
+    let next_all = pending.iter().map(|p| p.0).min().unwrap_or(0);
+    let mut snapshots = outputs.stored_snapshots(next_all);
+    for (_, cbor) in pending.iter().skip(1) {
+        snapshots
+            .add_pending(cbor)
+            .map_err(|e| EngineError::Runtime(format!("a rank's snapshot slices: {e}")))?;
     }
     let serial = gathered.in_serial_order();
     let pausing = Pausing {
@@ -313,7 +317,7 @@ fn write_checkpoint(
     };
     let (path, seconds) =
         rank_checkpoint::write(problem, shared.folder, shared.prior, pausing, number)?;
-    Ok((path, seconds, gathered.front.min_time()))
+    Ok((path, seconds, gathered.front.min_time(), next_all))
 }
 
 /// The check between tents of a run of `problem` with `options`: true when `control` has a
