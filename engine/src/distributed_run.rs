@@ -206,7 +206,13 @@ pub fn solve_mpi(
     })();
     match result {
         Ok(done) => Ok(done),
-        Err(Failure::Own(e)) if e.exit_code() != 3 => {
+        // Every rank has the checkpoint on disk: end at once, before `mpirun`, which got the
+        // signal too, kills the processes (1 s after its SIGTERM by default).
+        Err(Failure::Own(e @ EngineError::Checkpointed { .. })) => {
+            crate::progress::note(format_args!("stopped: rank {rank}: {e}"));
+            transport.abort(e.exit_code().into())
+        }
+        Err(Failure::Own(e)) => {
             crate::progress::note(format_args!("error: rank {rank}: {e}"));
             transport.abort(1)
         }

@@ -298,7 +298,8 @@ fn write_checkpoint(
     let values: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
     let times = history_times(problem.loaded.config.time.span()).len();
     let (sums, rests) = merged_sums(&values, times)?;
-    let pending: Vec<(usize, Vec<u8>)> = rests.into_iter().map(pending).collect::<Result<_, _>>()?;
+    let pending: Vec<(usize, Vec<u8>)> =
+        rests.into_iter().map(pending).collect::<Result<_, _>>()?;
     let next_all = pending.iter().map(|p| p.0).min().unwrap_or(0);
     let mut snapshots = outputs.stored_snapshots(next_all);
     for (_, cbor) in pending.iter().skip(1) {

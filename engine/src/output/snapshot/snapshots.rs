@@ -511,7 +511,9 @@ impl Snapshots {
             segments: Vec::new(),
             ..self.snapshots[*index].clone()
         });
-        let pending: Vec<Pending> = kept.chain(self.snapshots[self.next..].iter().cloned()).collect();
+        let pending: Vec<Pending> = kept
+            .chain(self.snapshots[self.next..].iter().cloned())
+            .collect();
         let mut cbor = Vec::new();
         ciborium::into_writer(&pending, &mut cbor).expect("slices encode in memory");
         (self.next, cbor)
@@ -525,7 +527,10 @@ impl Snapshots {
             ciborium::from_reader(cbor).map_err(|e| format!("snapshot slices: {e}"))?;
         for o in other.into_iter().filter(|o| o.index >= self.next) {
             let Some(p) = self.snapshots.get_mut(o.index) else {
-                return Err(format!("slices of snapshot {}, which there is not", o.index));
+                return Err(format!(
+                    "slices of snapshot {}, which there is not",
+                    o.index
+                ));
             };
             p.triangles.extend(o.triangles);
             p.fallback.extend(o.fallback);
