@@ -57,6 +57,9 @@ type Written = Vec<(f64, String)>;
 /// Parts of a front facet's energy: kinetic, strain, flux (scaled units).
 pub(crate) const PARTS: usize = 3;
 
+/// The energy parts of the front at one history time, summed exactly.
+pub(crate) type HistorySums = [ExactSum; PARTS];
+
 /// What one rank records of its tents for the outputs: the [`Observer`] of a run over ranks.
 pub(crate) struct RankOutputs<'p> {
     problem: &'p Problem,
@@ -374,7 +377,7 @@ pub(crate) fn history_csv(
 pub(crate) fn merged_sums<'a>(
     outputs: &[&'a [f64]],
     times: usize,
-) -> Result<(Vec<[ExactSum; PARTS]>, Vec<&'a [f64]>), EngineError> {
+) -> Result<(Vec<HistorySums>, Vec<&'a [f64]>), EngineError> {
     let mut sums: Vec<[ExactSum; PARTS]> = vec![Default::default(); times];
     let mut rests = Vec::new();
     for (rank, values) in outputs.iter().enumerate() {

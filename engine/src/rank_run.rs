@@ -223,7 +223,7 @@ pub(crate) fn run_rank<T: Transport>(
                 wall_time_s: shared.started.elapsed().as_secs_f64(),
                 checkpoints: written,
             };
-            return finish(problem, shared.dir, end, shared.estimate.clone())
+            return finish(problem, shared.dir, end, *shared.estimate)
                 .map(Some)
                 .map_err(Failure::Own);
         }
