@@ -1,12 +1,13 @@
 //! Messages between ranks and the transport that carries them.
 //!
-//! The pitching protocol ([`crate::pitching`]) needs three messages: a vertex's new front time
+//! The pitching protocol ([`crate::pitching`]) needs four messages: a vertex's new front time
 //! after a tent ([`Update`], with a generation number so that a late arrival never overwrites a
 //! newer one, and when patches are solved the elements the tent left under the receiver's
 //! triangles of its star, [`Cells`], each with a generation of its own), "I am done" with the
 //! count of messages sent before it ([`Message::Done`], so that termination needs no ordering
-//! between messages), and "stop, I failed" ([`Message::Abort`]). A [`Transport`] sends them
-//! without blocking and receives them with a timeout. [`loopback::Loopback`] carries them
+//! between messages), "stop, I failed" ([`Message::Abort`]) and "pause for a checkpoint"
+//! ([`Message::Pause`]). A [`Transport`] sends them without blocking, receives them with a
+//! timeout, and sums values over the ranks at a barrier ([`Transport::sum`]). [`loopback::Loopback`] carries them
 //! between threads of one process, with seeded random delays; `mpi::MpiTransport` (with the
 //! cargo feature `mpi`) carries them between MPI processes as [`Message::encode`]'s bytes,
 //! through one communication thread per process.
