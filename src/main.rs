@@ -398,11 +398,7 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
     exit_with_study()?;
     let job = &args.job;
     let problem = setup(&job.config)?;
-    if let Some(s) = args.max_wall_time.filter(|s| !(s.is_finite() && *s > 0.0)) {
-        return Err(EngineError::Input(format!(
-            "--max-wall-time: must be a positive number of seconds, got {s}"
-        )));
-    }
+    check_max_wall_time(args.max_wall_time)?;
     let options = RunOptions {
         restart: args.restart.clone(),
         max_wall_time_s: args.max_wall_time,
@@ -460,17 +456,31 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
     Ok(())
 }
 
+/// `--max-wall-time`: a positive number of seconds, if given.
+fn check_max_wall_time(seconds: Option<f64>) -> Result<(), EngineError> {
+    match seconds.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        Some(s) => Err(EngineError::Input(format!(
+            "--max-wall-time: must be a positive number of seconds, got {s}"
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// `sdg run --ranks N` (`ranks`) or, without, `sdg run --mpi`: the front split over ranks.
-/// No signal listener: a run over ranks writes no checkpoints, so SIGTERM and SIGINT end it
-/// at once.
+/// Signals are requests as on threads: SIGTERM, SIGINT and SIGHUP checkpoint and stop every
+/// rank (exit 3), SIGUSR1 checkpoints; under `mpirun` each process listens to its own.
 fn run_over_ranks(args: &RunArgs, ranks: Option<usize>) -> Result<(), EngineError> {
+    let control = Arc::new(Control::default());
+    signals::listen_to_signals(control.clone())?;
     exit_with_study()?;
     let job = &args.job;
     let problem = setup(&job.config)?;
+    check_max_wall_time(args.max_wall_time)?;
     let options = RunOptions {
         restart: args.restart.clone(),
         max_wall_time_s: args.max_wall_time,
         trace: args.trace.clone(),
+        control: Some(control),
         ..options(job)
     };
     let partition = args

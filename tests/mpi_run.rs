@@ -1,13 +1,16 @@
 //! `mpirun -n R sdg run CONFIG --mpi`: one rank per MPI process gives the state hash and patch
 //! count of `sdg run --threads 1`, the `history.csv` of the run over in-process ranks and
 //! snapshot pieces holding the threaded run's slices; a run under `mpirun` without `--mpi` is
-//! refused. Built
+//! refused; SIGTERM to `mpirun` checkpoints and stops every rank, and SIGKILL of one rank ends
+//! the others within 10 s; either run goes on from its checkpoint on any number of ranks or on
+//! threads to the state of the run never stopped. Built
 //! only with the feature `mpi`; needs OpenMPI's `mpirun` on the PATH.
 
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 use common::mpirun::MPIRUN_ENV;
 use common::{pieces, run_args, sdg, slices, stderr, summary_json as summary};
@@ -111,4 +114,176 @@ fn a_run_under_mpirun_without_mpi_is_refused() {
     assert_eq!(result.status.code(), Some(2));
     assert!(stderr(&result).contains("add --mpi"), "{}", stderr(&result));
     assert!(!dir.path().join("summary.json").exists());
+}
+
+/// A plane wave that takes seconds over 2 MPI ranks, with a checkpoint every `every` s.
+fn long_plane_wave(every: &str) -> Vec<String> {
+    [
+        "mesh.nx=16",
+        "mesh.ny=16",
+        "time.end=8e-6",
+        "output.snapshot_times=[]",
+        "output.png=false",
+    ]
+    .into_iter()
+    .map(String::from)
+    .chain(std::iter::once(format!("checkpoint.every_sim_s={every}")))
+    .collect()
+}
+
+/// `mpirun -n 2 sdg run` of `overrides` into `out` with `--mpi`, started.
+fn spawn_mpirun(overrides: &[&str], out: &Path) -> Child {
+    let args = run_args("plane_wave.toml", overrides, &["--mpi"], out);
+    Command::new("mpirun")
+        .args(["-n", "2", env!("CARGO_BIN_EXE_sdg")])
+        .args(&args)
+        .envs(MPIRUN_ENV)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("mpirun runs (OpenMPI installed: openmpi-bin)")
+}
+
+/// Waits up to `limit` for `child`; returns its output, or `None` if it is still running
+/// (then it is killed).
+fn wait_within(mut child: Child, limit: Duration) -> Option<Output> {
+    let start = Instant::now();
+    while start.elapsed() < limit {
+        if child.try_wait().unwrap().is_some() {
+            return Some(child.wait_with_output().unwrap());
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    None
+}
+
+/// The state hash and patches of the run of `overrides` on threads (`extra` arguments) into
+/// `out`.
+fn on_threads(overrides: &[&str], extra: &[&str], out: &Path) -> (serde_json::Value, u64) {
+    let args = run_args("plane_wave.toml", overrides, extra, out);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = sdg(&args);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let s = summary(out);
+    (s["state_hash"].clone(), s["patches"].as_u64().unwrap())
+}
+
+#[test]
+fn sigterm_to_mpirun_checkpoints_every_rank_and_the_run_goes_on_anywhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let overrides = long_plane_wave("1");
+    let overrides: Vec<&str> = overrides.iter().map(String::as_str).collect();
+    let expected = on_threads(
+        &overrides,
+        &["--threads", "2"],
+        &dir.path().join("reference"),
+    );
+    let out = dir.path().join("stopped");
+    let child = spawn_mpirun(&overrides, &out);
+    std::thread::sleep(Duration::from_millis(1500));
+    let pid = child.id().to_string();
+    assert!(
+        Command::new("kill")
+            .args(["-TERM", &pid])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let result = wait_within(child, Duration::from_secs(10)).expect("mpirun ends");
+    let err = stderr(&result);
+    for rank in 0..2 {
+        assert!(
+            err.contains(&format!("stopped: rank {rank}: SIGTERM")),
+            "{err}"
+        );
+    }
+    assert!(!out.join("summary.json").exists());
+    let folder = out.join("checkpoints").display().to_string();
+    for ranks in [2, 4] {
+        let restarted = dir.path().join(format!("restart-{ranks}"));
+        let args = run_args(
+            "plane_wave.toml",
+            &overrides,
+            &["--mpi", "--restart", &folder],
+            &restarted,
+        );
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let result = mpirun(ranks, &args);
+        assert!(result.status.success(), "{}", stderr(&result));
+        let s = summary(&restarted);
+        assert_eq!(
+            (s["state_hash"].clone(), s["patches"].as_u64().unwrap()),
+            expected
+        );
+    }
+    let threads = dir.path().join("restart-threads");
+    let extra = ["--threads", "2", "--restart", &folder];
+    assert_eq!(on_threads(&overrides, &extra, &threads), expected);
+}
+
+/// The pid of rank `rank` of the `sdg` processes writing into `out`.
+fn rank_pid(out: &Path, rank: u32) -> Option<String> {
+    let out = out.display().to_string();
+    std::fs::read_dir("/proc").ok()?.flatten().find_map(|e| {
+        let pid = e.file_name().into_string().ok()?;
+        pid.parse::<u32>().ok()?;
+        let cmdline = std::fs::read(e.path().join("cmdline")).ok()?;
+        let environ = std::fs::read(e.path().join("environ")).ok()?;
+        let has = |bytes: &[u8], s: &str| bytes.split(|&b| b == 0).any(|a| a == s.as_bytes());
+        let sdg = String::from_utf8_lossy(&cmdline).contains("sdg");
+        (sdg && has(&cmdline, "--mpi")
+            && has(&cmdline, &out)
+            && has(&environ, &format!("OMPI_COMM_WORLD_RANK={rank}")))
+        .then_some(pid)
+    })
+}
+
+#[test]
+fn sigkill_of_one_rank_ends_the_others_and_the_last_checkpoint_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let overrides = long_plane_wave("1e-6");
+    let overrides: Vec<&str> = overrides.iter().map(String::as_str).collect();
+    let expected = on_threads(
+        &overrides,
+        &["--threads", "2"],
+        &dir.path().join("reference"),
+    );
+    let out = dir.path().join("killed");
+    let child = spawn_mpirun(&overrides, &out);
+    let first = out.join("checkpoints/checkpoint_000000.sdgc");
+    let start = Instant::now();
+    while !first.exists() && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(first.exists(), "a first checkpoint");
+    let pid = rank_pid(&out, 1).expect("rank 1 runs");
+    assert!(
+        Command::new("kill")
+            .args(["-KILL", &pid])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let killed = Instant::now();
+    let result = wait_within(child, Duration::from_secs(10)).expect("the others end within 10 s");
+    assert!(!result.status.success());
+    assert!(killed.elapsed() < Duration::from_secs(10));
+    assert!(!out.join("summary.json").exists());
+    let folder = out.join("checkpoints").display().to_string();
+    let restarted = dir.path().join("restarted");
+    let args = run_args(
+        "plane_wave.toml",
+        &overrides,
+        &["--mpi", "--restart", &folder],
+        &restarted,
+    );
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = mpirun(2, &args);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let s = summary(&restarted);
+    assert_eq!(
+        (s["state_hash"].clone(), s["patches"].as_u64().unwrap()),
+        expected
+    );
 }

@@ -1,6 +1,7 @@
 //! `sdg run --ranks N`: the front split over in-process ranks gives the state hash, patch count
-//! and energies of the run on one thread, for every partition; what it cannot do yet is bad
-//! input (exit 2) naming the key.
+//! and energies of the run on one thread, for every partition; a run over ranks stopped at a
+//! checkpoint goes on from it on any number of ranks or on threads to the same state; what it
+//! cannot do yet is bad input (exit 2) naming the key.
 
 mod common;
 
@@ -245,9 +246,9 @@ fn what_ranks_cannot_do_yet_is_bad_input_naming_the_key() {
             vec![
                 repo("plane_wave.toml"),
                 "--set".into(),
-                "checkpoint.at_end=true".into(),
+                "output.spacetime_mesh=true".into(),
             ],
-            "checkpoint.at_end",
+            "output.spacetime_mesh",
         ),
     ];
     for (args, needle) in cases {
@@ -275,4 +276,158 @@ fn what_ranks_cannot_do_yet_is_bad_input_naming_the_key() {
     ] {
         assert_eq!(sdg(args).status.code(), Some(2), "{args:?}");
     }
+}
+
+/// The state hash, patch count and snapshot slices (ASCII) of the run in `out`.
+fn state(out: &Path, snapshots: usize) -> (serde_json::Value, serde_json::Value, Vec<Vec<String>>) {
+    let summary = summary_json(out);
+    let files = summary["snapshots"].as_array().unwrap().clone();
+    assert_eq!(files.len(), snapshots, "{files:?}");
+    let slices = files
+        .iter()
+        .enumerate()
+        .map(|(index, file)| {
+            let name = file[1].as_str().unwrap();
+            match name.strip_suffix(".pvtu") {
+                Some(_) => {
+                    let pieces: Vec<_> = std::fs::read_dir(out)
+                        .unwrap()
+                        .map(|e| e.unwrap().path())
+                        .filter(|p| {
+                            let n = p.file_name().unwrap().to_str().unwrap();
+                            n.starts_with(&format!("snapshot_{index:04}_")) && n.ends_with(".vtu")
+                        })
+                        .collect();
+                    slices(&pieces)
+                }
+                None => slices(&[out.join(name)]),
+            }
+        })
+        .collect();
+    (
+        summary["state_hash"].clone(),
+        summary["patches"].clone(),
+        slices,
+    )
+}
+
+/// Runs `name` with `overrides` (a checkpoint every `every` s) over 3 ranks, then from its
+/// first checkpoint on 2 and 4 ranks and on threads, and on 2 ranks from the first checkpoint
+/// of the run on threads: each ends with the state hash, patches and snapshot slices of the
+/// run never stopped.
+fn assert_restarts_are_the_run_never_stopped(name: &str, overrides: &[&str], snapshots: usize) {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("reference");
+    run(name, overrides, &["--threads", "2"], &reference);
+    let expected = state(&reference, snapshots);
+    let checkpointed = dir.path().join("checkpointed");
+    run(
+        name,
+        overrides,
+        &["--ranks", "3", "--partition", "random"],
+        &checkpointed,
+    );
+    assert_eq!(state(&checkpointed, snapshots), expected);
+    let threads = dir.path().join("threads-checkpointed");
+    run(name, overrides, &["--threads", "2"], &threads);
+    let first = |out: &Path| {
+        let file = out.join("checkpoints/checkpoint_000000.sdgc");
+        assert!(file.is_file(), "{}", file.display());
+        file.display().to_string()
+    };
+    let cases = [
+        (first(&checkpointed), &["--ranks", "2"][..]),
+        (
+            first(&checkpointed),
+            &["--ranks", "4", "--partition", "stripes"],
+        ),
+        (first(&checkpointed), &["--threads", "2"]),
+        (first(&threads), &["--ranks", "2", "--partition", "random"]),
+    ];
+    for (i, (checkpoint, extra)) in cases.iter().enumerate() {
+        let out = dir.path().join(format!("restart-{i}"));
+        let mut args = vec!["--restart", checkpoint.as_str()];
+        args.extend_from_slice(extra);
+        let summary = run(name, overrides, &args, &out);
+        assert_eq!(
+            summary["checkpoint"]["restarted_from"].as_str(),
+            Some(checkpoint.as_str())
+        );
+        assert_eq!(state(&out, snapshots), expected, "{args:?}");
+    }
+}
+
+#[test]
+fn a_plane_wave_checkpointed_over_ranks_restarts_on_any_rank_count_and_on_threads() {
+    let overrides = [
+        "mesh.nx=8",
+        "mesh.ny=8",
+        "time.end=1e-6",
+        "checkpoint.every_sim_s=3e-7",
+        "output.snapshot_times=[3e-7, 5e-7, 1e-6]",
+        "output.png=false",
+        "output.vtu=\"ascii\"",
+    ];
+    assert_restarts_are_the_run_never_stopped("plane_wave.toml", &overrides, 3);
+}
+
+#[test]
+fn a_frictional_interface_checkpointed_over_ranks_restarts_on_any_rank_count_and_on_threads() {
+    let overrides = [
+        "mesh.nx=8",
+        "mesh.ny=8",
+        "time.end=4e-6",
+        "checkpoint.every_sim_s=1.5e-6",
+        "output.snapshot_times=[2e-6, 4e-6]",
+        "output.interface_probes=[]",
+        "output.png=false",
+        "output.vtu=\"ascii\"",
+    ];
+    assert_restarts_are_the_run_never_stopped("stick_slip.toml", &overrides, 2);
+}
+
+#[test]
+fn a_run_over_ranks_stopped_by_the_wall_time_limit_goes_on_to_the_same_state() {
+    let overrides = [
+        "mesh.nx=16",
+        "mesh.ny=16",
+        "time.end=3e-6",
+        "output.snapshot_times=[1e-6, 2e-6, 3e-6]",
+        "output.png=false",
+        "output.vtu=\"ascii\"",
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("reference");
+    run(
+        "plane_wave.toml",
+        &overrides,
+        &["--threads", "2"],
+        &reference,
+    );
+    let expected = state(&reference, 3);
+    let out = dir.path().join("stopped");
+    let args = run_args(
+        "plane_wave.toml",
+        &overrides,
+        &["--ranks", "2", "--max-wall-time", "0.3"],
+        &out,
+    );
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = sdg(&args);
+    // Stopped mid-run on any machine this test runs on (the run takes seconds).
+    assert_eq!(result.status.code(), Some(3), "{}", stderr(&result));
+    assert!(
+        stderr(&result).contains("--max-wall-time"),
+        "{}",
+        stderr(&result)
+    );
+    assert!(!out.join("summary.json").exists());
+    let folder = out.join("checkpoints").display().to_string();
+    run(
+        "plane_wave.toml",
+        &overrides,
+        &["--ranks", "3", "--restart", &folder],
+        &out,
+    );
+    assert_eq!(state(&out, 3), expected);
 }

@@ -84,10 +84,7 @@ fn pitch(
     } = CAUSALITY;
     let pitcher = Pitcher::new(view.mesh(), c_max, safety, t_end).map_err(|e| e.to_string())?;
     let front = Front::flat(view.mesh().vertices().len(), 0.0);
-    let options = Options {
-        seed: 1,
-        idle_limit: Duration::from_secs(20),
-    };
+    let options = Options::new(1, Duration::from_secs(20));
     // Start together, so that the wait below is for updates, not for slower process starts.
     transport.sum(&[0]).map_err(|e| e.to_string())?;
     let start = Instant::now();

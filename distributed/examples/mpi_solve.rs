@@ -57,10 +57,7 @@ fn solve(
     .map_err(|e| e.to_string())?;
     let front = Front::flat(view.mesh().vertices().len(), 0.0);
     let solution = physics.initial_solution(&view);
-    let options = Options {
-        seed: 1,
-        idle_limit: Duration::from_secs(60),
-    };
+    let options = Options::new(1, Duration::from_secs(60));
     // Start together, so that the wait below is for updates, not for slower process starts.
     transport.sum(&[0]).map_err(|e| e.to_string())?;
     let start = Instant::now();
@@ -80,10 +77,7 @@ fn serial(problem: &Problem) -> Result<RankSolution, String> {
         max_delay: Duration::ZERO,
         fifo: true,
     };
-    let options = Options {
-        seed: 0,
-        idle_limit: Duration::from_secs(60),
-    };
+    let options = Options::new(0, Duration::from_secs(60));
     let mut ranks = solve_threads(&problem.mesh, &one, causality, physics, fifo, &options)
         .map_err(|e| e.to_string())?;
     ranks.pop().ok_or("no rank".to_string())

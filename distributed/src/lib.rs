@@ -25,7 +25,7 @@
 //!   patch report and the values the caller reports, through messages of the same transport.
 //!
 //! Not built yet: METIS (the `metis` crate behind a feature), mesh-changing events and
-//! fracture across ranks, deterministic rounds over ranks, checkpoints per rank. `sdg run
+//! fracture across ranks, deterministic rounds over ranks. `sdg run
 //! --ranks` uses [`Loopback`], `sdg run --mpi` the MPI transport. See `distributed/README.md`.
 
 pub mod gathering;
@@ -41,10 +41,11 @@ pub mod view;
 pub use gathering::{Gathered, gather, gather_threads};
 pub use partition::{Partition, PartitionError, Rank};
 pub use pitching::{
-    Causality, CellKind, Options, PitchingError, RankReport, SolvedPatch, pitch_rank, run_threads,
+    Causality, CellKind, Options, Pause, PauseRequest, PitchingError, RankReport, SolvedPatch,
+    pitch_rank, run_threads,
 };
 pub use solving::{
-    Observer, Physics, RankSolution, solve_rank, solve_rank_observed, solve_threads,
+    Observer, Physics, RankSolution, rank_state, solve_rank, solve_rank_observed, solve_threads,
     solve_threads_observed,
 };
 pub use transport::loopback::{Loopback, LoopbackOptions};

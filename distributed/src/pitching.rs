@@ -27,8 +27,24 @@
 //! it received as many messages from each as announced. No global poll; messages may arrive in
 //! any order (FIFO per pair is not needed). An error on a rank sends [`Message::Abort`] to
 //! every other rank, which stop with [`PitchingError::Aborted`].
+//!
+//! # Pauses (checkpoints)
+//! A run may end before the end time, every message delivered, so that the caller can gather
+//! the front and go on (or restart) from it ([`Pause`]). With [`Pause::at`] a rank pitches
+//! only vertices below that time and is done when every owned vertex has reached it: the
+//! ranks stop after exactly the tents with `t_old` below it, the same cut for every
+//! partition and timing, with no tent capped (a tent is the uninterrupted run's). On a
+//! [`Pause::requested`] request (a signal, a wall-time limit) a rank stops pitching at once
+//! and sends [`Message::Pause`] to its neighbour ranks (counted in its done count), which stop
+//! too and pass it on unless they said done already; the ranks then stop wherever they are.
+//! Either way the front and the elements on every rank are a state of the uninterrupted run
+//! (no update is in flight once every rank has finished), and the tents that follow from it
+//! are that run's: per-vertex tent sequences depend on the front and the elements only, and a
+//! new run from the paused state starts its generations afresh, which is safe because no
+//! message of the old run is left.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use sdg_mesh::{Front, Mesh, PitchError, Pitcher, Tent, VertexId};
@@ -41,12 +57,46 @@ use crate::transport::{Message, Transport, TransportError, Update};
 use crate::view::{LocalView, ViewError};
 
 /// How a rank runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug)]
 pub struct Options {
     /// Seed of the order in which a rank tries its candidates (any order gives the same front).
     pub seed: u64,
     /// Longest wait for a message while something is left to do; then the rank reports a stall.
     pub idle_limit: Duration,
+    /// When to stop before the end time.
+    pub pause: Pause,
+}
+
+impl Options {
+    /// A rank seeded `seed` that reports a stall after `idle_limit`, running to the end time.
+    pub fn new(seed: u64, idle_limit: Duration) -> Self {
+        Self {
+            seed,
+            idle_limit,
+            pause: Pause::default(),
+        }
+    }
+}
+
+/// A request to pause, asked between tents; true stops the rank.
+pub type PauseRequest = Arc<dyn Fn() -> bool + Send + Sync>;
+
+/// When a rank stops before the end time (see the module docs): at a time, or when asked.
+#[derive(Clone, Default)]
+pub struct Pause {
+    /// Pitch only vertices below this time, s; none: to the end time.
+    pub at: Option<f64>,
+    /// Asked between tents: true stops pitching now and tells the other ranks.
+    pub requested: Option<PauseRequest>,
+}
+
+impl std::fmt::Debug for Pause {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Pause")
+            .field("at", &self.at)
+            .field("requested", &self.requested.is_some())
+            .finish()
+    }
 }
 
 /// The causality parameters every rank builds its [`Pitcher`] from, on its own view.
@@ -215,6 +265,10 @@ pub struct RankReport {
     /// Values the caller sets after the run (its observer's results, see
     /// [`crate::solving::Observer`]), which [`crate::gather`] carries to rank 0 as they are.
     pub outputs: Vec<f64>,
+    /// Owned vertices left below the end time: more than 0 after a [`Pause`].
+    pub below_end: usize,
+    /// The rank stopped on a [`Pause::requested`] request or a neighbour's [`Message::Pause`].
+    pub paused: bool,
 }
 
 /// What a solved patch adds to a run's totals.
@@ -239,8 +293,15 @@ struct Runner<'v, T, W> {
     candidates: Vec<VertexId>,
     queued: Vec<bool>,
     order: SplitMix64,
-    /// Owned vertices below the end time.
+    /// Pitch only vertices below this time, s: the end time or the pause's.
+    limit: f64,
+    /// Owned vertices below `limit`.
     below: usize,
+    /// Asked between tents whether to stop.
+    requested: Option<PauseRequest>,
+    /// Stopped on a request or a neighbour's pause; and whether the neighbours were told.
+    paused: bool,
+    told: bool,
     /// Per rank, messages sent to it and received from it, and its done count if it said so.
     sent: Vec<u64>,
     received: Vec<u64>,
@@ -254,8 +315,7 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
     }
 
     fn offer(&mut self, v: VertexId) {
-        let t_end = self.pitcher.t_end();
-        if self.view.is_owned(v) && !self.queued[v as usize] && self.front.time(v) < t_end {
+        if self.view.is_owned(v) && !self.queued[v as usize] && self.front.time(v) < self.limit {
             self.queued[v as usize] = true;
             self.candidates.push(v);
         }
@@ -267,11 +327,11 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
         }
     }
 
-    /// True when owned `v` is below the end time and first in `(time, global id)` among its
+    /// True when owned `v` is below the limit and first in `(time, global id)` among its
     /// neighbours on this rank's view.
     fn is_first(&self, v: VertexId) -> bool {
         let (t, g) = (self.front.time(v), self.view.global(v));
-        t < self.pitcher.t_end()
+        t < self.limit
             && self.view.mesh().vertex_neighbors(v).iter().all(|&w| {
                 let tw = self.front.time(w);
                 tw > t || (tw == t && self.view.global(w) > g)
@@ -317,7 +377,7 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
         };
         self.work.tent(self.view, self.front, &tent)?;
         self.generation[v as usize] += 1;
-        if tent.t_new >= self.pitcher.t_end() {
+        if tent.t_new >= self.limit {
             self.below -= 1;
         }
         for i in 0..self.view.sharers(v).len() {
@@ -368,14 +428,23 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
             }
             Message::Done { sent } => self.done[from as usize] = Some(sent),
             Message::Abort => return Err(PitchingError::Aborted { rank, by: from }),
+            Message::Pause => {
+                self.received[from as usize] += 1;
+                self.paused = true;
+            }
         }
         Ok(())
+    }
+
+    /// True when this rank pitches no more: paused, or every owned vertex at the limit.
+    fn stopped(&self) -> bool {
+        self.paused || self.below == 0
     }
 
     /// True when this rank is done and has heard all its neighbour ranks say so, with every
     /// message they announced received.
     fn finished(&self) -> bool {
-        self.below == 0
+        self.stopped()
             && self
                 .view
                 .neighbour_ranks()
@@ -395,11 +464,22 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
             {
                 self.handle(from, message)?;
             }
-            if let Some(v) = self.next_ready() {
+            if !self.paused && self.requested.as_ref().is_some_and(|r| r()) {
+                self.paused = true;
+            }
+            if self.paused && !self.told && !said_done {
+                self.told = true;
+                for i in 0..self.view.neighbour_ranks().len() {
+                    self.send(self.view.neighbour_ranks()[i], Message::Pause)?;
+                }
+            }
+            if !self.paused
+                && let Some(v) = self.next_ready()
+            {
                 self.pitch(v)?;
                 continue;
             }
-            if self.below == 0 && !said_done {
+            if self.stopped() && !said_done {
                 said_done = true;
                 for i in 0..self.view.neighbour_ranks().len() {
                     let r = self.view.neighbour_ranks()[i];
@@ -458,6 +538,8 @@ pub(crate) fn run_rank<T: Transport, W: Work>(
 ) -> Result<RankReport, PitchingError> {
     let n = view.mesh().vertices().len();
     let ranks = transport.ranks();
+    let t_end = pitcher.t_end();
+    let limit = options.pause.at.map_or(t_end, |at| at.min(t_end));
     let mut state = Runner {
         view,
         pitcher,
@@ -468,10 +550,11 @@ pub(crate) fn run_rank<T: Transport, W: Work>(
         candidates: Vec::new(),
         queued: vec![false; n],
         order: SplitMix64::new(options.seed ^ u64::from(view.rank())),
-        below: view
-            .owned()
-            .filter(|&v| front.time(v) < pitcher.t_end())
-            .count(),
+        limit,
+        below: view.owned().filter(|&v| front.time(v) < limit).count(),
+        requested: options.pause.requested.clone(),
+        paused: false,
+        told: false,
         sent: vec![0; ranks],
         received: vec![0; ranks],
         done: vec![None; ranks],
@@ -487,6 +570,8 @@ pub(crate) fn run_rank<T: Transport, W: Work>(
     match state.run(options.idle_limit) {
         Ok(()) => {
             let mut report = state.report;
+            report.below_end = view.owned().filter(|&v| front.time(v) < t_end).count();
+            report.paused = state.paused;
             state.work.into_report(&mut report);
             Ok(report)
         }

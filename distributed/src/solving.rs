@@ -86,6 +86,34 @@ impl Physics<'_> {
     }
 }
 
+/// The pitcher, local front and local solution of the rank whose view is `view`, from the whole
+/// mesh's `front` (s, by global vertex) and `solution` (elements by global triangle, faces by
+/// global edge): a run that goes on from a paused or checkpointed state.
+pub fn rank_state(
+    view: &LocalView,
+    causality: Causality,
+    physics: Physics<'_>,
+    (front, solution): (&Front, &FrontSolution),
+) -> Result<(sdg_mesh::Pitcher, Front, FrontSolution), PitchingError> {
+    let (pitcher, local_front) = rank_start(view, causality, &front.snapshot())?;
+    let local = physics.initial_solution(view);
+    for t in 0..local.len() {
+        let global = view.global_triangle(t as u32) as usize;
+        let energy = solution.energy(global);
+        solution.with_element(global, |element| {
+            if let Some((geometry, coefficients)) = element {
+                local.store(t, geometry, coefficients, energy);
+            }
+        });
+    }
+    for e in 0..local.edges() {
+        if let Some(face) = solution.face(view.global_edge(e as u32) as usize) {
+            local.store_face(e, &face);
+        }
+    }
+    Ok((pitcher, local_front, local))
+}
+
 /// A rank's result: its report, view, front, and the elements and interface faces on it.
 #[derive(Debug)]
 pub struct RankSolution {

@@ -1,12 +1,13 @@
 //! Messages between ranks and the transport that carries them.
 //!
-//! The pitching protocol ([`crate::pitching`]) needs three messages: a vertex's new front time
+//! The pitching protocol ([`crate::pitching`]) needs four messages: a vertex's new front time
 //! after a tent ([`Update`], with a generation number so that a late arrival never overwrites a
 //! newer one, and when patches are solved the elements the tent left under the receiver's
 //! triangles of its star, [`Cells`], each with a generation of its own), "I am done" with the
 //! count of messages sent before it ([`Message::Done`], so that termination needs no ordering
-//! between messages), and "stop, I failed" ([`Message::Abort`]). A [`Transport`] sends them
-//! without blocking and receives them with a timeout. [`loopback::Loopback`] carries them
+//! between messages), "stop, I failed" ([`Message::Abort`]) and "pause for a checkpoint"
+//! ([`Message::Pause`]). A [`Transport`] sends them without blocking, receives them with a
+//! timeout, and sums values over the ranks at a barrier ([`Transport::sum`]). [`loopback::Loopback`] carries them
 //! between threads of one process, with seeded random delays; `mpi::MpiTransport` (with the
 //! cargo feature `mpi`) carries them between MPI processes as [`Message::encode`]'s bytes,
 //! through one communication thread per process.
@@ -121,6 +122,10 @@ pub enum Message {
     },
     /// The sender failed; the receiver stops too.
     Abort,
+    /// The sender stops pitching for a checkpoint ([`crate::pitching::Pause`]); the receiver
+    /// stops too and tells its own neighbour ranks. Counted like an update in
+    /// [`Message::Done`]'s `sent`.
+    Pause,
 }
 
 /// Bytes of an encoded [`Message::Update`] without cells; each cell adds 8 bytes and 8 per
@@ -136,6 +141,8 @@ pub enum TransportError {
     Malformed { kind: u8, len: usize },
     #[error("the transport's communication thread has ended")]
     Closed,
+    #[error("rank {by} failed")]
+    Aborted { by: Rank },
 }
 
 /// Carries [`Message`]s between the ranks of one run. One value per rank; sends never wait for
@@ -157,6 +164,11 @@ pub trait Transport: Send {
     /// True when messages from one sender to one receiver arrive in the order they were sent
     /// (MPI's non-overtaking rule). The pitching protocol does not need it.
     fn is_fifo(&self) -> bool;
+
+    /// Element-wise sums of `values` over all ranks, once every rank has called it (a
+    /// barrier), after every message this rank sent before. Collective: every rank calls it
+    /// with as many values. Messages arriving meanwhile wait for the next [`Self::receive`].
+    fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError>;
 }
 
 impl Update {
@@ -171,7 +183,7 @@ impl Message {
     /// generation, time bits, then count and values per cell of the elements and of the faces
     /// ([`UPDATE_BYTES`]), then per element its triangle and generation and the elements'
     /// values' bits, then the same for the faces; kind 1 and the count for done; kind 2 for
-    /// abort.
+    /// abort; kind 3 for pause.
     pub fn encode(&self, out: &mut Vec<u8>) {
         match self {
             Message::Update(u) => {
@@ -192,6 +204,7 @@ impl Message {
                 out.extend(sent.to_le_bytes());
             }
             Message::Abort => out.push(2),
+            Message::Pause => out.push(3),
         }
     }
 
@@ -225,6 +238,7 @@ impl Message {
             }
             (1, 9) => Ok(Message::Done { sent: long(1) }),
             (2, 1) => Ok(Message::Abort),
+            (3, 1) => Ok(Message::Pause),
             _ => Err(malformed),
         }
     }
@@ -258,6 +272,7 @@ mod tests {
             }),
             Message::Done { sent: 1 << 40 },
             Message::Abort,
+            Message::Pause,
         ];
         let mut bytes = Vec::new();
         for m in &messages {
@@ -294,6 +309,6 @@ mod tests {
             Err(TransportError::Malformed { kind: 0, len })
         );
         assert!(Message::decode(&[]).is_err());
-        assert!(Message::decode(&[3]).is_err());
+        assert!(Message::decode(&[4]).is_err());
     }
 }

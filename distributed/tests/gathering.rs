@@ -74,10 +74,7 @@ fn gathering_through_a_transport_gives_the_serial_runs_elements_and_tents() {
         max_delay: Duration::ZERO,
         fifo: true,
     };
-    let options = Options {
-        seed: 3,
-        idle_limit: Duration::from_secs(20),
-    };
+    let options = Options::new(3, Duration::from_secs(20));
     let one = Partition::coordinate(mesh, 1).unwrap();
     let serial = solve_threads(mesh, &one, causality, physics, fifo, &options).unwrap();
     let serial = gather_threads(mesh, &serial).unwrap();

@@ -66,10 +66,7 @@ fn sequences(vertices: usize, reports: &[RankReport], partition: &Partition) -> 
 }
 
 fn options(seed: u64) -> Options {
-    Options {
-        seed,
-        idle_limit: Duration::from_secs(10),
-    }
+    Options::new(seed, Duration::from_secs(10))
 }
 
 #[test]
@@ -159,6 +156,11 @@ impl Transport for Reversing {
             self.flush()?;
         }
         self.0.receive(timeout)
+    }
+
+    fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
+        self.flush()?;
+        self.0.sum(values)
     }
 
     fn is_fifo(&self) -> bool {
@@ -332,6 +334,10 @@ impl Transport for Lossy {
         self.0.receive(timeout)
     }
 
+    fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
+        self.0.sum(values)
+    }
+
     fn is_fifo(&self) -> bool {
         self.0.is_fifo()
     }
@@ -353,17 +359,14 @@ fn lost_updates_stall_with_an_error_and_a_stray_update_aborts_every_rank() {
         .map(|v| Pitcher::new(v.mesh(), 1.0, 0.5, 0.2).unwrap())
         .collect();
     let run = |ends: Vec<Lossy>| -> Vec<Result<RankReport, PitchingError>> {
-        let options = Options {
-            seed: 0,
-            idle_limit: Duration::from_millis(200),
-        };
+        let options = &Options::new(0, Duration::from_millis(200));
         std::thread::scope(|s| {
             let handles: Vec<_> = ends
                 .into_iter()
                 .enumerate()
                 .map(|(r, mut end)| {
                     let (view, pitcher, front) = (&views[r], &pitchers[r], &fronts[r]);
-                    s.spawn(move || pitch_rank(view, pitcher, front, &mut end, &options))
+                    s.spawn(move || pitch_rank(view, pitcher, front, &mut end, options))
                 })
                 .collect();
             handles.into_iter().map(|h| h.join().unwrap()).collect()
@@ -518,6 +521,53 @@ fn the_serial_order_is_the_threaded_asynchronous_schedulers_but_not_the_rounds()
             got == reference,
             !deterministic,
             "deterministic {deterministic}"
+        );
+    }
+}
+
+#[test]
+fn a_pause_at_a_time_stops_after_the_tents_below_it_and_going_on_gives_the_rest() {
+    let mesh = rectangle(8, Diagonal::Alternate, 0.2, 5);
+    let n = mesh.vertices().len();
+    let causality = Causality {
+        c_max: 1.0,
+        safety: 0.5,
+        t_end: 0.3,
+    };
+    let reference = serial(&mesh, &vec![0.0; n], causality);
+    let pause_at = 0.13;
+    for ranks in [2, 3] {
+        let partition = Partition::random(&mesh, ranks, 3).unwrap();
+        let delays = LoopbackOptions {
+            seed: ranks as u64,
+            max_delay: Duration::from_micros(40),
+            fifo: false,
+        };
+        let mut paused = options(1);
+        paused.pause.at = Some(pause_at);
+        let first =
+            run_threads(&mesh, &partition, &vec![0.0; n], causality, delays, &paused).unwrap();
+        let before = sequences(n, &first, &partition);
+        let below = |s: &Vec<(u64, u64)>| {
+            s.iter()
+                .filter(|t| f64::from_bits(t.0) < pause_at)
+                .copied()
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(before, reference.iter().map(below).collect::<Vec<_>>());
+        assert!(first.iter().any(|r| r.below_end > 0));
+        let front: Vec<f64> = (0..n)
+            .map(|v| before[v].last().map_or(0.0, |t| f64::from_bits(t.1)))
+            .collect();
+        assert!(front.iter().all(|&t| t >= pause_at));
+        let rest = run_threads(&mesh, &partition, &front, causality, delays, &options(2)).unwrap();
+        let mut all = before;
+        for (v, tents) in sequences(n, &rest, &partition).into_iter().enumerate() {
+            all[v].extend(tents);
+        }
+        assert!(
+            all == reference,
+            "{ranks} ranks: paused and resumed tents differ"
         );
     }
 }

@@ -35,10 +35,7 @@ fn plane_wave(cells: u32, end: f64, dir: &std::path::Path) -> Problem {
 }
 
 fn options(seed: u64) -> Options {
-    Options {
-        seed,
-        idle_limit: Duration::from_secs(20),
-    }
+    Options::new(seed, Duration::from_secs(20))
 }
 
 /// One element's bits: geometry values, top facet energy parts, coefficients.

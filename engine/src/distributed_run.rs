@@ -9,17 +9,20 @@
 //! gathered on rank 0 ([`sdg_distributed::gathering`]), each from the rank owning its
 //! triangle's first corner (an interface face from the owner of its edge's first end), and rank
 //! 0 writes `summary.json` with the state hash and energy totals summed in the serial order of
-//! the tents, and `history.csv`.
+//! the tents, and `history.csv`. The ranks run in phases between checkpoints (module
+//! `rank_run`), which are the threaded run's checkpoint files (module `rank_checkpoint`): a
+//! run over ranks restarts from either kind, on any number of ranks, and a run on threads from
+//! a checkpoint of one over ranks.
 //!
 //! What cannot be honoured yet is refused as bad input (exit 2), naming the key and why:
-//! mesh-changing events (`[adapt]`, `[fracture]`), deterministic rounds, checkpoints and
-//! restarts, `--trace`, interface probes and the spacetime mesh.
+//! mesh-changing events (`[adapt]`, `[fracture]`), deterministic rounds, `--trace`, interface
+//! probes and the spacetime mesh.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use sdg_distributed::{
-    Causality, Gathered, LoopbackOptions, Options, Partition, Physics, RankReport, SolvedPatch,
+    Causality, Gathered, LoopbackOptions, Partition, Physics, RankReport, SolvedPatch, Transport,
 };
 use sdg_mesh::Front;
 use sdg_solver::element::FrontSolution;
@@ -30,7 +33,11 @@ use crate::error::EngineError;
 use crate::job::RunOptions;
 use crate::output::write_output;
 use crate::problem::Problem;
-use crate::rank_outputs::{RankOutputs, history_csv};
+use crate::rank_checkpoint::Prior;
+use crate::rank_outputs::{history_csv, merged_sums};
+use crate::rank_run::{Failure, OTHER_RANK_STOPPED, Shared, pause_request, run_rank};
+use crate::solve::Control;
+use crate::solve::checkpoint::{self, Folder};
 use crate::solve::context::initial_state;
 use crate::solve::start::Start;
 use crate::solve::summary::state_hash;
@@ -75,97 +82,105 @@ pub struct RankOptions {
 /// The seed of `--partition random`: the same owners on every run.
 const RANDOM_SEED: u64 = 1;
 
-/// Longest a rank waits for an update while it has vertices left, before it reports a stall.
-const IDLE_LIMIT: Duration = Duration::from_secs(120);
-
 /// `sdg run` over `ranks.ranks` in-process ranks: solves `problem` to the end time and writes
-/// `summary.json`, `history.csv` and the snapshots into the output folder. Returns the
-/// summary and the folder. Errors: what the ranks cannot do yet, and bad `options` (a restart,
-/// a trace, a wall-time limit), as [`EngineError::Input`] (exit 2); a failed rank as
-/// [`EngineError::Runtime`] (exit 1).
+/// `summary.json`, `history.csv` and the snapshots into the output folder, and checkpoints as
+/// configured or asked (module `rank_checkpoint`). Returns the summary and the folder.
+/// Errors: what the ranks cannot do yet, and bad `options` (a trace), as
+/// [`EngineError::Input`] (exit 2); a failed rank as [`EngineError::Runtime`] (exit 1); a stop
+/// request as [`EngineError::Checkpointed`] (exit 3) once the checkpoint is written.
 pub fn solve_ranks(
     problem: &Problem,
     options: &RunOptions,
     ranks: &RankOptions,
 ) -> Result<(RunSummary, PathBuf), EngineError> {
     refuse(problem, options, ranks)?;
-    let config = &problem.loaded.config;
-    let Start {
-        state, max_star, ..
-    } = Start::new(problem)?;
-    let estimate = state.estimate(problem, max_star, ranks.ranks, false);
-    if options.progress {
-        crate::progress::note(format_args!("estimate: {}", estimate.describe()));
-    }
-    if !options.force {
-        estimate.check(problem)?;
-    }
-    let dir = options.output_dir(problem)?;
-    prepare_folder(&dir)?;
-    let mesh = &problem.mesh;
-    let partition = partition_for(mesh, ranks.partition, ranks.ranks)?;
-    let (physics, causality) = (physics(problem), causality(problem));
+    let set_up = SetUp::new(problem, options, ranks.ranks, true)?;
+    let partition = partition_for(&problem.mesh, ranks.partition, ranks.ranks)?;
     let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
     tracing::info!(
         ranks = ranks.ranks,
         partition = ranks.partition.name(),
-        order = config.solver.order,
-        vertices = mesh.vertices().len(),
+        order = problem.loaded.config.solver.order,
+        vertices = problem.mesh.vertices().len(),
         "solve over ranks started"
     );
-    let started = Instant::now();
+    let shared = set_up.shared(problem, (&partition, ranks.partition));
     let delays = LoopbackOptions {
         seed: 0,
         max_delay: Duration::ZERO,
         fifo: true,
     };
-    let mut outputs: Vec<RankOutputs> = (0..ranks.ranks as u32)
-        .map(|rank| RankOutputs::new(problem, &partition, rank, &dir))
-        .collect();
-    let failed = |e| EngineError::Runtime(format!("the run over ranks failed: {e}"));
-    let run = (causality, physics, delays);
-    let mut solved = sdg_distributed::solve_threads_observed(
-        mesh,
-        &partition,
-        run,
-        &mut outputs,
-        &Options {
-            seed: 0,
-            idle_limit: IDLE_LIMIT,
-        },
-    )
-    .map_err(failed)?;
-    let wall_time_s = started.elapsed().as_secs_f64();
-    let mut snapshots = Vec::new();
-    for (rank, outputs) in solved.iter_mut().zip(outputs) {
-        let (values, written) = outputs.finish()?;
-        rank.report.outputs = values;
-        if rank.view.rank() == 0 {
-            snapshots = written;
+    let ends = sdg_distributed::Loopback::connect(ranks.ranks, delays);
+    let results: Vec<Result<Option<(RunSummary, PathBuf)>, Failure>> = std::thread::scope(|s| {
+        let shared = &shared;
+        let handles: Vec<_> = (ends.into_iter())
+            .map(|mut end| {
+                s.spawn(move || {
+                    let rank = end.rank();
+                    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        run_rank(shared, &mut end)
+                    }))
+                    .unwrap_or_else(|_| {
+                        Err(Failure::Own(EngineError::Runtime(format!(
+                            "rank {rank}: internal error (a bug, please report it)"
+                        ))))
+                    });
+                    if matches!(result, Err(Failure::Own(ref e)) if e.exit_code() != 3) {
+                        for r in (0..end.ranks() as u32).filter(|&r| r != rank) {
+                            let _ = end.send(r, sdg_distributed::Message::Abort);
+                        }
+                    }
+                    result
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err(Failure::Own(EngineError::Runtime(
+                        "a rank thread panicked".into(),
+                    )))
+                })
+            })
+            .collect()
+    });
+    let mut own: Vec<EngineError> = Vec::new();
+    let (mut aborted, mut done) = (None, None);
+    for result in results {
+        match result {
+            Ok(Some(d)) => done = Some(d),
+            Ok(None) => {}
+            Err(Failure::Own(e)) => own.push(e),
+            Err(e) => aborted = aborted.or(Some(e.into_error())),
         }
     }
-    let gathered = sdg_distributed::gather_threads(mesh, &solved).map_err(failed)?;
-    finish(
-        problem,
-        &dir,
-        (ranks.partition, &gathered, snapshots),
-        wall_time_s,
-        estimate,
-    )
+    // A failure before a stop, and a stop with the reason of the rank that was asked.
+    let told = |e: &EngineError| match e {
+        EngineError::Checkpointed { reason, .. } => reason != OTHER_RANK_STOPPED,
+        _ => true,
+    };
+    own.sort_by_key(|e| (e.exit_code() == 3, !told(e)));
+    match (own.into_iter().next().or(aborted), done) {
+        (Some(e), _) => Err(e),
+        (None, Some(done)) => Ok(done),
+        (None, None) => Err(EngineError::Runtime("rank 0 returned no summary".into())),
+    }
 }
 
 /// `sdg run --mpi` on this MPI process (one rank per process of `mpirun`): the ranks split the
 /// front as [`solve_ranks`] does, with `sdg_distributed::MpiTransport`, and gather the results
 /// on rank 0, which writes the outputs. Returns the summary and the folder on rank 0, `None`
 /// on the others. Errors as [`solve_ranks`]; what is refused, every rank refuses alike, before
-/// MPI starts.
+/// MPI starts. A rank that fails by itself reports its error and ends every rank with exit
+/// code 1 (`MPI_Abort`), so that none waits for it.
 #[cfg(feature = "mpi")]
 pub fn solve_mpi(
     problem: &Problem,
     options: &RunOptions,
     partition: PartitionKind,
 ) -> Result<Option<(RunSummary, PathBuf)>, EngineError> {
-    use sdg_distributed::{LocalView, MpiOptions, MpiTransport, Transport};
+    use sdg_distributed::{MpiOptions, MpiTransport, Transport};
     refuse(
         problem,
         options,
@@ -174,130 +189,191 @@ pub fn solve_mpi(
             partition,
         },
     )?;
-    let dir = options.output_dir(problem)?;
     let mut transport = MpiTransport::start(MpiOptions::default())
         .map_err(|e| EngineError::Runtime(format!("starting MPI: {e}")))?;
     let (rank, ranks) = (transport.rank(), transport.ranks());
-    let failed = |e: sdg_distributed::PitchingError| {
-        EngineError::Runtime(format!("the run over {ranks} MPI ranks failed: {e}"))
-    };
-    let Start {
-        state, max_star, ..
-    } = Start::new(problem)?;
-    let estimate = state.estimate(problem, max_star, ranks, false);
-    if options.progress && rank == 0 {
-        crate::progress::note(format_args!("estimate: {}", estimate.describe()));
-    }
-    if !options.force {
-        estimate.check(problem)?;
-    }
-    if rank == 0 {
-        prepare_folder(&dir)?;
-    }
-    let mesh = &problem.mesh;
-    let partition_of = partition_for(mesh, partition, ranks)?;
-    let (physics, causality) = (physics(problem), causality(problem));
-    let view = LocalView::new(mesh, &partition_of, rank).map_err(|e| failed(e.into()))?;
-    let pitcher = sdg_mesh::Pitcher::new(
-        view.mesh(),
-        causality.c_max,
-        causality.safety,
-        causality.t_end,
-    )
-    .map_err(|e| failed(e.into()))?;
-    let front = Front::flat(view.mesh().vertices().len(), 0.0);
-    let solution = physics.initial_solution(&view);
-    let run = Options {
-        seed: u64::from(rank),
-        idle_limit: IDLE_LIMIT,
-    };
-    // Every rank set up before any sends (a barrier), and done before any gathers.
-    transport
-        .sum(&[0])
-        .map_err(|e| failed(sdg_distributed::PitchingError::Transport { rank, source: e }))?;
-    let started = Instant::now();
-    let mut outputs = RankOutputs::new(problem, &partition_of, rank, &dir);
-    let mut report = sdg_distributed::solve_rank_observed(
-        (&view, &pitcher, &front, &solution),
-        physics,
-        &mut transport,
-        &mut outputs,
-        &run,
-    )
-    .map_err(failed)?;
-    let (values, snapshots) = outputs.finish()?;
-    report.outputs = values;
-    transport
-        .sum(&[0])
-        .map_err(|e| failed(sdg_distributed::PitchingError::Transport { rank, source: e }))?;
-    let wall_time_s = started.elapsed().as_secs_f64();
-    let gathered = sdg_distributed::gather(
-        mesh,
-        &view,
-        (&front, &solution, &report),
-        &mut transport,
-        IDLE_LIMIT,
-    )
-    .map_err(failed)?;
-    match gathered {
-        Some(gathered) => finish(
-            problem,
-            &dir,
-            (partition, &gathered, snapshots),
-            wall_time_s,
-            estimate,
-        )
-        .map(Some),
-        None => Ok(None),
+    let result = (|| {
+        let set_up = SetUp::new(problem, options, ranks, rank == 0)?;
+        let partition_of = partition_for(&problem.mesh, partition, ranks)?;
+        let shared = set_up.shared(problem, (&partition_of, partition));
+        // Every rank set up before any sends (a barrier).
+        transport.sum(&[0]).map_err(|e| {
+            Failure::Own(EngineError::Runtime(format!(
+                "the run over {ranks} MPI ranks failed: rank {rank}: {e}"
+            )))
+        })?;
+        run_rank(&shared, &mut transport)
+    })();
+    match result {
+        Ok(done) => Ok(done),
+        // Every rank has the checkpoint on disk: end at once, before `mpirun`, which got the
+        // signal too, kills the processes (1 s after its SIGTERM by default).
+        Err(Failure::Own(e @ EngineError::Checkpointed { .. })) => {
+            crate::progress::note(format_args!("stopped: rank {rank}: {e}"));
+            transport.abort(e.exit_code().into())
+        }
+        Err(Failure::Own(e)) => {
+            crate::progress::note(format_args!("error: rank {rank}: {e}"));
+            transport.abort(1)
+        }
+        Err(f) => Err(f.into_error()),
     }
 }
 
-/// Writes the outputs of a run over ranks that ended with `gathered` after `wall_time_s` on
-/// the `partition`, with the `snapshots` (time in s, file name) rank 0 wrote, and its
-/// `summary.json` into `dir`. Returns the summary and the folder.
-fn finish(
+/// What every rank sets up before it solves: the estimate, the folders, the checkpoint read
+/// back and the pause request.
+struct SetUp {
+    estimate: crate::estimate::Estimate,
+    dir: PathBuf,
+    folder: Folder,
+    prior: Prior,
+    restored: Option<(Front, FrontSolution)>,
+    control: std::sync::Arc<Control>,
+    request: sdg_distributed::PauseRequest,
+}
+
+impl SetUp {
+    /// The set-up of a run of `problem` with `options` over `ranks` ranks; `first` prepares
+    /// the folders (rank 0, or the process of the in-process ranks).
+    fn new(
+        problem: &Problem,
+        options: &RunOptions,
+        ranks: usize,
+        first: bool,
+    ) -> Result<Self, EngineError> {
+        let config = &problem.loaded.config;
+        let Start {
+            state, max_star, ..
+        } = Start::new(problem)?;
+        let estimate = state.estimate(problem, max_star, ranks, false);
+        let restored = match &options.restart {
+            Some(path) => Some(checkpoint::restore(path, config)?),
+            None => None,
+        };
+        let estimate = match &restored {
+            Some((_, r)) => estimate.remaining(&r.frontier.front.snapshot(), config.time.span()),
+            None => estimate,
+        };
+        if options.progress && first {
+            crate::progress::note(format_args!("estimate: {}", estimate.describe()));
+        }
+        if !options.force {
+            estimate.check(problem)?;
+        }
+        let dir = options.output_dir(problem)?;
+        let folder = Folder::new(config, &dir);
+        if first {
+            folder.check_unmixed(options.restart.as_deref())?;
+            prepare_folder(&dir, restored.is_some())?;
+        }
+        let (prior, restored) = match restored {
+            Some(r) => {
+                let (prior, front, solution) = Prior::restored(problem, r, &folder)?;
+                (prior, Some((front, solution)))
+            }
+            None => (Prior::fresh(), None),
+        };
+        let control = options.control.clone().unwrap_or_default();
+        let request = pause_request(problem, options, control.clone());
+        Ok(Self {
+            estimate,
+            dir,
+            folder,
+            prior,
+            restored,
+            control,
+            request,
+        })
+    }
+
+    /// What the ranks of the run share, on `partition`.
+    fn shared<'a>(
+        &'a self,
+        problem: &'a Problem,
+        partition: (&'a Partition, PartitionKind),
+    ) -> Shared<'a> {
+        Shared {
+            problem,
+            partition,
+            dir: &self.dir,
+            folder: &self.folder,
+            prior: &self.prior,
+            restored: self.restored.as_ref().map(|(f, s)| (f, s)),
+            control: &self.control,
+            request: self.request.clone(),
+            estimate: &self.estimate,
+            started: Instant::now(),
+        }
+    }
+}
+
+/// How a run over ranks ended, for [`finish`]: on the `partition` with the `gathered`
+/// results since the (re)start after the `prior`, the snapshots rank 0 wrote (time in s, file
+/// name), its wall time since the (re)start (s), and the checkpoints written (count, seconds).
+pub(crate) struct End<'a> {
+    pub(crate) partition: PartitionKind,
+    pub(crate) gathered: &'a Gathered,
+    pub(crate) snapshots: Vec<(f64, String)>,
+    pub(crate) prior: &'a Prior,
+    pub(crate) wall_time_s: f64,
+    pub(crate) checkpoints: (u64, f64),
+}
+
+/// The energy of the initial front of `problem` (scaled units), integrated on `threads`
+/// threads.
+pub(crate) fn initial_energy(problem: &Problem, threads: usize) -> FrontEnergy {
+    let mesh = &problem.mesh;
+    let solver = PatchSolver::new(
+        problem.system.clone(),
+        problem.loaded.config.solver.order,
+        0,
+    );
+    let initial_front = Front::flat(mesh.vertices().len(), 0.0);
+    let empty = FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
+    energy_on(problem, &initial_front, &empty, threads)
+}
+
+/// Writes the outputs of a run over ranks that ended as `end` and its `summary.json` into
+/// `dir`, with the `estimate` made before. Returns the summary and the folder.
+pub(crate) fn finish(
     problem: &Problem,
     dir: &Path,
-    (partition, gathered, snapshots): (PartitionKind, &Gathered, Vec<(f64, String)>),
-    wall_time_s: f64,
+    end: End<'_>,
     estimate: crate::estimate::Estimate,
 ) -> Result<(RunSummary, PathBuf), EngineError> {
     let config = &problem.loaded.config;
-    let mesh = &problem.mesh;
     let finishing = Instant::now();
+    let gathered = end.gathered;
     let (front, solution) = (&gathered.front, &gathered.solution);
     let serial = gathered.in_serial_order();
     let patches: Vec<SolvedPatch> = serial.iter().map(|(_, p)| *p).collect();
     let ranks = gathered.reports.len();
+    let wall_time_s = end.prior.wall_time_s + end.wall_time_s;
     tracing::info!(patches = patches.len(), wall_time_s, "solve finished");
-    let initial_energy = {
-        let initial_front = Front::flat(mesh.vertices().len(), 0.0);
-        let empty = FrontSolution::new(
-            mesh.triangles().len(),
-            solution.basis_len(),
-            solution.width(),
-        );
-        energy_on(problem, &initial_front, &empty, ranks)
-    };
+    let initial_energy = initial_energy(problem, ranks);
     let energy = energy_on(problem, front, solution, ranks);
     let mut summary = summarize(
         problem,
         (front, solution),
-        &patches,
+        (end.prior, &patches),
         &gathered.reports,
         (initial_energy, &energy),
         estimate,
     )?;
     summary.wall_time_s = wall_time_s;
-    summary.patches_per_second = patches.len() as f64 / wall_time_s.max(f64::MIN_POSITIVE);
-    summary.distributed = Some(distributed_summary(partition, gathered));
-    summary.snapshots = snapshots;
+    summary.patches_per_second = patches.len() as f64 / end.wall_time_s.max(f64::MIN_POSITIVE);
+    summary.distributed = Some(distributed_summary(end.partition, gathered));
+    summary.snapshots = end.snapshots;
+    summary.checkpoint = end.prior.summary(end.checkpoints.0, end.checkpoints.1);
     let outputs: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
+    let times = crate::solve::book::history_times(config.time.span()).len();
+    let (sums, _) = merged_sums(&outputs, times)?;
     let history = history_csv(
         problem,
+        end.prior,
         &serial,
-        &outputs,
-        (&initial_energy, front, &energy),
+        &sums,
+        (&initial_energy, front, Some(&energy)),
     )?;
     let written = vec![write_output(dir, "history.csv", history.as_bytes()).map(drop)];
     if config.output.png {
@@ -372,22 +448,9 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
             )
         }),
         options
-            .restart
-            .is_some()
-            .then(|| "--restart: a run over ranks writes and reads no checkpoints yet".into()),
-        options.max_wall_time_s.is_some().then(|| {
-            "--max-wall-time: a run over ranks cannot checkpoint and stop yet".to_string()
-        }),
-        options
             .trace
             .is_some()
             .then(|| "--trace: a run over ranks records no trace yet".to_string()),
-        config.checkpoint.every_sim_s.is_some().then(|| {
-            format!("{file}: checkpoint.every_sim_s: a run over ranks writes no checkpoints yet")
-        }),
-        config.checkpoint.at_end.then(|| {
-            format!("{file}: checkpoint.at_end: a run over ranks writes no checkpoints yet")
-        }),
         (!config.output.interface_probes.is_empty()).then(|| {
             format!(
                 "{file}: output.interface_probes: a run over ranks records no probes yet; set \
@@ -413,24 +476,21 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
              snapshot_NNNN.png"
         );
     }
-    if config.checkpoint.every_wall_s.is_finite() {
-        tracing::info!(
-            every_wall_s = config.checkpoint.every_wall_s,
-            "a run over ranks writes no checkpoints: checkpoint.every_wall_s does not apply"
-        );
-    }
     Ok(())
 }
 
-/// Removes an earlier run's `summary.json` and snapshot files from `dir`.
-fn prepare_folder(dir: &Path) -> Result<(), EngineError> {
+/// Removes an earlier run's `summary.json` and, unless `restarted`, its snapshot files from
+/// `dir`.
+fn prepare_folder(dir: &Path, restarted: bool) -> Result<(), EngineError> {
     match std::fs::remove_file(dir.join("summary.json")) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
             return Err(EngineError::io(dir.join("summary.json"), e));
         }
         _ => {}
     }
-    crate::output::snapshot::remove_earlier(dir)?;
+    if !restarted {
+        crate::output::snapshot::remove_earlier(dir)?;
+    }
     Ok(())
 }
 
@@ -465,7 +525,7 @@ fn energy_on(
 fn summarize(
     problem: &Problem,
     (front, solution): (&Front, &FrontSolution),
-    patches: &[SolvedPatch],
+    (prior, patches): (&Prior, &[SolvedPatch]),
     ranks: &[RankReport],
     (energy0, e): (FrontEnergy, &FrontEnergy),
     estimate: crate::estimate::Estimate,
@@ -478,9 +538,12 @@ fn summarize(
     let solver = PatchSolver::new(system.clone(), config.solver.order, 0);
     let (basis, width) = (solver.basis(), solver.width());
     let threads = ranks.len();
-    let mut totals = PatchReport::default();
-    let (mut slope, mut nonlinear, mut newton, mut newton_max) = (0.0_f64, 0_u64, 0_u64, 0);
-    let (mut elements, mut dofs) = (0_u64, 0_u64);
+    let mut totals = prior.totals;
+    let c_max = problem.material.max_wave_speed();
+    let mut slope = prior.max_slope_ratio / c_max;
+    let (mut nonlinear, mut newton) = (prior.nonlinear, prior.newton);
+    let mut newton_max = prior.newton_max;
+    let (mut elements, mut dofs) = (prior.elements, prior.dofs);
     let mut timings = Timings::default();
     for p in patches {
         let r = &p.report;
@@ -503,7 +566,7 @@ fn summarize(
         slope = slope.max(p.slope);
     }
     timings.waiting_s = ranks.iter().map(|r| r.waited.as_secs_f64()).sum();
-    let count = patches.len() as u64;
+    let count = prior.patches + patches.len() as u64;
     let (initial_j, work) = (rho * energy0.total, rho * totals.boundary_work);
     let (dissipation, interface_work) = (rho * totals.dissipation, rho * totals.interface_work);
     let final_j = rho * e.total;
@@ -525,7 +588,7 @@ fn summarize(
         elements,
         dofs_per_patch: dofs as f64 / count.max(1) as f64,
         final_time: config.time.clock(front.min_time()),
-        max_slope_ratio: problem.material.max_wave_speed() * slope,
+        max_slope_ratio: c_max * slope,
         max_momentum_residual: momentum_residual(&totals),
         mode: "asynchronous",
         state_hash: state_hash(front, solution, basis.len() * width),

@@ -47,6 +47,7 @@ use crate::error::EngineError;
 use crate::exact_sum::ExactSum;
 use crate::output::snapshot::{Piece, Snapshots};
 use crate::problem::Problem;
+use crate::rank_checkpoint::Prior;
 use crate::solve::book::{Milestone, Milestones, history_times};
 use crate::solve::history::{history_header, history_line, point_values, repeats_last_row};
 
@@ -54,7 +55,10 @@ use crate::solve::history::{history_header, history_line, point_values, repeats_
 type Written = Vec<(f64, String)>;
 
 /// Parts of a front facet's energy: kinetic, strain, flux (scaled units).
-const PARTS: usize = 3;
+pub(crate) const PARTS: usize = 3;
+
+/// The energy parts of the front at one history time, summed exactly.
+pub(crate) type HistorySums = [ExactSum; PARTS];
 
 /// What one rank records of its tents for the outputs: the [`Observer`] of a run over ranks.
 pub(crate) struct RankOutputs<'p> {
@@ -77,13 +81,17 @@ pub(crate) struct RankOutputs<'p> {
 }
 
 impl<'p> RankOutputs<'p> {
-    /// The outputs of rank `rank` of `partition` for `problem`, written into `dir`.
+    /// The outputs of rank `rank` of `partition` for `problem`, written into `dir`, from the
+    /// whole front `start` (s by global vertex; `None`: the initial front) with the snapshots
+    /// `resumed` of a checkpoint (rank 0 keeps their slices and files written, the others only
+    /// which are still to come). Errors: a snapshot folder that cannot be set.
     pub(crate) fn new(
         problem: &'p Problem,
         partition: &Partition,
         rank: u32,
         dir: &std::path::Path,
-    ) -> Self {
+        (start, resumed): (Option<&[f64]>, Option<Snapshots>),
+    ) -> Result<Self, EngineError> {
         let config = &problem.loaded.config;
         let t_end = config.time.span();
         let solver = PatchSolver::new(problem.system.clone(), config.solver.order, 0);
@@ -98,9 +106,15 @@ impl<'p> RankOutputs<'p> {
             ranks: partition.ranks() as u32,
         };
         let times = history_times(t_end);
-        Self {
-            problem,
-            snapshots: Snapshots::on_clock(
+        let snapshots = match resumed {
+            Some(mut snapshots) => {
+                snapshots.set_output(&absolute, config.output.vtu)?;
+                if rank != 0 {
+                    snapshots.forget_collected();
+                }
+                snapshots.with_piece(piece)
+            }
+            None => Snapshots::on_clock(
                 &config.output.snapshot_times,
                 config.time.start,
                 problem.material.max_wave_speed(),
@@ -108,7 +122,21 @@ impl<'p> RankOutputs<'p> {
             )
             .with_vtu(config.output.vtu)
             .with_piece(piece),
-            milestones: Milestones::new(owned, t_end, &snapshot_times, None, None),
+        };
+        let milestones = match start {
+            Some(start) => {
+                let owned: Vec<f64> = (partition.owners().iter().zip(start))
+                    .filter(|&(&r, _)| r == rank)
+                    .map(|(_, &t)| t)
+                    .collect();
+                Milestones::resumed(&owned, t_end, &snapshot_times, None)
+            }
+            None => Milestones::new(owned, t_end, &snapshot_times, None, None),
+        };
+        Ok(Self {
+            problem,
+            snapshots,
+            milestones,
             passed: Vec::new(),
             sums: vec![Default::default(); times.len()],
             times,
@@ -118,7 +146,51 @@ impl<'p> RankOutputs<'p> {
             values: vec![0.0; width],
             basis,
             error: None,
+        })
+    }
+
+    /// What a checkpoint gathers from this rank, once every file handed to the writer is on
+    /// disk: the history sums as [`Self::finish`] returns them, then the number of snapshots
+    /// it has written, the length in bytes of the slices of [`Snapshots::pending_cbor`] and
+    /// those bytes, 8 to a value's bits.
+    pub(crate) fn checkpoint_values(&mut self) -> Result<Vec<f64>, EngineError> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
         }
+        self.snapshots.finish()?;
+        let mut values = self.sum_values();
+        let (next, bytes) = self.snapshots.pending_cbor();
+        values.push(next as f64);
+        values.push(bytes.len() as f64);
+        values.extend(bytes.chunks(8).map(|chunk| {
+            let mut word = [0_u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            f64::from_bits(u64::from_le_bytes(word))
+        }));
+        Ok(values)
+    }
+
+    /// A copy of this rank's snapshots as a checkpoint stores them when every rank has
+    /// written the first `next` ([`Snapshots::rewound`]).
+    pub(crate) fn stored_snapshots(&self, next: usize) -> Snapshots {
+        self.snapshots.rewound(next)
+    }
+
+    /// Forgets what the snapshots keep for checkpoints of the first `next`, which every rank
+    /// has written.
+    pub(crate) fn checkpointed(&mut self, next: usize) {
+        self.snapshots.forget_kept(next);
+    }
+
+    /// The history sums as values: per history time and part, the number of partials, then the
+    /// partials.
+    fn sum_values(&self) -> Vec<f64> {
+        let mut values = Vec::new();
+        for sum in self.sums.iter().flatten() {
+            values.push(sum.partials().len() as f64);
+            values.extend_from_slice(sum.partials());
+        }
+        values
     }
 
     /// Writes the snapshots left (those at the end time), waits for every file, and returns
@@ -132,12 +204,7 @@ impl<'p> RankOutputs<'p> {
         let t_end = self.problem.loaded.config.time.span();
         self.snapshots.flush(t_end)?;
         self.snapshots.finish()?;
-        let mut values = Vec::new();
-        for sum in self.sums.iter().flatten() {
-            values.push(sum.partials().len() as f64);
-            values.extend_from_slice(sum.partials());
-        }
-        Ok((values, self.snapshots.written().to_vec()))
+        Ok((self.sum_values(), self.snapshots.written().to_vec()))
     }
 
     /// Cuts the elements of `triangles` (local ids) by the pending snapshot planes.
@@ -218,31 +285,41 @@ impl Observer for RankOutputs<'_> {
     }
 }
 
-/// `history.csv` of a run over ranks on rank 0: the row of the initial front with energy
-/// `energy0`, a row per history time from the `tents` in serial order and the ranks' history
-/// sums `outputs` (from [`RankOutputs::finish`]), and the row of the end `front` with energy
-/// `energy` (all scaled units). Errors: outputs of the wrong form, as a runtime error.
+/// `history.csv` of a run over ranks on rank 0 after `prior`: its rows (or, for a new run,
+/// the row of the initial front with energy `energy0`), a row per history time after the
+/// prior's front from the `tents` since in serial order and the ranks' merged history `sums`,
+/// and the row of the end `front` with its `energy` (all scaled units). Without `energy` (a
+/// checkpoint) the rows stop at the last history time the whole `front` has passed, with no
+/// end row. Errors: tents of the wrong form, as a runtime error.
 pub(crate) fn history_csv(
     problem: &Problem,
+    prior: &Prior,
     tents: &[(Tent, SolvedPatch)],
-    outputs: &[&[f64]],
-    (energy0, front, energy): (&FrontEnergy, &Front, &FrontEnergy),
+    sums: &[[ExactSum; PARTS]],
+    (energy0, front, energy): (&FrontEnergy, &Front, Option<&FrontEnergy>),
 ) -> Result<String, EngineError> {
     let config = &problem.loaded.config;
     let rho = problem.material.density();
     let initial = energy0.total;
     let times = history_times(config.time.span());
-    let sums = merged_sums(outputs, times.len())?;
-    let mut history = history_header();
+    if sums.len() != times.len() {
+        return Err(EngineError::Runtime(
+            "history sums of the wrong form".into(),
+        ));
+    }
     let zero = PatchReport::default();
-    history.push_str(&history_line(
-        config.time.clock(0.0),
-        0,
-        energy0,
-        &zero,
-        initial,
-        rho,
-    ));
+    let mut history = prior.history.clone();
+    if history.is_empty() {
+        history = history_header();
+        history.push_str(&history_line(
+            config.time.clock(0.0),
+            0,
+            energy0,
+            &zero,
+            initial,
+            rho,
+        ));
+    }
     // The earliest end among the tents crossing each history time.
     let mut earliest = vec![f64::INFINITY; times.len()];
     for (tent, _) in tents {
@@ -252,16 +329,22 @@ pub(crate) fn history_csv(
             *e = e.min(tent.t_new);
         }
     }
-    let mut totals = PatchReport::default();
+    let mut totals = prior.totals;
     let mut done = 0;
+    let min_time = front.min_time();
     for (k, &t_k) in times.iter().enumerate() {
+        if energy.is_none() && t_k > min_time {
+            break;
+        }
         while done < tents.len() && tents[done].0.t_old < t_k {
             totals.accumulate(&tents[done].1.report);
             done += 1;
         }
+        let patches = prior.patches + done as u64;
         // After every tent, the front is the end front: its row is the last.
         let time = config.time.clock(earliest[k]);
-        if done == tents.len() || repeats_last_row(&history, time, done as u64) {
+        let at_end = energy.is_some() && done == tents.len();
+        if t_k <= prior.reached || at_end || repeats_last_row(&history, time, patches) {
             continue;
         }
         let [kinetic, strain, flux] = sums[k].each_ref().map(ExactSum::value);
@@ -271,23 +354,32 @@ pub(crate) fn history_csv(
             flux,
             total: kinetic + strain + flux,
         };
-        history.push_str(&history_line(time, done as u64, &e, &totals, initial, rho));
+        history.push_str(&history_line(time, patches, &e, &totals, initial, rho));
     }
+    let Some(energy) = energy else {
+        return Ok(history);
+    };
     for (_, patch) in &tents[done..] {
         totals.accumulate(&patch.report);
     }
     let time = config.time.clock(front.min_time());
-    if !repeats_last_row(&history, time, tents.len() as u64) {
-        let row = history_line(time, tents.len() as u64, energy, &totals, initial, rho);
+    let patches = prior.patches + tents.len() as u64;
+    if !repeats_last_row(&history, time, patches) {
+        let row = history_line(time, patches, energy, &totals, initial, rho);
         history.push_str(&row);
     }
     Ok(history)
 }
 
-/// The ranks' history sums `outputs` merged: per history time (`times` of them), the sums of
-/// the energy parts.
-fn merged_sums(outputs: &[&[f64]], times: usize) -> Result<Vec<[ExactSum; PARTS]>, EngineError> {
+/// The ranks' history `outputs` merged: per history time (`times` of them), the sums of the
+/// energy parts; with each rank's values after its sums (what [`RankOutputs::checkpoint_values`]
+/// adds).
+pub(crate) fn merged_sums<'a>(
+    outputs: &[&'a [f64]],
+    times: usize,
+) -> Result<(Vec<HistorySums>, Vec<&'a [f64]>), EngineError> {
     let mut sums: Vec<[ExactSum; PARTS]> = vec![Default::default(); times];
+    let mut rests = Vec::new();
     for (rank, values) in outputs.iter().enumerate() {
         let bad = || EngineError::Runtime(format!("rank {rank}: history sums of the wrong form"));
         let mut at = 0;
@@ -297,9 +389,27 @@ fn merged_sums(outputs: &[&[f64]], times: usize) -> Result<Vec<[ExactSum; PARTS]
             sum.merge(&ExactSum::from_partials(partials));
             at += 1 + n;
         }
-        if at != values.len() {
-            return Err(bad());
-        }
+        rests.push(&values[at..]);
     }
-    Ok(sums)
+    Ok((sums, rests))
+}
+
+/// The number of snapshots a rank has written, and its snapshot slices as CBOR, from the
+/// values [`RankOutputs::checkpoint_values`] put after its sums (`rest`). Errors: values of
+/// the wrong form.
+pub(crate) fn pending(rest: &[f64]) -> Result<(usize, Vec<u8>), EngineError> {
+    let bad = |why: &str| EngineError::Runtime(format!("snapshot slices of a rank: {why}"));
+    let [next, len, words @ ..] = rest else {
+        return Err(bad("none"));
+    };
+    let len = *len as usize;
+    if words.len() != len.div_ceil(8) {
+        return Err(bad("of the wrong length"));
+    }
+    let mut bytes: Vec<u8> = words
+        .iter()
+        .flat_map(|w| w.to_bits().to_le_bytes())
+        .collect();
+    bytes.truncate(len);
+    Ok((*next as usize, bytes))
 }

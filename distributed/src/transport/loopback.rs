@@ -6,7 +6,8 @@
 //! other too. The delays come from each sender's own generator seeded from the run's seed and
 //! its rank; thread timing adds its own variation on top. A receiver with nothing deliverable
 //! waits on a condition variable until the next message is due, a send wakes it, or its
-//! timeout ends.
+//! timeout ends. [`Transport::sum`] meets the other ranks at a shared tally; a rank waiting
+//! there gives up when an [`Message::Abort`] reaches its mailbox.
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -81,11 +82,27 @@ impl Mailbox {
     }
 }
 
+/// The ranks' meeting point for [`Transport::sum`]: the sums of the round being collected.
+#[derive(Debug, Default)]
+struct Tally {
+    /// Rounds completed so far.
+    round: u64,
+    /// Ranks that have added their values to this round.
+    arrived: usize,
+    sums: Vec<u64>,
+    /// The sums of the last completed round.
+    last: Vec<u64>,
+}
+
+/// How often a rank waiting at the tally looks for an abort in its mailbox.
+const TALLY_POLL: Duration = Duration::from_millis(5);
+
 /// One rank's end of an in-process transport (see the module docs).
 #[derive(Debug)]
 pub struct Loopback {
     rank: Rank,
     mailboxes: Arc<[Mailbox]>,
+    tally: Arc<(Mutex<Tally>, Condvar)>,
     delays: SplitMix64,
     options: LoopbackOptions,
 }
@@ -103,10 +120,12 @@ impl Loopback {
                 arrived: Condvar::new(),
             })
             .collect();
+        let tally = Arc::new((Mutex::new(Tally::default()), Condvar::new()));
         (0..ranks)
             .map(|rank| Loopback {
                 rank: rank as Rank,
                 mailboxes: Arc::clone(&mailboxes),
+                tally: Arc::clone(&tally),
                 delays: SplitMix64::new(
                     options.seed ^ (rank as u64 + 1).wrapping_mul(0xa076_1d64_78bd_642f),
                 ),
@@ -183,6 +202,45 @@ impl Transport for Loopback {
 
     fn is_fifo(&self) -> bool {
         self.options.fifo
+    }
+
+    fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
+        let (tally, met) = &*self.tally;
+        let lock = || tally.lock().unwrap_or_else(|e| e.into_inner());
+        let mut t = lock();
+        if t.arrived == 0 {
+            t.sums = vec![0; values.len()];
+        }
+        for (sum, v) in t.sums.iter_mut().zip(values) {
+            *sum += v;
+        }
+        t.arrived += 1;
+        if t.arrived == self.mailboxes.len() {
+            t.arrived = 0;
+            t.round += 1;
+            t.last = std::mem::take(&mut t.sums);
+            met.notify_all();
+            return Ok(t.last.clone());
+        }
+        let round = t.round;
+        while t.round == round {
+            t = met
+                .wait_timeout(t, TALLY_POLL)
+                .unwrap_or_else(|e| e.into_inner())
+                .0;
+            if t.round != round {
+                break;
+            }
+            drop(t);
+            let inbox = self.mailboxes[self.rank as usize].lock();
+            let abort = inbox.pending.iter().find(|p| p.message == Message::Abort);
+            if let Some(p) = abort {
+                return Err(TransportError::Aborted { by: p.from });
+            }
+            drop(inbox);
+            t = lock();
+        }
+        Ok(t.last.clone())
     }
 }
 

@@ -163,18 +163,6 @@ impl MpiTransport {
             .ok_or(TransportError::Closed)
     }
 
-    /// Element-wise sums of `values` over all ranks (`MPI_Allreduce`), after every message
-    /// this rank sent before. Collective: every rank calls it with as many values, or it waits
-    /// for ever; messages arriving meanwhile wait in MPI.
-    pub fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
-        let (reply, sums) = mpsc::channel();
-        self.command(Command::Sum {
-            values: values.to_vec(),
-            reply,
-        })?;
-        sums.recv().map_err(|_| TransportError::Closed)
-    }
-
     /// Ends every process of the run with exit code `code` (`MPI_Abort`), after the messages
     /// this rank sent before.
     pub fn abort(mut self, code: i32) -> ! {
@@ -233,6 +221,17 @@ impl Transport for MpiTransport {
 
     fn is_fifo(&self) -> bool {
         true
+    }
+
+    /// `MPI_Allreduce`: messages arriving meanwhile wait in MPI. A rank that never calls it
+    /// (one that died) leaves the others waiting until `mpirun` ends them.
+    fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
+        let (reply, sums) = mpsc::channel();
+        self.command(Command::Sum {
+            values: values.to_vec(),
+            reply,
+        })?;
+        sums.recv().map_err(|_| TransportError::Closed)
     }
 }
 

@@ -85,6 +85,24 @@ pub struct Snapshots {
     /// In a run over ranks, this rank's part: its slices only, as pieces.
     #[serde(skip)]
     piece: Option<Piece>,
+    /// In a run over ranks, the slices of the pieces written since the last checkpoint, by
+    /// snapshot index: other ranks may not have written theirs yet, and a checkpoint keeps
+    /// such a snapshot whole ([`Self::rewound`]).
+    #[serde(skip)]
+    kept: Vec<(usize, Vec<Triangle>)>,
+}
+
+/// The piece files `STEM_R.vtu` of the snapshot `STEM.pvtu` in `dir`.
+fn pieces_of(dir: &Path, stem: &str) -> Vec<String> {
+    let prefix = format!("{stem}_");
+    (std::fs::read_dir(dir).into_iter().flatten())
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| {
+            n.strip_prefix(&prefix)
+                .and_then(|rest| rest.strip_suffix(".vtu"))
+                .is_some_and(|r| r.parse::<u32>().is_ok())
+        })
+        .collect()
 }
 
 /// One rank's part of the snapshots of a run over `ranks` ranks: it writes the slices of the
@@ -162,6 +180,7 @@ impl Snapshots {
             writer: None,
             failed: false,
             piece: None,
+            kept: Vec::new(),
         }
     }
 
@@ -337,7 +356,12 @@ impl Snapshots {
                 .strip_suffix(".vtu")
                 .filter(|stem| stem.starts_with("snapshot_"))
                 .map(|stem| format!("{stem}.png"));
-            std::iter::once(name.clone()).chain(picture)
+            // A run over ranks lists the `.pvtu` of each snapshot; its pieces go with it.
+            let pieces = name
+                .strip_suffix(".pvtu")
+                .map(|stem| pieces_of(&earlier, stem))
+                .unwrap_or_default();
+            std::iter::once(name.clone()).chain(picture).chain(pieces)
         });
         for name in files {
             let (from, to) = (earlier.join(&name), dir.join(&name));
@@ -465,6 +489,7 @@ impl Snapshots {
         self.written
             .push((time, pvtu.clone().unwrap_or_else(|| own.clone())));
         let (dir, vtu) = (self.dir.clone(), self.vtu);
+        self.kept.push((index, triangles.clone()));
         let pieces: Vec<String> = (0..piece.ranks).map(name).collect();
         self.submit(Box::new(move || {
             let grid = triangles_grid(&triangles);
@@ -474,6 +499,89 @@ impl Snapshots {
             }
             Ok(())
         }));
+    }
+
+    /// What a checkpoint of a run over ranks gathers from this rank ([`Self::add_pending`]):
+    /// the number of snapshots it has written, and as CBOR the slices of those it has not
+    /// written and of the pieces it wrote since the last checkpoint.
+    pub(crate) fn pending_cbor(&self) -> (usize, Vec<u8>) {
+        let kept = self.kept.iter().map(|(index, triangles)| Pending {
+            triangles: triangles.clone(),
+            fallback: Vec::new(),
+            segments: Vec::new(),
+            ..self.snapshots[*index].clone()
+        });
+        let pending: Vec<Pending> = kept
+            .chain(self.snapshots[self.next..].iter().cloned())
+            .collect();
+        let mut cbor = Vec::new();
+        ciborium::into_writer(&pending, &mut cbor).expect("slices encode in memory");
+        (self.next, cbor)
+    }
+
+    /// Adds another rank's slices, [`Self::pending_cbor`] of snapshots of the same times, to
+    /// the snapshots not written yet (those of snapshots written already are left out).
+    /// Errors: bytes that are not such slices.
+    pub(crate) fn add_pending(&mut self, cbor: &[u8]) -> Result<(), String> {
+        let other: Vec<Pending> =
+            ciborium::from_reader(cbor).map_err(|e| format!("snapshot slices: {e}"))?;
+        for o in other.into_iter().filter(|o| o.index >= self.next) {
+            let Some(p) = self.snapshots.get_mut(o.index) else {
+                return Err(format!(
+                    "slices of snapshot {}, which there is not",
+                    o.index
+                ));
+            };
+            p.triangles.extend(o.triangles);
+            p.fallback.extend(o.fallback);
+            p.segments.extend(o.segments);
+        }
+        Ok(())
+    }
+
+    /// A copy for a checkpoint of a run over ranks in which every rank has written the first
+    /// `next` snapshots: those after are pending again, with this rank's pieces written since
+    /// the last checkpoint back among their slices. Then [`Self::add_pending`] the other
+    /// ranks'.
+    pub(crate) fn rewound(&self, next: usize) -> Self {
+        let mut copy = self.to_stored();
+        let next = next.min(self.next);
+        for (index, triangles) in self.kept.iter().filter(|k| k.0 >= next) {
+            let p = &mut copy.snapshots[*index];
+            p.triangles = triangles.clone();
+            p.fallback.clear();
+        }
+        copy.written.truncate(next.min(copy.written.len()));
+        copy.next = next;
+        copy
+    }
+
+    /// Forgets the kept slices of the first `next` snapshots, which every rank has written.
+    pub(crate) fn forget_kept(&mut self, next: usize) {
+        self.kept.retain(|k| k.0 >= next);
+    }
+
+    /// A copy of the schedule, the files written and the slices collected, without the writer
+    /// or the piece: what a checkpoint stores.
+    pub(crate) fn to_stored(&self) -> Self {
+        let mut cbor = Vec::new();
+        ciborium::into_writer(self, &mut cbor).expect("snapshots encode in memory");
+        let mut copy: Self = ciborium::from_reader(&cbor[..]).expect("decoded as encoded");
+        copy.vtu = self.vtu;
+        copy
+    }
+
+    /// Forgets the slices collected and the files written, keeping which snapshots are still
+    /// to come: the part of a rank other than 0 of a run over ranks resumed from a checkpoint
+    /// (rank 0 keeps the slices and the collection).
+    pub(crate) fn forget_collected(&mut self) {
+        self.written.clear();
+        self.crack_files.clear();
+        for p in &mut self.snapshots[self.next..] {
+            p.triangles.clear();
+            p.fallback.clear();
+            p.segments.clear();
+        }
     }
 
     /// Snapshot files written so far: (time in s, file name).

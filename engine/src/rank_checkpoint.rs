@@ -1,0 +1,304 @@
+//! Checkpoints of a run over ranks, in the threaded run's format, so that `sdg run --restart`
+//! goes on from one on any number of ranks or on threads, and a run over ranks from a threaded
+//! run's checkpoint.
+//!
+//! # When
+//! The ranks pause together ([`sdg_distributed::Pause`]): at each multiple of
+//! `checkpoint.every_sim_s` every rank pitches the vertices below it and stops once all its
+//! vertices have reached it (exactly the tents with `t_old` below it, whatever the partition
+//! and timing; no tent is capped, so the tents are the uninterrupted run's); on SIGTERM,
+//! SIGINT, SIGHUP, SIGUSR1, `checkpoint.every_wall_s` or the wall-time limit each rank stops
+//! where it is and tells its neighbour ranks. Once every rank has stopped no update is in
+//! flight, and the ranks' fronts and elements are a state of the uninterrupted run.
+//!
+//! # What
+//! Rank 0 gathers the front, the elements and interface faces, the tents since the run (re)
+//! started, each rank's history sums and its slices of the snapshots not written yet, and
+//! writes one `checkpoint_NNNNNN.sdgc` ([`crate::solve::checkpoint`]): the front, the
+//! elements and the pitcher, and a bookkeeping with the totals, the history rows of the times
+//! the whole front has passed, the snapshots (files written, slices pending) and the
+//! milestones still ahead. One file, written last of all (temporary file, sync, rename), is
+//! the manifest and the state at once: a reader sees a whole checkpoint or none.
+//!
+//! # A restart over ranks
+//! Every rank reads the checkpoint and takes its part of the front and elements; rank 0 takes
+//! the pending snapshot slices. Rows of `history.csv` before the checkpoint are its rows; the
+//! rows of times between the checkpoint front's earliest and latest times are left out (their
+//! tents were split by the checkpoint, and the front of such a time was never whole); rows
+//! after it are as in an uninterrupted run.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use sdg_distributed::{Gathered, SolvedPatch};
+use sdg_mesh::{Front, Pitcher, Tent};
+use sdg_solver::element::{FrontSolution, Geometry};
+use sdg_solver::norms::FrontEnergy;
+use sdg_solver::patch::PatchReport;
+
+use crate::error::EngineError;
+use crate::exact_sum::ExactSum;
+use crate::frontier::Frontier;
+use crate::output::snapshot::Snapshots;
+use crate::problem::Problem;
+use crate::progress::Progress;
+use crate::rank_outputs::{PARTS, history_csv};
+use crate::solve::CheckpointSummary;
+use crate::solve::book::{Book, Milestones};
+use crate::solve::checkpoint::{Counts, Folder, Restored};
+
+/// What a run over ranks did before it (re)started: nothing for a new run, the checkpoint's
+/// bookkeeping for a restarted one.
+#[derive(Debug)]
+pub(crate) struct Prior {
+    /// Tents before, with their reports summed, elements, degrees of freedom and Newton counts.
+    pub(crate) patches: u64,
+    pub(crate) totals: PatchReport,
+    pub(crate) elements: u64,
+    pub(crate) dofs: u64,
+    pub(crate) nonlinear: u64,
+    pub(crate) newton: u64,
+    pub(crate) newton_max: usize,
+    /// The largest `c_max |grad t|` before.
+    pub(crate) max_slope_ratio: f64,
+    /// `history.csv` so far (header and rows), empty for a new run.
+    pub(crate) history: String,
+    /// The latest time of the checkpoint's front, s (0 for a new run): history rows at times
+    /// up to it are in `history` or left out.
+    pub(crate) reached: f64,
+    /// Wall time of the solve before, s, and checkpoints numbered before.
+    pub(crate) wall_time_s: f64,
+    pub(crate) written: u64,
+    /// The checkpoint (re)started from and its front's least time on the config's clock, s.
+    pub(crate) restarted: Option<(PathBuf, f64)>,
+    /// Its snapshots (schedule, files written, slices pending), for a restart.
+    pub(crate) snapshots: Option<Snapshots>,
+}
+
+impl Prior {
+    /// The prior of a new run.
+    pub(crate) fn fresh() -> Self {
+        Self {
+            patches: 0,
+            totals: PatchReport::default(),
+            elements: 0,
+            dofs: 0,
+            nonlinear: 0,
+            newton: 0,
+            newton_max: 0,
+            max_slope_ratio: 0.0,
+            history: String::new(),
+            reached: 0.0,
+            wall_time_s: 0.0,
+            written: 0,
+            restarted: None,
+            snapshots: None,
+        }
+    }
+
+    /// The prior of a run restarted from `restored` (read from `file`) of `problem`, numbering
+    /// its checkpoints after those in `folder`; returns it with the checkpoint's front and
+    /// elements. A checkpoint with mesh-changing state, or a restart that moves the end time
+    /// or the snapshot times, is refused (exit 2).
+    pub(crate) fn restored(
+        problem: &Problem,
+        (file, restored): (PathBuf, Restored),
+        folder: &Folder,
+    ) -> Result<(Self, Front, FrontSolution), EngineError> {
+        let config = &problem.loaded.config;
+        let refuse = |reason: &str| {
+            EngineError::Input(format!(
+                "--restart {}: {reason}; restart it on threads (without --ranks or --mpi)",
+                file.display()
+            ))
+        };
+        if restored.frontier.mesh.vertices().len() != problem.mesh.vertices().len()
+            || restored.frontier.mesh.triangles().len() != problem.mesh.triangles().len()
+        {
+            return Err(refuse("its mesh was changed by events"));
+        }
+        if crate::solve::checkpoint::extends(&restored.header.config, config) {
+            return Err(refuse(
+                "time.end or output.snapshot_times differ from the checkpoint's, which a run \
+                 over ranks cannot move yet",
+            ));
+        }
+        let book = restored.book;
+        let front = restored.frontier.front;
+        let reached = front.snapshot().into_iter().fold(0.0, f64::max);
+        let prior = Self {
+            patches: book.patches,
+            totals: book.totals,
+            elements: book.elements,
+            dofs: book.dofs,
+            nonlinear: book.nonlinear_patches,
+            newton: book.newton_iterations,
+            newton_max: book.newton_max,
+            max_slope_ratio: book.max_slope_ratio,
+            history: book.history,
+            reached,
+            wall_time_s: restored.counts.wall_time_s,
+            written: folder.next_number(restored.counts.written),
+            restarted: Some((file, config.time.clock(restored.header.time))),
+            snapshots: Some(book.snapshots),
+        };
+        Ok((prior, front, restored.frontier.solution))
+    }
+
+    /// The checkpoint part of `summary.json` for `written` checkpoints written in
+    /// `write_seconds`.
+    pub(crate) fn summary(&self, written: u64, write_seconds: f64) -> CheckpointSummary {
+        CheckpointSummary {
+            written,
+            restarted_from: self.restarted.as_ref().map(|r| r.0.clone()),
+            restart_time: self.restarted.as_ref().map(|r| r.1),
+            write_seconds,
+        }
+    }
+}
+
+/// What rank 0 writes a checkpoint from: the gathered state, the tents since the (re)start in
+/// serial order, the merged history sums and the snapshots with every rank's pending slices.
+pub(crate) struct Pausing<'a> {
+    pub(crate) gathered: &'a Gathered,
+    pub(crate) serial: &'a [(Tent, SolvedPatch)],
+    pub(crate) sums: &'a [[ExactSum; PARTS]],
+    pub(crate) snapshots: Snapshots,
+    /// Energy of the initial front, scaled units.
+    pub(crate) energy0: &'a FrontEnergy,
+    /// Wall time of the solve since the (re)start, s.
+    pub(crate) wall_time_s: f64,
+}
+
+/// Writes checkpoint number `number` of the state `at` of a run over ranks of `problem` after
+/// `prior` into `folder`. Returns its path and the seconds it took.
+pub(crate) fn write(
+    problem: &Problem,
+    folder: &Folder,
+    prior: &Prior,
+    at: Pausing<'_>,
+    number: u64,
+) -> Result<(PathBuf, f64), EngineError> {
+    let started = Instant::now();
+    let config = &problem.loaded.config;
+    let mesh = &problem.mesh;
+    let t_end = config.time.span();
+    let (front, solution) = (&at.gathered.front, &at.gathered.solution);
+    let history = history_csv(
+        problem,
+        prior,
+        at.serial,
+        at.sums,
+        (at.energy0, front, None),
+    )?;
+    let mut book = book(problem, prior, at.serial, at.energy0.total);
+    book.history = history;
+    book.snapshots = at.snapshots.with_png(config.output.png);
+    let snapshot_times: Vec<f64> = (config.output.snapshot_times.iter())
+        .map(|&t| config.time.elapsed(t))
+        .collect();
+    book.milestones = Milestones::resumed(
+        &front.snapshot(),
+        t_end,
+        &snapshot_times,
+        config.checkpoint.every_sim_s,
+    );
+    let pitcher = Pitcher::new(
+        mesh,
+        problem.material.max_wave_speed(),
+        config.pitch.safety,
+        t_end,
+    )
+    .map_err(|e| EngineError::Runtime(e.to_string()))?;
+    let copy = FrontSolution::new(solution.len(), solution.basis_len(), solution.width())
+        .with_edges(solution.edges());
+    let mut element = (
+        Geometry::default(),
+        vec![0.0; solution.basis_len() * solution.width()],
+    );
+    for t in 0..solution.len() {
+        if solution.load(t, &mut element.0, &mut element.1) {
+            copy.store(t, &element.0, &element.1, solution.energy(t));
+        }
+    }
+    for e in 0..solution.edges() {
+        if let Some(face) = solution.face(e) {
+            copy.store_face(e, &face);
+        }
+    }
+    let times = Front::flat(front.len(), 0.0);
+    for (v, t) in front.snapshot().into_iter().enumerate() {
+        times.set_time(v as u32, t);
+    }
+    let frontier = Frontier::new(mesh.clone(), times, copy, pitcher);
+    let counts = Counts {
+        tents: book.patches,
+        wall_time_s: prior.wall_time_s + at.wall_time_s,
+        written: number,
+        ..Counts::default()
+    };
+    let path = folder.write(config, counts, &frontier, &book)?;
+    let seconds = started.elapsed().as_secs_f64();
+    tracing::info!(
+        checkpoint = %path.display(),
+        time = config.time.clock(front.min_time()),
+        seconds,
+        "checkpoint written"
+    );
+    Ok((path, seconds))
+}
+
+/// The bookkeeping of a run over ranks of `problem` after `prior` and the `serial` tents, from
+/// an initial front of energy `energy0` (scaled units); history, snapshots and milestones are
+/// the caller's to fill in.
+fn book(problem: &Problem, prior: &Prior, serial: &[(Tent, SolvedPatch)], energy0: f64) -> Book {
+    let config = &problem.loaded.config;
+    let mut totals = prior.totals;
+    let (mut elements, mut dofs) = (prior.elements, prior.dofs);
+    let (mut nonlinear, mut newton, mut newton_max) =
+        (prior.nonlinear, prior.newton, prior.newton_max);
+    let mut slope_ratio = prior.max_slope_ratio;
+    let c_max = problem.material.max_wave_speed();
+    for (_, p) in serial {
+        let r = &p.report;
+        totals.accumulate(r);
+        elements += r.elements as u64;
+        dofs += r.dofs as u64;
+        if r.newton_iterations > 0 {
+            nonlinear += 1;
+            newton += r.newton_iterations as u64;
+            newton_max = newton_max.max(r.newton_iterations);
+        }
+        slope_ratio = slope_ratio.max(c_max * p.slope);
+    }
+    Book {
+        totals,
+        patches: prior.patches + serial.len() as u64,
+        rejected: 0,
+        refinements: 0,
+        coarsenings: 0,
+        unresolved: 0,
+        unresolved_max: 0.0,
+        samples: Vec::new(),
+        crossings: Vec::new(),
+        fracture_events: Vec::new(),
+        nonlinear_patches: nonlinear,
+        newton_iterations: newton,
+        newton_max,
+        initial_energy: energy0,
+        energy_max: energy0.max(energy0 + totals.boundary_work),
+        elements,
+        dofs,
+        max_slope_ratio: slope_ratio,
+        timings: Default::default(),
+        snapshots: Snapshots::on_clock(&[], config.time.start, c_max, PathBuf::new()),
+        milestones: Milestones::new(0, 0.0, &[], None, None),
+        passed: Vec::new(),
+        history: String::new(),
+        progress: Progress::new(false, 0.0),
+        phi: Vec::new(),
+        values: Vec::new(),
+        geometry: Geometry::default(),
+        coefficients: Vec::new(),
+    }
+}
