@@ -9,7 +9,9 @@
 //! gathered on rank 0 ([`sdg_distributed::gathering`]), each from the rank owning its
 //! triangle's first corner (an interface face from the owner of its edge's first end), and rank
 //! 0 writes `summary.json` with the state hash and energy totals summed in the serial order of
-//! the tents, and `history.csv`. The ranks run in phases between checkpoints (module
+//! the tents, and `history.csv` (module `rank_finish`). The partition and what every rank
+//! solves with are module `rank_setup`'s; what a restarted run did before, `rank_prior`'s. The
+//! ranks run in phases between checkpoints (module
 //! `rank_run`), which are the threaded run's checkpoint files (module `rank_checkpoint`): a
 //! run over ranks restarts from either kind, on any number of ranks, and a run on threads from
 //! a checkpoint of one over ranks.
@@ -21,54 +23,20 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use sdg_distributed::{
-    Causality, Gathered, LoopbackOptions, Partition, Physics, RankReport, SolvedPatch, Transport,
-};
+use sdg_distributed::{LoopbackOptions, Partition, Transport};
 use sdg_mesh::Front;
 use sdg_solver::element::FrontSolution;
-use sdg_solver::norms::{FrontEnergy, front_energy, slice_errors};
-use sdg_solver::patch::{Initial, Newton, PatchReport, PatchSolver};
 
 use crate::error::EngineError;
 use crate::job::RunOptions;
-use crate::output::write_output;
 use crate::problem::Problem;
-use crate::rank_checkpoint::Prior;
-use crate::rank_outputs::{history_csv, merged_sums};
+use crate::rank_prior::Prior;
 use crate::rank_run::{Failure, OTHER_RANK_STOPPED, Shared, pause_request, run_rank};
-use crate::solve::Control;
+use crate::rank_setup::partition_for;
+pub use crate::rank_setup::{PartitionKind, causality, physics};
 use crate::solve::checkpoint::{self, Folder};
-use crate::solve::context::initial_state;
 use crate::solve::start::Start;
-use crate::solve::summary::state_hash;
-use crate::solve::tent::momentum_residual;
-use crate::solve::{
-    CheckpointSummary, DistributedSummary, EnergySummary, ErrorSummary, InterfaceSummary,
-    RunSummary, Timings,
-};
-
-/// How the vertices are split among the ranks (`--partition`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum PartitionKind {
-    /// Recursive coordinate bisection weighted by star size: balanced, short cuts.
-    #[default]
-    Coordinate,
-    /// Stripes along x of equal weight.
-    Stripes,
-    /// Seeded random owners (nearly every vertex on a rank boundary): for tests.
-    Random,
-}
-
-impl PartitionKind {
-    /// The name `--partition` and `summary.json` use.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Coordinate => "coordinate",
-            Self::Stripes => "stripes",
-            Self::Random => "random",
-        }
-    }
-}
+use crate::solve::{Control, RunSummary};
 
 /// What `sdg run --ranks` asks beyond [`RunOptions`].
 #[derive(Clone, Copy, Debug)]
@@ -78,9 +46,6 @@ pub struct RankOptions {
     /// How the vertices are split among them.
     pub partition: PartitionKind,
 }
-
-/// The seed of `--partition random`: the same owners on every run.
-const RANDOM_SEED: u64 = 1;
 
 /// `sdg run` over `ranks.ranks` in-process ranks: solves `problem` to the end time and writes
 /// `summary.json`, `history.csv` and the snapshots into the output folder, and checkpoints as
@@ -307,122 +272,6 @@ impl SetUp {
     }
 }
 
-/// How a run over ranks ended, for [`finish`]: on the `partition` with the `gathered`
-/// results since the (re)start after the `prior`, the snapshots rank 0 wrote (time in s, file
-/// name), its wall time since the (re)start (s), and the checkpoints written (count, seconds).
-pub(crate) struct End<'a> {
-    pub(crate) partition: PartitionKind,
-    pub(crate) gathered: &'a Gathered,
-    pub(crate) snapshots: Vec<(f64, String)>,
-    pub(crate) prior: &'a Prior,
-    pub(crate) wall_time_s: f64,
-    pub(crate) checkpoints: (u64, f64),
-}
-
-/// The energy of the initial front of `problem` (scaled units), integrated on `threads`
-/// threads.
-pub(crate) fn initial_energy(problem: &Problem, threads: usize) -> FrontEnergy {
-    let mesh = &problem.mesh;
-    let solver = PatchSolver::new(
-        problem.system.clone(),
-        problem.loaded.config.solver.order,
-        0,
-    );
-    let initial_front = Front::flat(mesh.vertices().len(), 0.0);
-    let empty = FrontSolution::new(mesh.triangles().len(), solver.basis().len(), solver.width());
-    energy_on(problem, &initial_front, &empty, threads)
-}
-
-/// Writes the outputs of a run over ranks that ended as `end` and its `summary.json` into
-/// `dir`, with the `estimate` made before. Returns the summary and the folder.
-pub(crate) fn finish(
-    problem: &Problem,
-    dir: &Path,
-    end: End<'_>,
-    estimate: crate::estimate::Estimate,
-) -> Result<(RunSummary, PathBuf), EngineError> {
-    let config = &problem.loaded.config;
-    let finishing = Instant::now();
-    let gathered = end.gathered;
-    let (front, solution) = (&gathered.front, &gathered.solution);
-    let serial = gathered.in_serial_order();
-    let patches: Vec<SolvedPatch> = serial.iter().map(|(_, p)| *p).collect();
-    let ranks = gathered.reports.len();
-    let wall_time_s = end.prior.wall_time_s + end.wall_time_s;
-    tracing::info!(patches = patches.len(), wall_time_s, "solve finished");
-    let initial_energy = initial_energy(problem, ranks);
-    let energy = energy_on(problem, front, solution, ranks);
-    let mut summary = summarize(
-        problem,
-        (front, solution),
-        (end.prior, &patches),
-        &gathered.reports,
-        (initial_energy, &energy),
-        estimate,
-    )?;
-    summary.wall_time_s = wall_time_s;
-    summary.patches_per_second = patches.len() as f64 / end.wall_time_s.max(f64::MIN_POSITIVE);
-    summary.distributed = Some(distributed_summary(end.partition, gathered));
-    summary.snapshots = end.snapshots;
-    summary.checkpoint = end.prior.summary(end.checkpoints.0, end.checkpoints.1);
-    let outputs: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
-    let times = crate::solve::book::history_times(config.time.span()).len();
-    let (sums, _) = merged_sums(&outputs, times)?;
-    let history = history_csv(
-        problem,
-        end.prior,
-        &serial,
-        &sums,
-        (&initial_energy, front, Some(&energy)),
-    )?;
-    let written = vec![write_output(dir, "history.csv", history.as_bytes()).map(drop)];
-    if config.output.png {
-        crate::plot::write_history_png(dir, &history);
-    }
-    crate::solve::finish::write_summary(dir, written, summary, finishing)
-}
-
-/// The partition of `mesh` over `ranks` ranks of `kind`; one that cannot be made (more ranks
-/// than vertices) is bad input.
-fn partition_for(
-    mesh: &sdg_mesh::Mesh,
-    kind: PartitionKind,
-    ranks: usize,
-) -> Result<Partition, EngineError> {
-    match kind {
-        PartitionKind::Coordinate => Partition::coordinate(mesh, ranks),
-        PartitionKind::Stripes => Partition::striped(mesh, ranks),
-        PartitionKind::Random => Partition::random(mesh, ranks, RANDOM_SEED),
-    }
-    .map_err(|e| EngineError::Input(format!("{ranks} ranks, --partition {}: {e}", kind.name())))
-}
-
-/// What every rank solves the patches of `problem` with.
-pub fn physics(problem: &Problem) -> Physics<'_> {
-    let config = &problem.loaded.config;
-    Physics {
-        system: &problem.system,
-        order: config.solver.order,
-        boundary: &problem.boundary,
-        initial: problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave),
-        interfaces: &problem.interfaces,
-        newton: Newton {
-            tol: config.solver.newton_tol,
-            max_iter: config.solver.newton_max_iter,
-        },
-    }
-}
-
-/// What every rank pitches the tents of `problem` with.
-pub fn causality(problem: &Problem) -> Causality {
-    let config = &problem.loaded.config;
-    Causality {
-        c_max: problem.material.max_wave_speed(),
-        safety: config.pitch.safety,
-        t_end: config.time.span(),
-    }
-}
-
 /// What a run over ranks cannot do yet, as bad input naming the key or option and why.
 fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Result<(), EngineError> {
     let config = &problem.loaded.config;
@@ -492,173 +341,4 @@ fn prepare_folder(dir: &Path, restarted: bool) -> Result<(), EngineError> {
         crate::output::snapshot::remove_earlier(dir)?;
     }
     Ok(())
-}
-
-/// The energy on `front` with the elements of `solution` (initial data where there is none),
-/// scaled units, integrated on `threads` threads.
-fn energy_on(
-    problem: &Problem,
-    front: &Front,
-    solution: &FrontSolution,
-    threads: usize,
-) -> FrontEnergy {
-    let solver = PatchSolver::new(
-        problem.system.clone(),
-        problem.loaded.config.solver.order,
-        0,
-    );
-    let initial = problem.exact.as_ref().map_or(Initial::Rest, Initial::Wave);
-    front_energy(
-        &problem.mesh,
-        front,
-        solution,
-        solver.basis(),
-        &problem.system,
-        threads,
-        |x| initial_state(problem, initial, x),
-    )
-}
-
-/// The summary of a run that left `front` and `solution` (with the energy `e` on it) after
-/// `patches` (in serial order) from the `energy0` of the initial front, with the `estimate`
-/// made before; the wall time is the caller's to fill in.
-fn summarize(
-    problem: &Problem,
-    (front, solution): (&Front, &FrontSolution),
-    (prior, patches): (&Prior, &[SolvedPatch]),
-    ranks: &[RankReport],
-    (energy0, e): (FrontEnergy, &FrontEnergy),
-    estimate: crate::estimate::Estimate,
-) -> Result<RunSummary, EngineError> {
-    let config = &problem.loaded.config;
-    let mesh = &problem.mesh;
-    let system = &problem.system;
-    let rho = problem.material.density();
-    let t_end = config.time.span();
-    let solver = PatchSolver::new(system.clone(), config.solver.order, 0);
-    let (basis, width) = (solver.basis(), solver.width());
-    let threads = ranks.len();
-    let mut totals = prior.totals;
-    let c_max = problem.material.max_wave_speed();
-    let mut slope = prior.max_slope_ratio / c_max;
-    let (mut nonlinear, mut newton) = (prior.nonlinear, prior.newton);
-    let mut newton_max = prior.newton_max;
-    let (mut elements, mut dofs) = (prior.elements, prior.dofs);
-    let mut timings = Timings::default();
-    for p in patches {
-        let r = &p.report;
-        if let Some((name, value)) = non_finite(r) {
-            return Err(EngineError::Runtime(format!(
-                "a patch over ranks has {name} = {value} (a non-finite value)"
-            )));
-        }
-        elements += r.elements as u64;
-        dofs += r.dofs as u64;
-        timings.assembly_s += r.assembly_s;
-        timings.solve_s += r.solve_s;
-        timings.evaluation_s += r.evaluation_s;
-        totals.accumulate(r);
-        if r.newton_iterations > 0 {
-            nonlinear += 1;
-            newton += r.newton_iterations as u64;
-            newton_max = newton_max.max(r.newton_iterations);
-        }
-        slope = slope.max(p.slope);
-    }
-    timings.waiting_s = ranks.iter().map(|r| r.waited.as_secs_f64()).sum();
-    let count = prior.patches + patches.len() as u64;
-    let (initial_j, work) = (rho * energy0.total, rho * totals.boundary_work);
-    let (dissipation, interface_work) = (rho * totals.dissipation, rho * totals.interface_work);
-    let final_j = rho * e.total;
-    let error = problem.exact.as_ref().map(|w| {
-        let e = slice_errors(mesh, solution, basis, system, t_end, w);
-        ErrorSummary {
-            velocity_l2_rel: e.velocity,
-            stress_l2_rel: e.stress,
-        }
-    });
-    let (min_edge, max_edge) = mesh.edge_length_range();
-    Ok(RunSummary {
-        command: "run",
-        config_file: problem.loaded.file.clone(),
-        vertices: mesh.vertices().len(),
-        triangles: mesh.triangles().len(),
-        order: config.solver.order,
-        patches: count,
-        elements,
-        dofs_per_patch: dofs as f64 / count.max(1) as f64,
-        final_time: config.time.clock(front.min_time()),
-        max_slope_ratio: c_max * slope,
-        max_momentum_residual: momentum_residual(&totals),
-        mode: "asynchronous",
-        state_hash: state_hash(front, solution, basis.len() * width),
-        wall_time_s: 0.0,
-        patches_per_second: 0.0,
-        threads,
-        ranks: threads,
-        distributed: None,
-        peak_memory_bytes: crate::estimate::peak_resident_bytes(),
-        estimate,
-        energy: EnergySummary {
-            initial: initial_j,
-            final_kinetic: rho * e.kinetic,
-            final_strain: rho * e.strain,
-            r#final: final_j,
-            boundary_work: work,
-            dissipation,
-            interface_work,
-            friction_dissipation: rho * totals.friction_dissipation,
-            fracture_energy: rho * totals.fracture_work,
-            balance_residual_rel: (initial_j + work - final_j - dissipation - interface_work)
-                / (initial_j + work.abs()).max(f64::MIN_POSITIVE),
-        },
-        interface: InterfaceSummary {
-            nonlinear_patches: nonlinear,
-            newton_iterations_mean: newton as f64 / nonlinear.max(1) as f64,
-            newton_iterations_max: newton_max,
-        },
-        loading: problem.loading,
-        lefm: None,
-        crack: None,
-        fracture: None,
-        error,
-        snapshots: Vec::new(),
-        refinements: 0,
-        rejected_patches: 0,
-        unresolved_patches: 0,
-        unresolved_max: 0.0,
-        coarsenings: 0,
-        events: 0,
-        rounds: 0,
-        min_edge,
-        max_edge,
-        checkpoint: CheckpointSummary::default(),
-        timings,
-    })
-}
-
-/// The first non-finite value of a patch report, named as the engine's guard names it.
-fn non_finite(r: &PatchReport) -> Option<(&'static str, f64)> {
-    [
-        ("energy_in", r.energy_in),
-        ("energy_out", r.energy_out),
-        ("boundary_work", r.boundary_work),
-        ("interface_work", r.interface_work),
-        ("dissipation", r.dissipation),
-    ]
-    .into_iter()
-    .find(|(_, v)| !v.is_finite())
-}
-
-/// `distributed` of `summary.json`.
-fn distributed_summary(partition: PartitionKind, gathered: &Gathered) -> DistributedSummary {
-    let reports = &gathered.reports;
-    let per_tent = |x: u64| x as f64 / gathered.tents.len().max(1) as f64;
-    DistributedSummary {
-        partition: partition.name(),
-        boundary_vertices: reports.iter().map(|r| r.boundary_vertices).sum(),
-        updates_per_tent: per_tent(reports.iter().map(|r| r.updates_sent).sum()),
-        bytes_per_tent: per_tent(reports.iter().map(|r| r.update_bytes).sum()),
-        waited_s: reports.iter().map(|r| r.waited.as_secs_f64()).sum(),
-    }
 }

@@ -47,7 +47,7 @@ use crate::error::EngineError;
 use crate::exact_sum::ExactSum;
 use crate::output::snapshot::{Piece, Snapshots};
 use crate::problem::Problem;
-use crate::rank_checkpoint::Prior;
+use crate::rank_prior::Prior;
 use crate::solve::book::{Milestone, Milestones, history_times};
 use crate::solve::history::{history_header, history_line, point_values, repeats_last_row};
 

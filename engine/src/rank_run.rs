@@ -24,12 +24,14 @@ use sdg_distributed::{
 use sdg_mesh::{Front, Pitcher};
 use sdg_solver::element::FrontSolution;
 
-use crate::distributed_run::{PartitionKind, causality, finish, physics};
 use crate::error::EngineError;
 use crate::estimate::Estimate;
 use crate::problem::Problem;
-use crate::rank_checkpoint::{self, Pausing, Prior};
+use crate::rank_checkpoint::{self, Pausing};
+use crate::rank_finish::{End, finish, initial_energy};
 use crate::rank_outputs::{RankOutputs, merged_sums, pending};
+use crate::rank_prior::Prior;
+use crate::rank_setup::{PartitionKind, causality, physics};
 use crate::solve::book::history_times;
 use crate::solve::checkpoint::Folder;
 use crate::solve::work::deadline;
@@ -177,7 +179,7 @@ pub(crate) fn run_rank<T: Transport>(
     let mut collected = Collected::default();
     let mut number = shared.prior.written;
     let mut written = (0_u64, 0.0_f64);
-    let energy0 = crate::distributed_run::initial_energy(problem, ranks);
+    let energy0 = initial_energy(problem, ranks);
     // The checkpoint at the end (`checkpoint.at_end`) is written.
     let mut ended = false;
     loop {
@@ -215,7 +217,7 @@ pub(crate) fn run_rank<T: Transport>(
                 return Ok(None);
             };
             let gathered = collected.add(gathered);
-            let end = crate::distributed_run::End {
+            let end = End {
                 partition: kind,
                 gathered,
                 snapshots,
