@@ -190,6 +190,12 @@ shield_angle = 35.0
         )
         .unwrap();
         assert!(c.fracture.unwrap().surface_nucleation);
+        let length = |sets: &[&str]| {
+            let c = parse(&format!("{BASE}{FRACTURE}"), sets).unwrap();
+            c.fracture.unwrap().criterion_length
+        };
+        assert_eq!(length(&[]), None);
+        assert_eq!(length(&["fracture.criterion_length=9.4e-6"]), Some(9.4e-6));
     }
 
     #[test]
