@@ -1,9 +1,10 @@
 //! Crack propagation in a run (seed 4.3.2; the criteria are in [`crate::fracture`]).
 //!
 //! The tent at a crack tip evaluates the stress at the middle of its pole, once the patch is
-//! accepted: the mean of the patch elements' stresses there, weighted by their angles at the tip
-//! (the average over a small disc around it). When the tip has directions to extend along, an
-//! event extends it: per direction, the crack takes the existing edge of the tip's star when the
+//! accepted: each patch element's at the tip, in its sector ([`Fracture::candidates`]); with
+//! `fracture.criterion_length`, once the tent settles, the stress averaged along segments ahead
+//! of the tip ([`super::nonlocal`]). When the tip has directions to extend along, an event
+//! extends it: per direction, the crack takes the existing edge of the tip's star when the
 //! direction crosses the opposite edge near one of its ends (`snap`) and that edge keeps to the
 //! rules ([`Fracture::may_take`]), and otherwise splits that edge where the direction crosses it
 //! ([`Frontier::split_at`] towards the tip), or, where no split may be that short, takes an end
@@ -58,7 +59,9 @@ impl Extension {
 
 impl Solve<'_> {
     /// The extension of the tip at `v` after its patch (of the tent from `t_old` to `t_new`, s)
-    /// was accepted, if it has directions to extend along.
+    /// was accepted, if it has directions to extend along, or of a crack nucleating there. With
+    /// [`Fracture::criterion_length`] a tip's test is made when the tent settles instead
+    /// ([`Solve::settled_extension`]).
     pub(crate) fn extension(
         &self,
         fracture: &Fracture,
