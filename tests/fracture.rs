@@ -191,6 +191,54 @@ fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branch
 /// With adaptivity, calm regions are coarsened again; on the crack only where both halves of
 /// a bisected crack edge are fully debonded (seed Fig. 4.6): here the notch's edges, refined
 /// when the tip started to run and merged once calm. Each merge is an event in `events.csv`.
+/// With `fracture.criterion_length` the tip reads the stress averaged over 9.4 um ahead of it
+/// (the damage law's process zone c_R tau) instead of at the tip: the notch still grows
+/// straight ahead, later than by the point rule (the mean of a field that falls away from the
+/// tip is below its value at the tip).
+#[test]
+fn over_a_criterion_length_the_notch_still_grows_straight_ahead() {
+    let set = ["time.end=1.1e-6", "output.snapshot_times=[]"];
+    let first_extension = |criterion: &[&str]| {
+        let sets: Vec<&str> = set.iter().chain(criterion).copied().collect();
+        let (summary, dir) = solve(&shipped("crack_growth.toml", &sets), 2, true);
+        let (rows, kinds) = events(dir.path());
+        let extensions: Vec<Vec<f64>> = (rows.into_iter().zip(&kinds))
+            .filter(|(row, kind)| *kind == "extension" && row[0] > 0.0)
+            .map(|(row, _)| row)
+            .collect();
+        (summary.fracture.expect("fracture summary"), extensions)
+    };
+    let (fracture, extensions) = first_extension(&["fracture.criterion_length=9.4e-6"]);
+    assert!(fracture.total_length > 2e-4, "{fracture:?}");
+    // The first five edges run from the notch's tip along y = 1 mm, each from where the last
+    // one ended.
+    let mut x = 1e-3;
+    for row in &extensions[..5] {
+        assert_eq!([row[1], row[2]], [x, 1e-3], "{extensions:?}");
+        let angle = (row[4] - row[2]).atan2(row[3] - row[1]).to_degrees();
+        assert!(angle.abs() < 1.0, "{extensions:?}");
+        x = row[3];
+    }
+    assert!(x > 1.3e-3, "{extensions:?}");
+    // The crack's furthest point ahead lies within 5 degrees of +x from the notch's tip.
+    let last = (extensions.iter())
+        .max_by(|p, q| p[3].total_cmp(&q[3]))
+        .expect("extensions");
+    let overall = (last[4] - 1e-3).atan2(last[3] - 1e-3).to_degrees();
+    assert!(overall.abs() < 5.0, "{extensions:?}");
+    let (_, point) = first_extension(&[]);
+    assert!(extensions[0][0] > point[0][0], "{extensions:?} {point:?}");
+    eprintln!(
+        "criterion length: first extension at {:e} s (point rule {:e} s), crack {:e} m, \
+         {} extensions, {} branchings",
+        extensions[0][0],
+        point[0][0],
+        fracture.total_length,
+        fracture.extensions,
+        fracture.branchings
+    );
+}
+
 #[test]
 fn the_crack_wake_is_merged_where_fully_debonded() {
     let problem = shipped(

@@ -41,6 +41,14 @@ pub struct FractureConfig {
     /// and curl onto its own crack.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tangent_length: Option<f64>,
+    /// A crack surface tip's criterion reads the stress averaged over a segment of this length
+    /// from the tip, m (> 0), in each direction, instead of the stress at the tip: a point
+    /// value in the tip's singular field grows without bound as the mesh is refined, a mean
+    /// over a fixed length converges. The segment stops where it meets a crack or the
+    /// boundary. Default none: the stress at the tip (the seed's radius `0+`). Nucleation
+    /// stays a test of the stress at a point.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub criterion_length: Option<f64>,
     /// The fastest a crack surface tip may advance, as a fraction of the Rayleigh speed `c_R`
     /// (> 0, default 1; `inf`: the seed's rule, one edge at every tent of the tip). A tip
     /// extends only when its new edge's length over the time since the tip reached its vertex
@@ -182,6 +190,12 @@ shield_angle = 35.0
         )
         .unwrap();
         assert!(c.fracture.unwrap().surface_nucleation);
+        let length = |sets: &[&str]| {
+            let c = parse(&format!("{BASE}{FRACTURE}"), sets).unwrap();
+            c.fracture.unwrap().criterion_length
+        };
+        assert_eq!(length(&[]), None);
+        assert_eq!(length(&["fracture.criterion_length=9.4e-6"]), Some(9.4e-6));
     }
 
     #[test]
@@ -237,6 +251,26 @@ shield_angle = 35.0
             (
                 "fracture.tangent_length=0.0",
                 "fracture.tangent_length",
+                "positive length",
+            ),
+            (
+                "fracture.criterion_length=0.0",
+                "fracture.criterion_length",
+                "positive length",
+            ),
+            (
+                "fracture.criterion_length=-1e-6",
+                "fracture.criterion_length",
+                "positive length",
+            ),
+            (
+                "fracture.criterion_length=nan",
+                "fracture.criterion_length",
+                "positive length",
+            ),
+            (
+                "fracture.criterion_length=inf",
+                "fracture.criterion_length",
                 "positive length",
             ),
             (

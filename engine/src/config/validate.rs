@@ -443,6 +443,7 @@ impl Config {
             ("short_macro_length", f.short_macro_length),
             ("min_piece", f.min_piece),
             ("tangent_length", f.tangent_length),
+            ("criterion_length", f.criterion_length),
         ] {
             if let Some(length) = length
                 && !(length.is_finite() && length > 0.0)

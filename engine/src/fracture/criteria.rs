@@ -39,6 +39,10 @@ pub struct Fracture {
     pub max_tip_speed: f64,
     /// Length over which a tip's crack tangent is averaged, m; none: its last edge.
     pub tangent_length: Option<f64>,
+    /// Length over which a crack surface tip's criterion averages the stress ahead of it, m
+    /// ([`Fracture::averaged_candidates`]); none: the stress at the tip
+    /// ([`Fracture::candidates`]).
+    pub criterion_length: Option<f64>,
     /// Mixity factor `beta` of the damage law of `tag`.
     pub beta: f64,
     /// Delay `tau` of the damage law of `tag`, s.
@@ -128,6 +132,7 @@ impl Fracture {
                 .map_or(0.5 * config.shield_angle.to_radians(), f64::to_radians),
             max_tip_speed: config.max_tip_speed * c_r,
             tangent_length: config.tangent_length,
+            criterion_length: config.criterion_length,
             beta: damage.beta,
             delay: damage.delay,
             nucleation: config

@@ -1,9 +1,10 @@
 //! Crack propagation in a run (seed 4.3.2; the criteria are in [`crate::fracture`]).
 //!
 //! The tent at a crack tip evaluates the stress at the middle of its pole, once the patch is
-//! accepted: the mean of the patch elements' stresses there, weighted by their angles at the tip
-//! (the average over a small disc around it). When the tip has directions to extend along, an
-//! event extends it: per direction, the crack takes the existing edge of the tip's star when the
+//! accepted: each patch element's at the tip, in its sector ([`Fracture::candidates`]); with
+//! `fracture.criterion_length`, once the tent settles, the stress averaged along segments ahead
+//! of the tip ([`super::nonlocal`]). When the tip has directions to extend along, an event
+//! extends it: per direction, the crack takes the existing edge of the tip's star when the
 //! direction crosses the opposite edge near one of its ends (`snap`) and that edge keeps to the
 //! rules ([`Fracture::may_take`]), and otherwise splits that edge where the direction crosses it
 //! ([`Frontier::split_at`] towards the tip), or, where no split may be that short, takes an end
@@ -23,9 +24,10 @@ use sdg_solver::element::evaluate;
 use sdg_solver::patch::PatchSolver;
 
 use super::criteria::{self, Fracture, Pending, Tip};
+use super::nonlocal;
 use super::records::{FractureEvent, Refusal, SCRATCH};
 use crate::frontier::Frontier;
-use crate::solve::context::Solve;
+use crate::solve::context::{Solve, initial_state};
 
 /// A tip's directions to extend along, found by the tent at its vertex.
 #[derive(Debug)]
@@ -57,7 +59,9 @@ impl Extension {
 
 impl Solve<'_> {
     /// The extension of the tip at `v` after its patch (of the tent from `t_old` to `t_new`, s)
-    /// was accepted, if it has directions to extend along.
+    /// was accepted, if it has directions to extend along, or of a crack nucleating there. With
+    /// [`Fracture::criterion_length`] a tip's test is made when the tent settles instead
+    /// ([`Solve::settled_extension`]).
     pub(crate) fn extension(
         &self,
         fracture: &Fracture,
@@ -70,27 +74,11 @@ impl Solve<'_> {
         let t_mid = 0.5 * (times[0] + times[1]);
         let stress = |t| element_stress(self, mesh, solver, v, t, t_mid);
         let (directions, nucleation) = match state.tips[v as usize] {
+            // Over a length the test reads beyond the star: it waits for `settled_extension`.
+            Some(_) if fracture.criterion_length.is_some() => return None,
             Some(tip) => {
                 let candidates = fracture.candidates(mesh, v, stress);
-                let mut directions = fracture.select(mesh, v, tip, &candidates);
-                if !fracture.in_time(mesh, v, tip, directions, times[1]) {
-                    // Faster than a crack: the tip waits for its next tent.
-                    directions = [f64::NAN; 2];
-                }
-                if !candidates.is_empty() {
-                    let [x, y] = mesh.vertex(v);
-                    let degrees_mpa = |(d, s): (f64, f64)| (d.to_degrees(), s * 1e-6);
-                    tracing::debug!(
-                        vertex = v,
-                        x,
-                        y,
-                        t = t_mid,
-                        travel = tip.direction.to_degrees(),
-                        maxima = ?candidates.iter().copied().map(degrees_mpa).collect::<Vec<_>>(),
-                        chosen = ?directions.map(f64::to_degrees),
-                        "propagation test (degrees, MPa)"
-                    );
-                }
+                let directions = tip_directions(fracture, mesh, (v, tip), &candidates, times);
                 (directions, false)
             }
             None => (fracture.nucleates(mesh, v, times[1], stress)?, true),
@@ -99,6 +87,48 @@ impl Solve<'_> {
             at: mesh.vertex(v),
             directions,
             nucleation,
+            retry: false,
+        })
+    }
+
+    /// With [`Fracture::criterion_length`], the extension of the tip at `v` after its patch
+    /// (of the tent from `t_old` to `t_new`, s) was accepted, if it has directions to extend
+    /// along ([`Fracture::averaged_candidates`]); none without a criterion length or a tip.
+    /// Called once the tent settles ([`sdg_scheduler::Work::settle`]): the segments reach
+    /// beyond the star, into triangles that other tents of a deterministic round may have
+    /// solved, and the state as the round left it does not depend on their order. The stress
+    /// in a star triangle is that of the patch element just stored under it at the middle of
+    /// the pole, as for the point rule; elsewhere the front's: the element under the triangle
+    /// on its top facet (the initial state where none was solved yet).
+    pub(crate) fn settled_extension(
+        &self,
+        fracture: &Fracture,
+        state: &Frontier,
+        v: VertexId,
+        times: [f64; 2],
+    ) -> Option<Extension> {
+        let length = fracture.criterion_length?;
+        let tip = state.tips[v as usize]?;
+        let mesh = &state.mesh;
+        let t_mid = 0.5 * (times[0] + times[1]);
+        let star = mesh.vertex_triangles(v);
+        let stress = |t: TriangleId, x: [f64; 2]| {
+            let time = if star.contains(&t) {
+                t_mid
+            } else {
+                let corners = mesh.triangles()[t as usize].map(|w| state.front.time(w));
+                nonlocal::facet_time(mesh, t, corners, x)
+            };
+            front_stress(self, state, t, x, time)
+        };
+        let order = self.basis.degree();
+        let candidates =
+            fracture.averaged_candidates(mesh, v, tip.direction, length, order, stress);
+        let directions = tip_directions(fracture, mesh, (v, tip), &candidates, times);
+        directions[0].is_finite().then_some(Extension {
+            at: mesh.vertex(v),
+            directions,
+            nucleation: false,
             retry: false,
         })
     }
@@ -371,4 +401,71 @@ fn element_stress(
     );
     let z = system.z_ref();
     [values[2], values[3], values[4]].map(|s| z * s)
+}
+
+/// The directions (radians, unused entries NaN) `tip` at vertex `v` extends along after the
+/// tent from `times[0]` to `times[1]` (s), of its `candidates` (`(direction, traction)`,
+/// radians and Pa): [`Fracture::select`], unless the tip would be faster than
+/// [`Fracture::max_tip_speed`] ([`Fracture::in_time`]); logged at debug level.
+fn tip_directions(
+    fracture: &Fracture,
+    mesh: &Mesh,
+    (v, tip): (VertexId, Tip),
+    candidates: &[(f64, f64)],
+    times: [f64; 2],
+) -> [f64; 2] {
+    let mut directions = fracture.select(mesh, v, tip, candidates);
+    if !fracture.in_time(mesh, v, tip, directions, times[1]) {
+        // Faster than a crack: the tip waits for its next tent.
+        directions = [f64::NAN; 2];
+    }
+    if !candidates.is_empty() {
+        let [x, y] = mesh.vertex(v);
+        let degrees_mpa = |(d, s): (f64, f64)| (d.to_degrees(), s * 1e-6);
+        tracing::debug!(
+            vertex = v,
+            x,
+            y,
+            t = 0.5 * (times[0] + times[1]),
+            travel = tip.direction.to_degrees(),
+            maxima = ?candidates.iter().copied().map(degrees_mpa).collect::<Vec<_>>(),
+            chosen = ?directions.map(f64::to_degrees),
+            "propagation test (degrees, MPa)"
+        );
+    }
+    directions
+}
+
+/// The in-plane stress (Pa) at the point `x` (m) of triangle `triangle` at time `t` (s) in the
+/// element stored under it in the front solution, or of the initial state where none is.
+fn front_stress(
+    solve: &Solve,
+    state: &Frontier,
+    triangle: TriangleId,
+    x: [f64; 2],
+    t: f64,
+) -> [f64; 3] {
+    let system = &solve.problem.system;
+    let (mut phi, mut values) = ([0.0; SCRATCH], [0.0; SCRATCH]);
+    let (n, width) = (solve.basis.len(), solve.width);
+    let scaled = state
+        .solution
+        .with_element(triangle as usize, |element| match element {
+            Some((geometry, coefficients)) => {
+                evaluate(
+                    &solve.basis,
+                    geometry,
+                    coefficients,
+                    [x[0], x[1], system.c_ref() * t],
+                    &mut phi[..n],
+                    &mut values[..width],
+                );
+                [values[2], values[3], values[4]]
+            }
+            None => {
+                let q = initial_state(solve.problem, solve.initial, x);
+                [q[2], q[3], q[4]]
+            }
+        });
+    scaled.map(|s| system.z_ref() * s)
 }

@@ -85,11 +85,18 @@ impl<'a> Work<'a> for Solve<'a> {
             t_new,
             retries,
             span,
+            extension,
             ..
         } = o
         else {
             return;
         };
+        if let Some(fracture) = &self.problem.fracture
+            && extension.is_none()
+        {
+            // A tip's test over a length reads the front beyond the star as the tents left it.
+            *extension = self.settled_extension(fracture, state, v, [*t_old, *t_new]);
+        }
         // The star's elements span the old and new front times of `v` and its neighbours.
         let neighbours = state.mesh.vertex_neighbors(v);
         *span = (neighbours.iter())

@@ -31,6 +31,7 @@ pub(crate) fn notched() -> (Mesh, Fracture) {
         floor_angle: 17.5f64.to_radians(),
         max_tip_speed: 1000.0,
         tangent_length: None,
+        criterion_length: None,
         beta: 1.0,
         delay: 1e-8,
         nucleation: None,
