@@ -279,6 +279,10 @@ fn invalid_adaptivity_settings() {
             "adapt.reference_energy=-1.0",
             ["adapt.reference_energy", "positive energy"],
         ),
+        (
+            "adapt.fixed_reference=true",
+            ["adapt.fixed_reference", "needs adapt.reference_energy"],
+        ),
     ] {
         let args = [
             "validate",

@@ -39,6 +39,8 @@ pub(crate) struct Adapt {
     /// Least reference energy, in the scaled units of the indicator's energies (J/m over the
     /// density).
     energy_floor: f64,
+    /// The reference energy is `energy_floor` alone (`adapt.fixed_reference`).
+    fixed: bool,
     /// `A L / c`, m^2 s: the spacetime volume of one crossing of the domain.
     crossing: f64,
 }
@@ -72,6 +74,7 @@ impl Adapt {
             far_edge: config.far_edge.unwrap_or(0.0),
             zones: config.zone.clone(),
             energy_floor: config.reference_energy.map_or(0.0, |e| e / rho),
+            fixed: config.fixed_reference,
             crossing: area * diameter / c_max,
         })
     }
@@ -86,10 +89,15 @@ impl Adapt {
     }
 
     /// `eta` of a patch that dissipated `dissipation` over spacetime volume `volume` (m^2 s),
-    /// with reference energy `energy` (at least `adapt.reference_energy`; both energies in the
-    /// same units); zero while the body holds no energy.
+    /// with reference energy `energy` (at least `adapt.reference_energy`, or that alone with
+    /// `adapt.fixed_reference`; both energies in the same units); zero while the body holds no
+    /// energy.
     pub(crate) fn indicator(&self, dissipation: f64, volume: f64, energy: f64) -> f64 {
-        let energy = energy.max(self.energy_floor);
+        let energy = if self.fixed {
+            self.energy_floor
+        } else {
+            energy.max(self.energy_floor)
+        };
         if energy > 0.0 {
             dissipation * self.crossing / (energy * volume)
         } else {
@@ -182,11 +190,22 @@ mod tests {
         // A reference energy floor of 8 J/m at density 2 (4 in scaled units) replaces the 2.
         let floored = AdaptConfig {
             reference_energy: Some(8.0),
-            ..config
+            ..config.clone()
         };
         let f = Adapt::new(&floored, &unit(4), 2.0, 2.0).unwrap();
         assert!((f.indicator(1e-3, 0.1 * crossing, 2.0) - eta / 2.0).abs() < 1e-15);
         assert!((f.indicator(1e-3, 0.1 * crossing, 8.0) - eta / 4.0).abs() < 1e-15);
+        // A fixed reference ignores the energy held: 4 in scaled units whatever it is.
+        let fixed = AdaptConfig {
+            reference_energy: Some(8.0),
+            fixed_reference: true,
+            ..config
+        };
+        let x = Adapt::new(&fixed, &unit(4), 2.0, 2.0).unwrap();
+        for held in [0.0, 2.0, 8.0, 1e6] {
+            let got = x.indicator(1e-3, 0.1 * crossing, held);
+            assert!((got - eta / 2.0).abs() < 1e-15, "held {held}: {got}");
+        }
     }
 
     #[test]

@@ -283,6 +283,11 @@ pub struct AdaptConfig {
     /// Least reference energy of the indicator, J/m. Default: none (the energy put in so far).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_energy: Option<f64>,
+    /// The indicator's reference energy is `reference_energy` alone (which must be set), not the
+    /// larger of it and the energy put in so far, so that a patch's verdict depends on the patch
+    /// only. Default: false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fixed_reference: bool,
 }
 
 /// `[[adapt.zone]]`: the points within `radius` of the segment `from`-`to` keep edges no longer
@@ -320,6 +325,7 @@ impl Default for AdaptConfig {
             far_edge: None,
             zone: Vec::new(),
             reference_energy: None,
+            fixed_reference: false,
         }
     }
 }

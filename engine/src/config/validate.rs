@@ -172,6 +172,13 @@ impl Config {
                 format!("must be a positive energy in J/m, got {e}"),
             );
         }
+        if a.fixed_reference && a.reference_energy.is_none() {
+            return fail(
+                "fixed_reference",
+                "needs adapt.reference_energy, the energy the indicator is then measured against"
+                    .to_string(),
+            );
+        }
         if let (Some(lo), Some(hi)) = (a.min_edge, a.max_edge)
             && 2.0 * lo > hi
         {
