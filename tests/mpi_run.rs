@@ -116,25 +116,32 @@ fn a_run_under_mpirun_without_mpi_is_refused() {
     assert!(!dir.path().join("summary.json").exists());
 }
 
-/// A plane wave that takes seconds over 2 MPI ranks, with a checkpoint every `every` s.
-fn long_plane_wave(every: &str) -> Vec<String> {
-    [
+/// A plane wave to `end` s (1.4 s over 2 MPI ranks at 8e-6 s on 2 cores), with a checkpoint
+/// every `every` s.
+fn long_plane_wave(end: &str, every: &str) -> Vec<String> {
+    let fixed = [
         "mesh.nx=16",
         "mesh.ny=16",
-        "time.end=8e-6",
         "output.snapshot_times=[]",
         "output.png=false",
-    ]
-    .into_iter()
-    .map(String::from)
-    .chain(std::iter::once(format!("checkpoint.every_sim_s={every}")))
-    .collect()
+    ];
+    fixed
+        .into_iter()
+        .map(String::from)
+        .chain([
+            format!("time.end={end}"),
+            format!("checkpoint.every_sim_s={every}"),
+        ])
+        .collect()
 }
 
-/// `mpirun -n 2 sdg run` of `overrides` into `out` with `--mpi`, started.
-fn spawn_mpirun(overrides: &[&str], out: &Path) -> Child {
+/// `mpirun -n 2 sdg run` of `overrides` into `out` with `--mpi`, started, with OpenMPI's
+/// `odls_base_sigkill_timeout` set to `kill_after` s: on SIGTERM `mpirun` sends the ranks SIGCONT,
+/// SIGTERM that long after, and SIGKILL as long after that.
+fn spawn_mpirun(overrides: &[&str], out: &Path, kill_after: &str) -> Child {
     let args = run_args("plane_wave.toml", overrides, &["--mpi"], out);
     Command::new("mpirun")
+        .args(["--mca", "odls_base_sigkill_timeout", kill_after])
         .args(["-n", "2", env!("CARGO_BIN_EXE_sdg")])
         .args(&args)
         .envs(MPIRUN_ENV)
@@ -172,7 +179,9 @@ fn on_threads(overrides: &[&str], extra: &[&str], out: &Path) -> (serde_json::Va
 #[test]
 fn sigterm_to_mpirun_checkpoints_every_rank_and_the_run_goes_on_anywhere() {
     let dir = tempfile::tempdir().unwrap();
-    let overrides = long_plane_wave("1");
+    // A run of seconds: `mpirun` passes SIGTERM on to the ranks `odls_base_sigkill_timeout`
+    // (here 2) s after it gets it, and kills them as long after that.
+    let overrides = long_plane_wave("4e-5", "2e-6");
     let overrides: Vec<&str> = overrides.iter().map(String::as_str).collect();
     let expected = on_threads(
         &overrides,
@@ -180,8 +189,9 @@ fn sigterm_to_mpirun_checkpoints_every_rank_and_the_run_goes_on_anywhere() {
         &dir.path().join("reference"),
     );
     let out = dir.path().join("stopped");
-    let child = spawn_mpirun(&overrides, &out);
-    std::thread::sleep(Duration::from_millis(1500));
+    let child = spawn_mpirun(&overrides, &out, "2");
+    // The signal while the ranks solve: after their first checkpoint, at 1/20 of the run.
+    wait_for_first_checkpoint(&out);
     let pid = child.id().to_string();
     assert!(
         Command::new("kill")
@@ -190,7 +200,7 @@ fn sigterm_to_mpirun_checkpoints_every_rank_and_the_run_goes_on_anywhere() {
             .unwrap()
             .success()
     );
-    let result = wait_within(child, Duration::from_secs(10)).expect("mpirun ends");
+    let result = wait_within(child, Duration::from_secs(40)).expect("mpirun ends");
     let err = stderr(&result);
     for rank in 0..2 {
         assert!(
@@ -222,6 +232,16 @@ fn sigterm_to_mpirun_checkpoints_every_rank_and_the_run_goes_on_anywhere() {
     assert_eq!(on_threads(&overrides, &extra, &threads), expected);
 }
 
+/// Waits up to 60 s for the first checkpoint of the run writing into `out`.
+fn wait_for_first_checkpoint(out: &Path) {
+    let first = out.join("checkpoints/checkpoint_000000.sdgc");
+    let start = Instant::now();
+    while !first.exists() && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(first.exists(), "a first checkpoint");
+}
+
 /// The pid of rank `rank` of the `sdg` processes writing into `out`.
 fn rank_pid(out: &Path, rank: u32) -> Option<String> {
     let out = out.display().to_string();
@@ -242,7 +262,7 @@ fn rank_pid(out: &Path, rank: u32) -> Option<String> {
 #[test]
 fn sigkill_of_one_rank_ends_the_others_and_the_last_checkpoint_goes_on() {
     let dir = tempfile::tempdir().unwrap();
-    let overrides = long_plane_wave("1e-6");
+    let overrides = long_plane_wave("8e-6", "1e-6");
     let overrides: Vec<&str> = overrides.iter().map(String::as_str).collect();
     let expected = on_threads(
         &overrides,
@@ -250,13 +270,8 @@ fn sigkill_of_one_rank_ends_the_others_and_the_last_checkpoint_goes_on() {
         &dir.path().join("reference"),
     );
     let out = dir.path().join("killed");
-    let child = spawn_mpirun(&overrides, &out);
-    let first = out.join("checkpoints/checkpoint_000000.sdgc");
-    let start = Instant::now();
-    while !first.exists() && start.elapsed() < Duration::from_secs(60) {
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    assert!(first.exists(), "a first checkpoint");
+    let child = spawn_mpirun(&overrides, &out, "1");
+    wait_for_first_checkpoint(&out);
     let pid = rank_pid(&out, 1).expect("rank 1 runs");
     assert!(
         Command::new("kill")
