@@ -4,8 +4,9 @@
 //! becomes `--max-wall-time`, SIGTERM to the batch shell reaches sdg, exit 3 resubmits
 //! (`run.sbatch`) or requeues (`sweep.sbatch`) and the next job resumes with `--restart`
 //! until the run finishes, and the caps on resubmissions hold. `mpi.sbatch` (issue 68) runs
-//! under a stand-in `srun` that starts the ranks with `mpirun` on this machine, or, with an
-//! sdg built without the feature `mpi`, refuses before starting any.
+//! under a stand-in `srun` that starts the ranks with `mpirun` on this machine, stops at its
+//! wall time, resubmits itself and resumes over the ranks, or, with an sdg built without the
+//! feature `mpi`, refuses before starting any.
 
 mod common;
 
@@ -391,7 +392,10 @@ fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
     let out = slurm.path("mpirun");
     let (code, text) = job(303, "2", &out, &[("SDG_LAUNCHER", "mpirun")]);
     assert_eq!(code, 0, "{text}");
-    assert!(text.contains("mpirun -n 2 "), "{text}");
+    assert!(
+        text.contains("mpirun --mca odls_base_sigkill_timeout 20 -n 2 "),
+        "{text}"
+    );
     assert_eq!(ranks(&out), 2);
     assert_eq!(slurm.calls("srun.log").len(), 2, "srun not used");
 
@@ -400,4 +404,72 @@ fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
     assert_eq!(code, 2, "{text}");
     assert!(text.contains("must be srun or mpirun"), "{text}");
     assert!(!out.exists(), "nothing written");
+}
+
+/// `mpi.sbatch` over two jobs of 2 ranks, a plane wave of seconds: the first stops at the
+/// `--max-wall-time` the time left gives (3 s, less a margin of 1 s), every rank checkpoints,
+/// and the job resubmits itself; the second resumes with `--restart` and finishes.
+#[cfg(feature = "mpi")]
+#[test]
+fn mpi_sbatch_resubmits_on_exit_3_and_the_ranks_resume() {
+    let slurm = Slurm::new();
+    let out = slurm.path("out");
+    // About 7 s over 2 ranks on two idle cores: longer than the first job's 2 s.
+    let args = [
+        "--set",
+        "mesh.nx=16",
+        "--set",
+        "mesh.ny=16",
+        "--set",
+        "time.end=4e-5",
+        "--set",
+        "output.snapshot_times=[]",
+        "--set",
+        "output.png=false",
+    ];
+    let job = |id: u32, resubmit: &str| {
+        let mut job = slurm.job("mpi.sbatch", id, &args, &[]);
+        job.env_remove("SDG_CONFIG")
+            .env_remove("SDG_LAUNCHER")
+            .env_remove("SDG_SRUN_MPI")
+            .env("SLURM_NTASKS", "2")
+            .env("SDG_OUT", &out)
+            .env("SDG_MARGIN_S", "1")
+            .env("SDG_RESUBMIT", resubmit)
+            .envs(common::mpirun::MPIRUN_ENV);
+        finish(job.spawn().unwrap())
+    };
+    slurm.left("00:03");
+    let (code, text) = job(305, "0");
+    assert_eq!(
+        code, 0,
+        "the job that resubmitted itself ends with 0: {text}"
+    );
+    assert!(text.contains("--max-wall-time 2"), "{text}");
+    let script = repo().join("examples/slurm/mpi.sbatch");
+    let resubmitted = format!(
+        "SDG_RESUBMIT=1 --dependency=afterany:305 {} {}",
+        script.display(),
+        args.join(" ")
+    );
+    assert_eq!(slurm.calls("sbatch.log"), [resubmitted]);
+
+    slurm.left("1-00:00:00");
+    let (code, text) = job(306, "1");
+    assert_eq!(code, 0, "{text}");
+    let restart = format!("--restart {}/checkpoints", out.display());
+    assert!(text.contains(&restart), "{text}");
+    assert!(text.contains("finished:"), "{text}");
+    assert_eq!(slurm.calls("sbatch.log").len(), 1, "no resubmission");
+    assert_eq!(
+        jobs(&out),
+        [
+            "job 305: sdg exited 3 (2 ranks)",
+            "job 306: sdg exited 0 (2 ranks)"
+        ]
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert!(summary["checkpoint"]["restarted_from"].is_string());
+    assert_eq!(summary["ranks"], 2);
 }
