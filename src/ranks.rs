@@ -9,6 +9,8 @@ use sdg_engine::{EngineError, PartitionKind, Problem, RunOptions, RunSummary};
 pub(crate) enum PartitionArg {
     /// Recursive coordinate bisection weighted by star size.
     Coordinate,
+    /// METIS's k-way partition of the vertex graph weighted by star size (fewest cut edges).
+    Metis,
     /// Stripes along x of equal weight.
     Stripes,
     /// Seeded random owners (for tests: nearly every vertex on a rank boundary).
@@ -20,6 +22,7 @@ impl PartitionArg {
     pub(crate) fn kind(self) -> PartitionKind {
         match self {
             Self::Coordinate => PartitionKind::Coordinate,
+            Self::Metis => PartitionKind::Metis,
             Self::Stripes => PartitionKind::Stripes,
             Self::Random => PartitionKind::Random,
         }

@@ -85,7 +85,7 @@ fn plane_wave_over_mpi_is_the_run_on_one_thread() {
     ];
     let cases = [
         (1, "coordinate"),
-        (2, "coordinate"),
+        (2, "metis"),
         (3, "random"),
         (4, "stripes"),
     ];

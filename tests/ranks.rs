@@ -95,6 +95,7 @@ fn history_and_snapshots_over_ranks_are_the_threaded_runs_for_every_partition() 
         (1, "coordinate"),
         (2, "random"),
         (3, "coordinate"),
+        (3, "metis"),
         (4, "stripes"),
     ];
     assert_same_outputs_over_ranks("plane_wave.toml", &overrides, 4, &cases);
@@ -111,7 +112,7 @@ fn history_and_snapshots_of_a_frictional_interface_over_ranks_are_the_threaded_r
         "output.png=false",
         "output.vtu=\"ascii\"",
     ];
-    let cases = [(2, "coordinate"), (3, "random")];
+    let cases = [(2, "coordinate"), (3, "random"), (4, "metis")];
     assert_same_outputs_over_ranks("stick_slip.toml", &overrides, 2, &cases);
 }
 

@@ -1,10 +1,11 @@
 //! Partitions of a mesh's vertices among ranks: which rank owns (pitches) each vertex.
 //!
 //! A vertex's weight is its star size (the number of its triangles): a tent costs about one
-//! patch element per star triangle, so equal weights mean equal work per rank. Three partitions
-//! exist: recursive coordinate bisection ([`Partition::coordinate`], the one for runs), stripes
-//! along x ([`Partition::striped`]) and seeded random owners ([`Partition::random`], for tests:
-//! nearly every vertex is on a rank boundary). Graph partitioning with METIS is not built yet.
+//! patch element per star triangle, so equal weights mean equal work per rank. Four partitions
+//! exist: recursive coordinate bisection ([`Partition::coordinate`], the default for runs),
+//! METIS's multilevel k-way partition of the vertex graph ([`Partition::metis`], fewest cut
+//! edges), stripes along x ([`Partition::striped`]) and seeded random owners
+//! ([`Partition::random`], for tests: nearly every vertex is on a rank boundary).
 
 use sdg_mesh::{Mesh, VertexId};
 
@@ -30,6 +31,8 @@ pub enum PartitionError {
     },
     #[error("rank {0} owns no vertex")]
     EmptyRank(Rank),
+    #[error("METIS: {0}")]
+    Metis(String),
 }
 
 /// The owner rank of every vertex of a mesh; every rank owns at least one vertex.
@@ -38,6 +41,9 @@ pub struct Partition {
     ranks: usize,
     owner: Vec<Rank>,
 }
+
+/// METIS's random seed: fixed, so that every rank computes the same partition.
+const METIS_SEED: metis::Idx = 1;
 
 /// Which coordinate a bisection cuts along.
 #[derive(Clone, Copy, Debug)]
@@ -107,6 +113,38 @@ impl Partition {
             owner[v as usize] = r as Rank;
         }
         Ok(Self { ranks, owner })
+    }
+
+    /// METIS's multilevel k-way partition (`METIS_PartGraphKway`, its bundled copy) of the
+    /// graph of the mesh's vertices and edges, each vertex weighted by its star size, with a
+    /// fixed seed: the same partition for the same mesh on every rank and every run. METIS
+    /// minimizes the cut edges (so the messages) at up to 3% imbalance.
+    pub fn metis(mesh: &Mesh, ranks: usize) -> Result<Self, PartitionError> {
+        check_sizes(mesh, ranks)?;
+        let n = mesh.vertices().len();
+        let too_large = || PartitionError::Metis(format!("a graph of {n} vertices is too large"));
+        let idx = |k: usize| metis::Idx::try_from(k).map_err(|_| too_large());
+        let mut xadj = Vec::with_capacity(n + 1);
+        let mut adjncy = Vec::new();
+        let mut weights = Vec::with_capacity(n);
+        xadj.push(0);
+        for v in 0..n as VertexId {
+            for &w in mesh.vertex_neighbors(v) {
+                adjncy.push(idx(w as usize)?);
+            }
+            xadj.push(idx(adjncy.len())?);
+            weights.push(idx(mesh.vertex_triangles(v).len())?);
+        }
+        let mut part = vec![0; n];
+        let failed = |e: &dyn std::fmt::Display| PartitionError::Metis(e.to_string());
+        metis::Graph::new(1, idx(ranks)?, &xadj, &adjncy)
+            .map_err(|e| failed(&e))?
+            .set_vwgt(&weights)
+            .set_option(metis::option::Seed(METIS_SEED))
+            .part_kway(&mut part)
+            .map_err(|e| failed(&e))?;
+        let owner = part.into_iter().map(|r| r as Rank).collect();
+        Self::from_owners(mesh, owner, ranks)
     }
 
     fn bisected(mesh: &Mesh, ranks: usize, cut: Cut) -> Result<Self, PartitionError> {
@@ -263,6 +301,43 @@ mod tests {
                 assert_eq!(p.owner(v), 1, "vertex {v} at x = {x}");
             }
         }
+    }
+
+    #[test]
+    fn metis_balances_star_sizes_and_cuts_fewer_edges_than_coordinate_bisection() {
+        let mesh = rectangle(64, 64, 0.2, 3);
+        let cut = |p: &Partition| {
+            (mesh.edges().iter())
+                .filter(|e| p.owner(e.vertices[0]) != p.owner(e.vertices[1]))
+                .count()
+        };
+        for ranks in [2, 3, 4, 7] {
+            let p = Partition::metis(&mesh, ranks).unwrap();
+            assert_eq!(p, Partition::metis(&mesh, ranks).unwrap(), "seeded");
+            assert!(
+                p.imbalance(&mesh) <= 1.031,
+                "{ranks} ranks: {}",
+                p.imbalance(&mesh)
+            );
+            let coordinate = Partition::coordinate(&mesh, ranks).unwrap();
+            assert!(
+                cut(&p) as f64 <= 1.05 * cut(&coordinate) as f64,
+                "{ranks} ranks: METIS cuts {} edges, coordinate bisection {}",
+                cut(&p),
+                cut(&coordinate)
+            );
+        }
+        assert_eq!(
+            Partition::metis(&mesh, 1).unwrap().owners(),
+            vec![0; 65 * 65]
+        );
+        assert_eq!(
+            Partition::metis(&rectangle(1, 1, 0.0, 0), 5),
+            Err(PartitionError::TooFewVertices {
+                ranks: 5,
+                vertices: 4
+            })
+        );
     }
 
     #[test]

@@ -13,6 +13,8 @@ pub enum PartitionKind {
     /// Recursive coordinate bisection weighted by star size: balanced, short cuts.
     #[default]
     Coordinate,
+    /// METIS's k-way partition of the vertex graph weighted by star size: fewest cut edges.
+    Metis,
     /// Stripes along x of equal weight.
     Stripes,
     /// Seeded random owners (nearly every vertex on a rank boundary): for tests.
@@ -24,6 +26,7 @@ impl PartitionKind {
     pub fn name(self) -> &'static str {
         match self {
             Self::Coordinate => "coordinate",
+            Self::Metis => "metis",
             Self::Stripes => "stripes",
             Self::Random => "random",
         }
@@ -42,6 +45,7 @@ pub(crate) fn partition_for(
 ) -> Result<Partition, EngineError> {
     match kind {
         PartitionKind::Coordinate => Partition::coordinate(mesh, ranks),
+        PartitionKind::Metis => Partition::metis(mesh, ranks),
         PartitionKind::Stripes => Partition::striped(mesh, ranks),
         PartitionKind::Random => Partition::random(mesh, ranks, RANDOM_SEED),
     }
