@@ -188,9 +188,14 @@ struct RunArgs {
 #[derive(Debug, Args)]
 struct PlotArgs {
     /// A VTU file (ASCII, base64 binary or appended, uncompressed or zlib); or one or more
-    /// runs' crack_tips.csv, whose tips are drawn together, each named by its run's folder.
+    /// runs' crack_tips.csv, whose tips are drawn together, each named by its run's folder; or,
+    /// with --lefm, run folders.
     #[arg(required = true, value_name = "FILE")]
     inputs: Vec<PathBuf>,
+    /// The seed's figures 2.6 to 2.10 from run folders of the mode-I problem (configs with
+    /// [loading]), one curve per run, into the folder --out.
+    #[arg(long, conflicts_with_all = ["field", "edges"])]
+    lefm: bool,
     /// Point or cell field: NAME (vectors: magnitude), NAME_x, NAME_xy, or von_mises
     /// [default: velocity, i.e. its magnitude].
     #[arg(long, value_name = "NAME")]
@@ -726,6 +731,19 @@ fn print_predictions(predictions: &[sdg_engine::trace::Prediction], one: f64) {
 }
 
 fn plot(args: &PlotArgs) -> Result<(), EngineError> {
+    if args.lefm {
+        let Some(out) = &args.out else {
+            return Err(EngineError::Input(
+                "--lefm: --out DIR is required (the folder of the figures)".into(),
+            ));
+        };
+        for path in sdg_engine::plot::plot_lefm(&args.inputs, out)? {
+            if !args.quiet {
+                say!("{}", path.display());
+            }
+        }
+        return Ok(());
+    }
     let is_csv = |p: &PathBuf| p.extension().is_some_and(|e| e == "csv");
     if args.inputs.iter().any(is_csv) {
         let usage = |reason: &str| Err(EngineError::Input(reason.into()));

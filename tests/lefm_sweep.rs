@@ -95,4 +95,27 @@ fn the_reduced_lefm_sweep_meets_the_seed_s_findings() {
     assert!((tips[0][0] - 0.5e-3).abs() < 3e-6, "{}", tips[0][0]);
     let early = tips[tips.len() / 4][1] / number(high, "loading.c_r");
     assert!(early > 0.5, "{early}");
+    // The seed's figures from the three runs.
+    let figures = out.path().join("figures");
+    let dirs: Vec<&str> = cases.iter().map(|(d, _)| d.to_str().unwrap()).collect();
+    let args = [
+        &["plot", "--lefm"][..],
+        &dirs,
+        &["--out", figures.to_str().unwrap()],
+    ]
+    .concat();
+    let plot = common::sdg(&args);
+    assert!(plot.status.success(), "{}", common::stderr(&plot));
+    for name in [
+        "lefm_tips",
+        "lefm_tips_early",
+        "lefm_energy_release",
+        "lefm_process_zone",
+    ] {
+        let png = figures.join(format!("{name}.png"));
+        assert!(
+            std::fs::metadata(&png).is_ok_and(|m| m.len() > 1000),
+            "{png:?}"
+        );
+    }
 }

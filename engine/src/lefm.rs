@@ -95,7 +95,7 @@ pub const ZONE_FROM_SPEED: f64 = 0.5;
 /// `Lambda(v) = Lambda_0 / A_I(v)`, `Lambda_0 = zeta pi mu / (1 - nu) phi / sigma_c^2`.
 /// Written with the wave speeds, `1 / (1 - nu) = 2 (1 - c_s^2 / c_d^2)` in plane strain (and
 /// with `nu / (1 + nu)` for `nu` in plane stress, whose `c_d` this is).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 pub struct ZoneEstimate {
     /// `Lambda_0`, m: the quasi-static size.
     pub quasi_static: f64,
@@ -204,6 +204,8 @@ pub struct LefmComparison {
     /// The process zone over its steady-state estimate ([`ZoneEstimate`], `zeta = 9/16`) once
     /// the tip runs at [`ZONE_FROM_SPEED`] `c_R` or faster; none without such a state.
     pub process_zone_over_estimate: Option<ZoneRatio>,
+    /// The process zone's steady-state estimate the ratios are taken against.
+    pub zone_estimate: ZoneEstimate,
 }
 
 /// The comparison of the tip states `tips` and the history rows `work` (`t'`, work of the
@@ -247,6 +249,7 @@ pub fn compare(tips: &[TipPoint], work: &[(f64, f64)], from: f64, units: &Units)
         tip_error_max,
         energy_release_over_phi,
         process_zone_over_estimate: zone_ratio(tips, units),
+        zone_estimate: units.zone,
     }
 }
 

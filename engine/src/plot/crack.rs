@@ -36,7 +36,7 @@ const NAMED_BRANCHES: usize = 8;
 const SPEED_AXIS_C_R: f64 = 2.0;
 
 /// The points of one interface's tip, in the chart's units.
-struct TipSeries {
+pub(super) struct TipSeries {
     name: String,
     extension: Vec<(f64, f64)>,
     speed: Vec<(f64, f64)>,
@@ -55,16 +55,17 @@ pub fn crack_charts(
     for &(label, csv) in runs {
         tip_series((label, "crack_tips.csv"), csv, normalization, &mut tips)?;
     }
-    render(&tips, normalization, None)
+    render(&tips, normalization, None, None)
 }
 
 /// The extension chart above the speed chart of `tips`, with the LEFM reference under a
 /// `normalization`, and the Rayleigh speed `c_r` (m/s) as a line when given (the speed axis
-/// then cut as [`speed_axis`] says).
-fn render(
+/// then cut as [`speed_axis`] says); over the time range `window` when given.
+pub(super) fn render(
     tips: &[TipSeries],
     normalization: Option<Normalization>,
     c_r: Option<f64>,
+    window: Option<(f64, f64)>,
 ) -> Result<Image, EngineError> {
     let (time, extension, speed) = match normalization {
         Some(_) => (
@@ -79,6 +80,10 @@ fn render(
     let mut velocity = LineChart::new(&title, time, speed);
     if let Some((lo, hi)) = range {
         velocity = velocity.y_range(lo, hi);
+    }
+    if let Some((lo, hi)) = window {
+        position = position.x_range(lo, hi);
+        velocity = velocity.x_range(lo, hi);
     }
     for tip in tips {
         position = position.series(&tip.name, &tip.extension, tip.style);
@@ -108,7 +113,7 @@ fn render(
 /// Appends the series of the `crack_tips.csv` text `csv` to `tips`, one per interface tag (or
 /// per branch, for runs with `[fracture]`), named `label, tag` (`label, branch N`); errors name
 /// the `source` file.
-fn tip_series(
+pub(super) fn tip_series(
     (label, source): (&str, &str),
     csv: &str,
     normalization: Option<Normalization>,
@@ -181,7 +186,7 @@ pub fn write_tip_speed_png(dir: &Path, csv: &str, c_r: f64) {
 fn tip_speed_charts(csv: &str, c_r: f64) -> Result<Image, EngineError> {
     let mut tips = Vec::new();
     tip_series(("sdg", "crack_tips.csv"), csv, None, &mut tips)?;
-    render(&longest_named(tips), None, Some(c_r))
+    render(&longest_named(tips), None, Some(c_r), None)
 }
 
 /// The speed chart's title and fixed y range: with the Rayleigh speed `c_r` (m/s) given and
@@ -244,7 +249,7 @@ pub fn plot_tips(files: &[PathBuf], out: &Path) -> Result<(), EngineError> {
         tip_series((&label, &source), &text, None, &mut tips)?;
     }
     super::canvas::make_folder(out)?;
-    render(&tips, None, None)?.write_png(out)
+    render(&tips, None, None, None)?.write_png(out)
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@ mod canvas;
 mod command;
 mod crack;
 mod field;
+mod lefm;
 mod line;
 mod vtu;
 
@@ -20,5 +21,6 @@ pub use crack::{
     CRACK_PNG_SIZE, Normalization, crack_charts, plot_tips, write_crack_png, write_tip_speed_png,
 };
 pub use field::{FieldLayout, FieldPlot, Values, viridis};
+pub use lefm::{G_WINDOW, plot_lefm};
 pub use line::{LineChart, LineStyle};
 pub use vtu::VtuGrid;
