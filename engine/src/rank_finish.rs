@@ -173,9 +173,6 @@ fn summarize(
     }
     timings.waiting_s = ranks.iter().map(|r| r.waited.as_secs_f64()).sum();
     let count = prior.patches + patches.len() as u64;
-    let (initial_j, work) = (rho * energy0.total, rho * totals.boundary_work);
-    let (dissipation, interface_work) = (rho * totals.dissipation, rho * totals.interface_work);
-    let final_j = rho * e.total;
     let error = problem.exact.as_ref().map(|w| {
         let e = slice_errors(mesh, solution, basis, system, t_end, w);
         ErrorSummary {
@@ -205,19 +202,7 @@ fn summarize(
         distributed: None,
         peak_memory_bytes: crate::estimate::peak_resident_bytes(),
         estimate,
-        energy: EnergySummary {
-            initial: initial_j,
-            final_kinetic: rho * e.kinetic,
-            final_strain: rho * e.strain,
-            r#final: final_j,
-            boundary_work: work,
-            dissipation,
-            interface_work,
-            friction_dissipation: rho * totals.friction_dissipation,
-            fracture_energy: rho * totals.fracture_work,
-            balance_residual_rel: (initial_j + work - final_j - dissipation - interface_work)
-                / (initial_j + work.abs()).max(f64::MIN_POSITIVE),
-        },
+        energy: EnergySummary::new(rho, energy0.total, e, &totals),
         interface: InterfaceSummary {
             nonlinear_patches: nonlinear,
             newton_iterations_mean: newton as f64 / nonlinear.max(1) as f64,

@@ -85,24 +85,7 @@ impl Solve<'_> {
             scheduler.threads,
             |x| initial_state(problem, initial, x),
         );
-        let initial_j = rho * book.initial_energy;
-        let work = rho * book.totals.boundary_work;
-        let dissipation = rho * book.totals.dissipation;
-        let interface_work = rho * book.totals.interface_work;
-        let final_j = rho * e.total;
-        let energy = EnergySummary {
-            initial: initial_j,
-            final_kinetic: rho * e.kinetic,
-            final_strain: rho * e.strain,
-            r#final: final_j,
-            boundary_work: work,
-            dissipation,
-            interface_work,
-            friction_dissipation: rho * book.totals.friction_dissipation,
-            fracture_energy: rho * book.totals.fracture_work,
-            balance_residual_rel: (initial_j + work - final_j - dissipation - interface_work)
-                / (initial_j + work.abs()).max(f64::MIN_POSITIVE),
-        };
+        let energy = EnergySummary::new(rho, book.initial_energy, &e, &book.totals);
         let interface = InterfaceSummary {
             nonlinear_patches: book.nonlinear_patches,
             newton_iterations_mean: book.newton_iterations as f64

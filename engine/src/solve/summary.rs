@@ -6,6 +6,8 @@ use serde::Serialize;
 
 use sdg_mesh::Front;
 use sdg_solver::element::{FrontSolution, Geometry};
+use sdg_solver::norms::FrontEnergy;
+use sdg_solver::patch::PatchReport;
 
 /// Energy totals of a run, J per metre of thickness.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
@@ -34,6 +36,29 @@ pub struct EnergySummary {
     /// `(initial + boundary_work - final - dissipation - interface_work) /
     /// (initial + |boundary_work|)`.
     pub balance_residual_rel: f64,
+}
+
+impl EnergySummary {
+    /// The totals of a run of density `rho` (kg/m^3) from its energies per unit density: the
+    /// initial energy `initial`, the final front's `end` and the patches' summed `totals`.
+    pub(crate) fn new(rho: f64, initial: f64, end: &FrontEnergy, totals: &PatchReport) -> Self {
+        let (initial, r#final) = (rho * initial, rho * end.total);
+        let boundary_work = rho * totals.boundary_work;
+        let (dissipation, interface_work) = (rho * totals.dissipation, rho * totals.interface_work);
+        let residual = initial + boundary_work - r#final - dissipation - interface_work;
+        Self {
+            initial,
+            final_kinetic: rho * end.kinetic,
+            final_strain: rho * end.strain,
+            r#final,
+            boundary_work,
+            dissipation,
+            interface_work,
+            friction_dissipation: rho * totals.friction_dissipation,
+            fracture_energy: rho * totals.fracture_work,
+            balance_residual_rel: residual / (initial + boundary_work.abs()).max(f64::MIN_POSITIVE),
+        }
+    }
 }
 
 /// Nonlinear interface patches of a run.
