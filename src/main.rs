@@ -193,7 +193,7 @@ struct PlotArgs {
     #[arg(required = true, value_name = "FILE")]
     inputs: Vec<PathBuf>,
     /// The seed's figures 2.6 to 2.10 from run folders of the mode-I problem (configs with
-    /// [loading]), one curve per run, into the folder --out.
+    /// a loading section), one curve per run, into the folder --out.
     #[arg(long, conflicts_with_all = ["field", "edges"])]
     lefm: bool,
     /// Point or cell field: NAME (vectors: magnitude), NAME_x, NAME_xy, or von_mises
