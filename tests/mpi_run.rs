@@ -202,12 +202,12 @@ fn sigterm_to_mpirun_checkpoints_every_rank_and_the_run_goes_on_anywhere() {
     );
     let result = wait_within(child, Duration::from_secs(40)).expect("mpirun ends");
     let err = stderr(&result);
+    // Every rank stops with the checkpoint; `mpirun` signals the ranks one after the other, so a
+    // rank may stop because another was asked to before its own SIGTERM arrives.
     for rank in 0..2 {
-        assert!(
-            err.contains(&format!("stopped: rank {rank}: SIGTERM")),
-            "{err}"
-        );
+        assert!(err.contains(&format!("stopped: rank {rank}: ")), "{err}");
     }
+    assert!(err.contains("SIGTERM received: stopped at"), "{err}");
     assert!(!out.join("summary.json").exists());
     let folder = out.join("checkpoints").display().to_string();
     for ranks in [2, 4] {
