@@ -422,9 +422,9 @@ fn poisoned(value: f64) -> (String, sdg_engine::RunOptions, tempfile::TempDir) {
     poisoned_run("plane_wave.toml", &["mesh.nx=8", "mesh.ny=8"], value, 0.5)
 }
 
-/// Runs the shipped `config` with `overrides` and `value` written into the element under
-/// triangle 0 at `fraction` of the end time; returns the error, the options and the output
-/// folder.
+/// Runs the shipped `config` with `overrides` and `value` written at `fraction` of the end time
+/// into the element under a triangle of the earliest vertex's star, which the next tent reads;
+/// returns the error, the options and the output folder.
 fn poisoned_run(
     config: &str,
     overrides: &[&str],
@@ -441,12 +441,17 @@ fn poisoned_run(
         ..Default::default()
     };
     let poison = move |live: &mut sdg_engine::Live<'_>| {
+        let (mesh, front) = (live.mesh(), live.front());
+        let earliest = (0..mesh.vertices().len() as u32)
+            .min_by(|&a, &b| front.time(a).total_cmp(&front.time(b)))
+            .unwrap();
+        let t = mesh.vertex_triangles(earliest)[0] as usize;
         let solution = live.solution();
         let mut geometry = sdg_solver::element::Geometry::default();
         let mut coefficients = vec![0.0; live.basis().len() * solution.width()];
-        assert!(solution.load(0, &mut geometry, &mut coefficients));
+        assert!(solution.load(t, &mut geometry, &mut coefficients));
         coefficients[0] = value;
-        solution.store(0, &geometry, &coefficients, None);
+        solution.store(t, &geometry, &coefficients, None);
     };
     let err = sdg_engine::solve_job_with(&problem, &options, fraction * t_end, poison)
         .unwrap_err()

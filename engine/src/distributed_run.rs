@@ -16,9 +16,11 @@
 //! run over ranks restarts from either kind, on any number of ranks, and a run on threads from
 //! a checkpoint of one over ranks.
 //!
-//! What cannot be honoured yet is refused as bad input (exit 2), naming the key and why:
-//! mesh-changing events (`[adapt]`, `[fracture]`), deterministic rounds, `--trace`, interface
-//! probes and the spacetime mesh.
+//! Without events the ranks take the tents of both scheduler modes (each rank's share of the
+//! deterministic rounds' vertices, those first in `(time, id)` among their neighbours), so a
+//! run over ranks is the threaded run of either mode. What cannot be honoured yet is refused
+//! as bad input (exit 2), naming the key and why: mesh-changing events (`[adapt]`,
+//! `[fracture]`), `--trace`, interface probes and the spacetime mesh.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -195,6 +197,8 @@ struct SetUp {
     restored: Option<(Front, FrontSolution)>,
     control: std::sync::Arc<Control>,
     request: sdg_distributed::PauseRequest,
+    /// The scheduler mode asked for (`summary.json`'s `mode`).
+    mode: &'static str,
 }
 
 impl SetUp {
@@ -240,6 +244,11 @@ impl SetUp {
         };
         let control = options.control.clone().unwrap_or_default();
         let request = pause_request(problem, options, control.clone());
+        let mode = if options.deterministic || config.scheduler.deterministic {
+            "deterministic"
+        } else {
+            "asynchronous"
+        };
         Ok(Self {
             estimate,
             dir,
@@ -248,6 +257,7 @@ impl SetUp {
             restored,
             control,
             request,
+            mode,
         })
     }
 
@@ -267,6 +277,7 @@ impl SetUp {
             control: &self.control,
             request: self.request.clone(),
             estimate: &self.estimate,
+            mode: self.mode,
             started: Instant::now(),
         }
     }
@@ -284,17 +295,6 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
         }),
         config.fracture.is_some().then(|| {
             format!("{file}: [fracture]: {events}; run on threads (without --ranks or --mpi)")
-        }),
-        (options.deterministic || config.scheduler.deterministic).then(|| {
-            format!(
-                "{}: deterministic rounds do not run over ranks; without events the \
-                 asynchronous run over ranks is already the same for any rank count and timing",
-                if options.deterministic {
-                    "--deterministic".to_string()
-                } else {
-                    format!("{file}: scheduler.deterministic")
-                }
-            )
         }),
         options
             .trace

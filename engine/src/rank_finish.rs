@@ -35,6 +35,8 @@ pub(crate) struct End<'a> {
     pub(crate) prior: &'a Prior,
     pub(crate) wall_time_s: f64,
     pub(crate) checkpoints: (u64, f64),
+    /// `summary.json`'s `mode`.
+    pub(crate) mode: &'static str,
 }
 
 /// The energy of the initial front of `problem` (scaled units), integrated on `threads`
@@ -79,6 +81,7 @@ pub(crate) fn finish(
         estimate,
     )?;
     summary.wall_time_s = wall_time_s;
+    summary.mode = end.mode;
     summary.patches_per_second = patches.len() as f64 / end.wall_time_s.max(f64::MIN_POSITIVE);
     summary.distributed = Some(distributed_summary(end.partition, gathered));
     summary.snapshots = end.snapshots;

@@ -57,6 +57,8 @@ pub(crate) struct Shared<'a> {
     pub(crate) control: &'a Control,
     pub(crate) request: PauseRequest,
     pub(crate) estimate: &'a Estimate,
+    /// The scheduler mode asked for: without events the ranks' tents are those of both modes.
+    pub(crate) mode: &'static str,
     /// When the solve started.
     pub(crate) started: Instant,
 }
@@ -224,6 +226,7 @@ pub(crate) fn run_rank<T: Transport>(
                 prior: shared.prior,
                 wall_time_s: shared.started.elapsed().as_secs_f64(),
                 checkpoints: written,
+                mode: shared.mode,
             };
             return finish(problem, shared.dir, end, *shared.estimate)
                 .map(Some)

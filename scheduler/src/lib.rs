@@ -15,9 +15,10 @@
 //!   and solution are the serial reference order's, bitwise, for any thread count; events
 //!   (refinement, coarsening, cracks) run when a worker gets to them, so with events the
 //!   spacetime mesh depends on timing (equally accurate);
-//! - deterministic: rounds of a deterministically chosen independent set of ready vertices, solved
-//!   in parallel and recorded in a fixed order, so results depend only on the inputs, never on the
-//!   thread count or timing.
+//! - deterministic: rounds of every vertex first in `(time, id)` among its neighbours, solved in
+//!   parallel, recorded in that order, with events between rounds, so results depend only on the
+//!   inputs, never on the thread count or timing; without events the tents are the serial order's
+//!   and the asynchronous mode's.
 
 pub mod claim;
 mod error;
@@ -42,7 +43,7 @@ pub use serial::run_serial;
 pub struct Options {
     /// Worker threads, at least 1.
     pub threads: usize,
-    /// Rounds of independent sets instead of asynchronous claiming.
+    /// Rounds of the vertices first among their neighbours instead of asynchronous claiming.
     pub deterministic: bool,
 }
 
@@ -412,14 +413,8 @@ impl Clock {
     }
 }
 
-/// True when `v` is below `t_end` and no neighbour is earlier.
-fn is_ready<S: State>(state: &S, t_end: f64, v: VertexId) -> bool {
-    let front = state.front();
-    (v as usize) < front.len() && front.time(v) < t_end && front.is_local_minimum(state.mesh(), v)
-}
-
-/// [`is_ready`], and no neighbour at exactly the same time has a smaller id: `v` comes first in
-/// the order of `(time, id)` among its neighbours. Two such vertices are never neighbours, and a
+/// True when `v` is below `t_end` and comes first in the order of `(time, id)` among its
+/// neighbours: no neighbour is earlier, and none at exactly the same time has a smaller id. Two such vertices are never neighbours, and a
 /// tent elsewhere changes neither whether `v` is one nor what its tent reads, so tents taken by
 /// this rule in any order give the serial reference order's front and solution
 /// ([`run_serial`]: always the earliest vertex, ties to the smaller id).

@@ -1,10 +1,13 @@
-//! Deterministic mode: rounds of an independent set of ready vertices.
+//! Deterministic mode: rounds of the vertices first in `(time, id)` among their neighbours.
 //!
-//! Each round finds the ready vertices (local minima below the end time; after the first round
-//! only those whose neighbourhood the last round or its events changed are examined), sorts them by
-//! `(time, id)` and greedily takes every vertex none of whose neighbours is taken. The taken
-//! tents do not read each other's data (they are not neighbours), so solving them in parallel in
-//! any order gives the same bits. Once all have run, the workers settle their outcomes
+//! Each round takes every vertex below the end time that comes first in the order of
+//! `(time, id)` among its neighbours (after the first round only those whose neighbourhood the
+//! last round or its events changed are examined), in that order. Two such vertices are never
+//! neighbours, so the round's tents do not read each other's data and solving them in parallel
+//! in any order gives the same bits; and whether a vertex is taken depends on its neighbourhood
+//! alone, so that without events the tents are those of the serial order
+//! ([`crate::run_serial`]) and of the asynchronous pool, and ranks holding parts of a mesh can
+//! each choose their share of a round. Once all have run, the workers settle their outcomes
 //! ([`Work::settle`]) and check which of the vertices they took are ready for the next round, in
 //! parallel: both only read the state as the round left it. The calling thread then records the
 //! outcomes in the round's order, and queued events run in the order they were queued, with the
@@ -18,8 +21,8 @@ use std::time::Instant;
 use parking_lot::{Mutex, RwLock};
 
 use crate::{
-    Clock, Events, Lease, RunError, State, Stats, VertexId, Work, below_end, is_ready,
-    panic_message,
+    Clock, Events, Lease, RunError, State, Stats, VertexId, Work, below_end,
+    is_first_among_neighbours, panic_message,
 };
 
 /// What a worker's tent gave: its outcome or error, or the message of its panic.
@@ -70,10 +73,10 @@ pub(crate) fn run<'a, W: Work<'a>>(
     };
     let per_thread: Vec<AtomicUsize> = (0..threads).map(|_| AtomicUsize::new(0)).collect();
     let (event_time, wait_time) = (Clock::default(), Clock::default());
-    // The ready vertices with their times. A round takes every ready vertex (it is chosen or
-    // beside a chosen one) and changes the front only at its chosen vertices, so the next
-    // round's ready vertices are among the taken ones, which the workers check and list in
-    // `found`, one list per worker. After events (which may renumber vertices) the calling
+    // The ready vertices (first among their neighbours) with their times. A round takes every
+    // ready vertex and changes the front only at them, so the next round's ready vertices are
+    // among the chosen ones and their neighbours, which the workers check and list in `found`,
+    // one list per worker. After events (which may renumber vertices) the calling
     // thread scans the whole front again.
     let mut ready: Vec<(f64, VertexId)> = Vec::with_capacity(n);
     let found: Vec<Mutex<Vec<(f64, VertexId)>>> = (0..threads)
@@ -137,7 +140,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 found.extend(
                     r.touched[from..r.ends[end - 1]]
                         .iter()
-                        .filter(|&&v| is_ready(&**state, t_end, v))
+                        .filter(|&&v| is_first_among_neighbours(&**state, t_end, v))
                         .map(|&v| (state.front().time(v), v)),
                 );
                 work.settled(begun.elapsed());
@@ -178,7 +181,7 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 if scan_all {
                     ready.extend(
                         (0..n as VertexId)
-                            .filter(|&v| is_ready(s, t_end, v))
+                            .filter(|&v| is_first_among_neighbours(s, t_end, v))
                             .map(|v| (s.front().time(v), v)),
                     );
                     scan_all = false;
@@ -205,19 +208,21 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 touched.clear();
                 ends.clear();
                 taken.fill(false);
+                // Every ready vertex is chosen; none is a neighbour of another, and `taken`
+                // lists each neighbour shared by two of them once.
                 for &(_, v) in &ready {
+                    chosen.push(v);
                     if !taken[v as usize] {
-                        chosen.push(v);
                         taken[v as usize] = true;
                         touched.push(v);
-                        for &w in s.mesh().vertex_neighbors(v) {
-                            if !taken[w as usize] {
-                                taken[w as usize] = true;
-                                touched.push(w);
-                            }
-                        }
-                        ends.push(touched.len());
                     }
+                    for &w in s.mesh().vertex_neighbors(v) {
+                        if !taken[w as usize] {
+                            taken[w as usize] = true;
+                            touched.push(w);
+                        }
+                    }
+                    ends.push(touched.len());
                 }
                 let len = r.chosen.len();
                 r.results.resize_with(len, || Mutex::new(None));

@@ -542,38 +542,37 @@ impl<'a, 'm: 'a> Work<'a> for Listed<'m> {
     }
 }
 
-/// The rounds by definition: scan the whole front for ready vertices, sort them by time and id,
-/// take greedily every vertex none of whose neighbours is taken, pitch them; repeat.
+/// The rounds by definition: scan the whole front for the vertices first in `(time, id)` among
+/// their neighbours, sort them by time and id, pitch them all; repeat.
 fn rounds_by_full_scans(mesh: &Mesh, t_end: f64) -> Vec<VertexId> {
     let n = mesh.vertices().len();
     let front = Front::flat(n, 0.0);
     let pitcher = Pitcher::new(mesh, C, SAFETY, t_end).unwrap();
     let mut order = Vec::new();
     loop {
+        let first = |v: VertexId| {
+            let t = front.time(v);
+            t < t_end
+                && (mesh.vertex_neighbors(v).iter())
+                    .all(|&w| front.time(w) > t || (front.time(w) == t && w > v))
+        };
         let mut ready: Vec<(f64, VertexId)> = (0..n as VertexId)
-            .filter(|&v| front.time(v) < t_end && front.is_local_minimum(mesh, v))
+            .filter(|&v| first(v))
             .map(|v| (front.time(v), v))
             .collect();
         if ready.is_empty() {
             return order;
         }
         ready.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let mut taken = vec![false; n];
         for (_, v) in ready {
-            if !taken[v as usize] {
-                taken[v as usize] = true;
-                mesh.vertex_neighbors(v)
-                    .iter()
-                    .for_each(|&w| taken[w as usize] = true);
-                pitcher.pitch(mesh, &front, v).unwrap();
-                order.push(v);
-            }
+            pitcher.pitch(mesh, &front, v).unwrap();
+            order.push(v);
         }
     }
 }
 
 #[test]
-fn deterministic_rounds_take_every_ready_vertex_as_a_full_scan_of_the_front_would() {
+fn deterministic_rounds_take_every_vertex_first_among_its_neighbours_as_a_full_scan_would() {
     let mesh = perturbed(14);
     let t_end = 3.0 / 16.0;
     let expected = rounds_by_full_scans(&mesh, t_end);

@@ -35,6 +35,8 @@ const CHART_SIZE: (u32, u32) = (1000, 650);
 struct Run {
     /// `sigma' = 10^x`, for the legend.
     label: String,
+    /// The load ratio `sigma'`, by which the runs are ordered.
+    ratio: f64,
     normalization: Normalization,
     /// `phi`, J/m^2.
     phi: f64,
@@ -52,7 +54,7 @@ pub fn plot_lefm(dirs: &[PathBuf], out: &Path) -> Result<Vec<PathBuf>, EngineErr
         .iter()
         .map(|d| read_run(d))
         .collect::<Result<Vec<_>, _>>()?;
-    runs.sort_by(|a, b| a.label_key().total_cmp(&b.label_key()));
+    runs.sort_by(|a, b| a.ratio.total_cmp(&b.ratio));
     std::fs::create_dir_all(out).map_err(|e| EngineError::io(out, e))?;
     let mut tips = Vec::new();
     for run in &runs {
@@ -110,17 +112,6 @@ pub fn plot_lefm(dirs: &[PathBuf], out: &Path) -> Result<Vec<PathBuf>, EngineErr
     Ok(written)
 }
 
-impl Run {
-    /// The load ratio, for ordering.
-    fn label_key(&self) -> f64 {
-        self.label
-            .rsplit('^')
-            .next()
-            .and_then(|x| x.parse().ok())
-            .unwrap_or(0.0)
-    }
-}
-
 /// The run in folder `dir`.
 fn read_run(dir: &Path) -> Result<Run, EngineError> {
     let read = |name: &str| {
@@ -144,6 +135,7 @@ fn read_run(dir: &Path) -> Result<Run, EngineError> {
     let ratio = key("loading.load_ratio")?;
     Ok(Run {
         label: format!("sigma' = 10^{:.3}", ratio.log10()),
+        ratio,
         normalization: Normalization {
             tau: key("loading.tau_prime")?,
             c_r: key("loading.c_r")?,

@@ -56,6 +56,18 @@ impl Solve<'_> {
         let star = mesh.vertex_triangles(v);
         let report = match solved {
             Ok(report) => report,
+            // A non-finite residual comes from non-finite inflow, which refinement copies
+            // onto the children: the guard's failure, not a reason to refine.
+            Err(failure) if !failure.residual.is_finite() => {
+                let [x, y] = mesh.vertex(v);
+                self.control.fail(format!(
+                    "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: the Newton \
+                     residual is {} (a non-finite value)",
+                    self.problem.loaded.config.time.clock(tent.t_old),
+                    failure.residual
+                ));
+                return Ok((tent.t_old, Outcome::Failed));
+            }
             Err(failure) => {
                 // Not converged: refine around the vertex when adaptivity can, else stop.
                 let star: Vec<_> = self
