@@ -148,6 +148,17 @@ pub enum PitchingError {
     Gather { rank: Rank, reason: String },
     #[error("rank {rank}: internal error (a bug, please report it): {message}")]
     Panic { rank: Rank, message: String },
+    #[error(
+        "rank {rank}: the patch of vertex {vertex} at t = {time} s: {name} is {value} (a \
+         non-finite value); nothing of it was stored"
+    )]
+    NonFinite {
+        rank: Rank,
+        vertex: VertexId,
+        time: f64,
+        name: &'static str,
+        value: f64,
+    },
     #[error("rank {rank}: the patch of vertex {vertex} at t = {time} s: {source}")]
     Patch {
         rank: Rank,

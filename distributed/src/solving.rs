@@ -187,6 +187,16 @@ impl<O: Observer> Work for Patches<'_, O> {
                 time: tent.t_old,
                 source,
             })?;
+        // The engine's guard: a patch with a non-finite value is not stored.
+        if let Some((name, value)) = report.first_non_finite() {
+            return Err(PitchingError::NonFinite {
+                rank: view.rank(),
+                vertex: view.global(tent.vertex),
+                time: tent.t_old,
+                name,
+                value,
+            });
+        }
         self.solver.commit(self.solution);
         let mut slope = 0.0_f64;
         for &t in view.mesh().vertex_triangles(tent.vertex) {

@@ -338,3 +338,54 @@ fn a_front_solution_of_the_wrong_size_is_an_error() {
         }
     );
 }
+
+/// The engine's guard over ranks: a patch with a non-finite value (here from a bad element
+/// written between two runs of the rank) is not stored, and the rank stops naming the vertex,
+/// the time and the value.
+#[test]
+fn a_patch_with_a_non_finite_value_stops_the_rank() {
+    let dir = tempfile::tempdir().unwrap();
+    let problem = plane_wave(4, 1e-7, dir.path());
+    let (mesh, causality, physics) = (&problem.mesh, causality(&problem), physics(&problem));
+    let partition = Partition::coordinate(mesh, 1).unwrap();
+    let view = sdg_distributed::LocalView::new(mesh, &partition, 0).unwrap();
+    let pitcher = |t_end: f64| {
+        sdg_mesh::Pitcher::new(view.mesh(), causality.c_max, causality.safety, t_end).unwrap()
+    };
+    let front = Front::flat(view.mesh().vertices().len(), 0.0);
+    let solution = physics.initial_solution(&view);
+    let mut ends = sdg_distributed::Loopback::connect(
+        1,
+        LoopbackOptions {
+            seed: 0,
+            max_delay: Duration::ZERO,
+            fifo: true,
+        },
+    );
+    let half = 0.5 * causality.t_end;
+    let rank = (&view, &front, &solution);
+    let mut run = |t_end: f64| {
+        sdg_distributed::solve_rank(
+            rank.0,
+            &pitcher(t_end),
+            rank.1,
+            rank.2,
+            physics,
+            &mut ends[0],
+            &options(0),
+        )
+    };
+    run(half).unwrap();
+    let mut geometry = Geometry::default();
+    let mut coefficients = vec![0.0; solution.basis_len() * solution.width()];
+    assert!(solution.load(0, &mut geometry, &mut coefficients));
+    coefficients[0] = f64::NAN;
+    solution.store(0, &geometry, &coefficients, None);
+    let err = run(causality.t_end).unwrap_err();
+    assert!(
+        matches!(err, PitchingError::NonFinite { rank: 0, time, value, .. }
+            if value.is_nan() && time >= half),
+        "{err}"
+    );
+    assert!(err.to_string().contains("a non-finite value"), "{err}");
+}

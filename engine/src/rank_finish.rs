@@ -9,7 +9,7 @@ use sdg_distributed::{Gathered, RankReport, SolvedPatch};
 use sdg_mesh::Front;
 use sdg_solver::element::FrontSolution;
 use sdg_solver::norms::{FrontEnergy, front_energy, slice_errors};
-use sdg_solver::patch::{Initial, PatchReport, PatchSolver};
+use sdg_solver::patch::{Initial, PatchSolver};
 
 use crate::error::EngineError;
 use crate::output::write_output;
@@ -156,7 +156,7 @@ fn summarize(
     let mut timings = Timings::default();
     for p in patches {
         let r = &p.report;
-        if let Some((name, value)) = non_finite(r) {
+        if let Some((name, value)) = r.first_non_finite() {
             return Err(EngineError::Runtime(format!(
                 "a patch over ranks has {name} = {value} (a non-finite value)"
             )));
@@ -229,19 +229,6 @@ fn summarize(
         checkpoint: CheckpointSummary::default(),
         timings,
     })
-}
-
-/// The first non-finite value of a patch report, named as the engine's guard names it.
-fn non_finite(r: &PatchReport) -> Option<(&'static str, f64)> {
-    [
-        ("energy_in", r.energy_in),
-        ("energy_out", r.energy_out),
-        ("boundary_work", r.boundary_work),
-        ("interface_work", r.interface_work),
-        ("dissipation", r.dissipation),
-    ]
-    .into_iter()
-    .find(|(_, v)| !v.is_finite())
 }
 
 /// `distributed` of `summary.json`.

@@ -77,18 +77,7 @@ impl Solve<'_> {
     /// What is wrong with a solved patch's `report`, if anything: a non-finite value or an
     /// energy blow-up ([`BLOW_UP`]).
     pub(crate) fn guard(&self, report: &PatchReport) -> Option<String> {
-        let values = [
-            ("energy_in", report.energy_in),
-            ("energy_out", report.energy_out),
-            ("boundary_work", report.boundary_work),
-            ("interface_work", report.interface_work),
-            ("friction_dissipation", report.friction_dissipation),
-            ("fracture_work", report.fracture_work),
-            ("dissipation", report.dissipation),
-            ("momentum_residual", report.momentum_residual),
-            ("cohesive_mismatch", report.cohesive_mismatch),
-        ];
-        if let Some((name, value)) = values.iter().find(|(_, v)| !v.is_finite()) {
+        if let Some((name, value)) = report.first_non_finite() {
             return Some(format!("{name} is {value} (a non-finite value)"));
         }
         let held = f64::from_bits(self.energy_reference.load(Ordering::Relaxed))

@@ -87,6 +87,24 @@ pub struct PatchReport {
 }
 
 impl PatchReport {
+    /// The first of the report's energy terms, momentum residual and cohesive mismatch that is
+    /// not finite, with its field's name: a patch that has one must not be stored.
+    pub fn first_non_finite(&self) -> Option<(&'static str, f64)> {
+        [
+            ("energy_in", self.energy_in),
+            ("energy_out", self.energy_out),
+            ("boundary_work", self.boundary_work),
+            ("interface_work", self.interface_work),
+            ("friction_dissipation", self.friction_dissipation),
+            ("fracture_work", self.fracture_work),
+            ("dissipation", self.dissipation),
+            ("momentum_residual", self.momentum_residual),
+            ("cohesive_mismatch", self.cohesive_mismatch),
+        ]
+        .into_iter()
+        .find(|(_, v)| !v.is_finite())
+    }
+
     /// Adds `other`'s energy terms to these totals and keeps the largest of each momentum
     /// diagnostic; sums in the order of the calls.
     pub fn accumulate(&mut self, other: &PatchReport) {
