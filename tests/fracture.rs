@@ -163,6 +163,7 @@ fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branch
         "{debonded_ends} debonded segment ends"
     );
     assert!(summary.energy.fracture_energy > 0.0);
+    assert!(edges_within_c_r(dir.path(), problem.material.c_r()) >= 5);
     assert!(dir.path().join("crack_path.png").is_file());
     assert!(dir.path().join("crack_zoom.png").is_file());
     // Up to the branching, branch 0's tip (where the damage reaches 1) runs along y = 1 mm
@@ -404,6 +405,64 @@ fn cracks_nucleate_across_the_tension_the_same_way_for_any_thread_count() {
     }
     assert_eq!(sites, fracture.nucleations);
     assert!(one.energy.balance_residual_rel.abs() < 1e-10);
+    assert!(edges_within_c_r(a.path(), problem.material.c_r()) >= 2);
+}
+
+/// At the refinement floor (the tip's star refined to `tip_edge`, a split floor of
+/// `min_edge`, `floor_angle` 90: the crack takes an end of the crossed edge), the edge the
+/// mesh makes may be longer than the crossing the tip's test bounded by `max_tip_speed`: such
+/// an edge is refused (`speed`) and the tip waits for its next tent, so every edge keeps to
+/// c_R. Before the edge itself was checked, 25 of 66 successive edges here were made faster,
+/// up to 1.29 c_R.
+#[test]
+fn edges_taken_to_an_end_of_the_crossed_edge_keep_to_the_speed_bound() {
+    let set = [
+        "time.end=1.1e-6",
+        "output.snapshot_times=[]",
+        "output.png=false",
+        "adapt.enabled=true",
+        "adapt.tol=1e9",
+        "adapt.min_edge=1e-5",
+        "adapt.tip_edge=2e-5",
+        "fracture.floor_angle=90",
+    ];
+    let problem = shipped("crack_growth.toml", &set);
+    let (summary, dir) = solve(&problem, 2, true);
+    let fracture = summary.fracture.expect("fracture summary");
+    assert!(
+        fracture.refusals.get("speed").is_some_and(|&n| n > 0),
+        "{fracture:?}"
+    );
+    assert!(edges_within_c_r(dir.path(), problem.material.c_r()) >= 20);
+}
+
+/// Checks `fracture.max_tip_speed` (1 c_R) in `events.csv` of `dir`: each edge a branch makes
+/// from where its last one ended is at most `c_r` (m/s) times the time between them, however
+/// the mesh took it (to an end of the crossed edge, say). Returns the edges checked.
+fn edges_within_c_r(dir: &Path, c_r: f64) -> usize {
+    let (rows, kinds) = events(dir);
+    let branches = column(dir, 2);
+    let mut last: std::collections::HashMap<&str, ([f64; 2], f64)> = Default::default();
+    let mut checked = 0;
+    for ((row, kind), branch) in rows.iter().zip(&kinds).zip(&branches) {
+        if kind != "extension" {
+            continue;
+        }
+        let (from, to) = ([row[1], row[2]], [row[3], row[4]]);
+        if let Some((end, time)) = last.get(branch.as_str())
+            && *end == from
+        {
+            let length = (to[0] - from[0]).hypot(to[1] - from[1]);
+            assert!(
+                length <= c_r * (row[0] - time) * (1.0 + 1e-9),
+                "branch {branch}: {length:e} m in {:e} s",
+                row[0] - time
+            );
+            checked += 1;
+        }
+        last.insert(branch, (to, row[0]));
+    }
+    checked
 }
 
 /// `time.start` only names the instant the run starts at: the same run started at -0.3 us

@@ -175,19 +175,24 @@ impl Fracture {
         directions: [f64; 2],
         t: f64,
     ) -> bool {
-        if self.max_tip_speed == f64::INFINITY || tip.since == f64::NEG_INFINITY {
-            return true;
-        }
-        let reach = self.max_tip_speed * (t - tip.since);
         directions.iter().filter(|d| d.is_finite()).all(|&d| {
             crossing(mesh, v, d).is_none_or(|c| {
                 let [p, q] = mesh.edges()[c.edge as usize]
                     .vertices
                     .map(|w| mesh.vertex(w));
                 let at = [0, 1].map(|k| p[k] + c.fraction * (q[k] - p[k]));
-                geometry::distance(mesh.vertex(v), at) <= reach
+                self.within_reach(tip, t, geometry::distance(mesh.vertex(v), at))
             })
         })
+    }
+
+    /// True when `tip` may make an edge of `length` (m) at time `t` (s): at most
+    /// [`Fracture::max_tip_speed`] times the time since the tip reached its vertex (always for
+    /// the seed's rule and for the initial cracks' tips).
+    pub fn within_reach(&self, tip: Tip, t: f64, length: f64) -> bool {
+        self.max_tip_speed == f64::INFINITY
+            || tip.since == f64::NEG_INFINITY
+            || length <= self.max_tip_speed * (t - tip.since)
     }
 
     /// True when an edge with `tag` is a crack edge.

@@ -191,6 +191,20 @@ impl Solve<'_> {
                 *plan = Plan::Refused(Refusal::Closure, state.mesh.vertex(w));
             }
         }
+        // The test bounded where the directions cross the opposite edges; an edge that snaps to
+        // or takes an end of the crossed edge is longer (up to sqrt 2 on right triangles), and
+        // the edge made keeps to `fracture.max_tip_speed` too.
+        if let Some(tip) = tip {
+            for plan in &mut plans {
+                if let Plan::Edge(w) = *plan {
+                    let to = state.mesh.vertex(w);
+                    let length = (to[0] - at[0]).hypot(to[1] - at[1]);
+                    if !fracture.within_reach(tip, time, length) {
+                        *plan = Plan::Refused(Refusal::Speed, to);
+                    }
+                }
+            }
+        }
         let refusals: Vec<(Refusal, [f64; 2])> = plans
             .iter()
             .filter_map(|&p| match p {
@@ -218,11 +232,14 @@ impl Solve<'_> {
             }));
         }
         // A tip makes all its edges or none (a branching is not lost half-made); its splits
-        // stay as refinements, and the same directions are tried again after neighbours' tents.
+        // stay as refinements, and the same directions are tried again after neighbours' tents,
+        // unless an edge was too long for the time since the tip came (a retry comes at the
+        // same time): then the tip's next tent tests anew.
         if let Some(tip) = &mut state.tips[v as usize]
             && !refusals.is_empty()
         {
-            tip.pending = Some(Pending {
+            let waits = refusals.iter().any(|&(reason, _)| reason == Refusal::Speed);
+            tip.pending = (!waits).then_some(Pending {
                 directions: extension.directions,
                 time,
             });

@@ -54,6 +54,10 @@ pub(crate) enum Refusal {
     Shield,
     /// The closure of the tip's second split split its first new edge.
     Closure,
+    /// The edge the mesh would make (to an end of the crossed edge, which may lie farther than
+    /// the crossing the test bounded) is longer than `fracture.max_tip_speed` allows since the
+    /// tip reached its vertex: the tip waits for its next tent.
+    Speed,
 }
 
 impl Refusal {
@@ -66,6 +70,7 @@ impl Refusal {
             Refusal::Degenerate => "degenerate",
             Refusal::Shield => "shield",
             Refusal::Closure => "closure",
+            Refusal::Speed => "speed",
         }
     }
 }
