@@ -400,7 +400,7 @@ fn run(args: &RunArgs) -> Result<(), EngineError> {
     // Before anything else: a signal during set-up is a request like any other.
     let control = Arc::new(Control::default());
     signals::listen_to_signals(control.clone())?;
-    exit_with_study()?;
+    stop_with_study(&control)?;
     let job = &args.job;
     let problem = setup(&job.config)?;
     check_max_wall_time(args.max_wall_time)?;
@@ -477,7 +477,7 @@ fn check_max_wall_time(seconds: Option<f64>) -> Result<(), EngineError> {
 fn run_over_ranks(args: &RunArgs, ranks: Option<usize>) -> Result<(), EngineError> {
     let control = Arc::new(Control::default());
     signals::listen_to_signals(control.clone())?;
-    exit_with_study()?;
+    stop_with_study(&control)?;
     let job = &args.job;
     let problem = setup(&job.config)?;
     check_max_wall_time(args.max_wall_time)?;
@@ -504,24 +504,32 @@ fn run_over_ranks(args: &RunArgs, ranks: Option<usize>) -> Result<(), EngineErro
     Ok(())
 }
 
-/// A case of `sdg study` (the study's process id in [`sdg_engine::study::PARENT_ENV`]) exits
-/// at once when the study is gone: a study killed outright leaves no runs behind. Files are
-/// written whole or not at all, so what the run leaves is as after SIGKILL.
-fn exit_with_study() -> Result<(), EngineError> {
-    let Some(parent) = std::env::var(sdg_engine::study::PARENT_ENV)
-        .ok()
-        .and_then(|p| p.parse::<u32>().ok())
-    else {
+/// A case of `sdg study` ([`sdg_engine::study::STUDY_ENV`] set) reads its standard input, a
+/// pipe from the study: a [`sdg_engine::study::CHECKPOINT_BYTE`] asks for a checkpoint, the
+/// pipe's end (the study asked its cases to stop, or is gone, even by SIGKILL) for a checkpoint
+/// and a stop (exit 3), as SIGTERM does. So no run outlives its study, and none is lost.
+fn stop_with_study(control: &Arc<Control>) -> Result<(), EngineError> {
+    use std::io::Read;
+    if std::env::var_os(sdg_engine::study::STUDY_ENV).is_none() {
         return Ok(());
-    };
+    }
+    let control = control.clone();
     std::thread::Builder::new()
         .name("study watch".into())
         .spawn(move || {
-            while std::os::unix::process::parent_id() == parent {
-                std::thread::sleep(std::time::Duration::from_millis(100));
+            let mut input = std::io::stdin().lock();
+            let mut byte = [0u8; 1];
+            loop {
+                match input.read(&mut byte) {
+                    Ok(1) if byte[0] == sdg_engine::study::CHECKPOINT_BYTE => {
+                        control.checkpoint();
+                    }
+                    Ok(1) => {}
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    _ => break,
+                }
             }
-            note!("error: the study that started this run is gone; exiting");
-            std::process::exit(1);
+            control.stop("the study that started this run stopped or is gone");
         })
         .map_err(|e| EngineError::Runtime(format!("watching the study: {e}")))?;
     Ok(())
@@ -601,6 +609,8 @@ then gather                  them with
         );
         let progress = !args.quiet && args.case.is_none();
         let estimate_s = first_case_estimate(&plan, &cases[selected[0]], threads, progress)?;
+        let stop = Arc::new(study::Stop::default());
+        signals::listen_to_signals(stop.clone())?;
         let run_plan = RunPlan {
             program,
             out: out.clone(),
@@ -608,16 +618,42 @@ then gather                  them with
             threads,
             progress,
             estimate_s,
+            stop: stop.clone(),
         };
         let tally = study::run_cases(&plan, &cases, &selected, &run_plan)?;
         if args.case.is_some() {
-            return match tally.failed.first() {
-                Some(&(k, code)) => Err(EngineError::CasesFailed {
+            return match (tally.failed.first(), tally.stopped.first()) {
+                (Some(&(k, code)), _) => Err(EngineError::CasesFailed {
                     message: format!("case {k} failed: sdg run exited {code}"),
                     code: u8::try_from(code).unwrap_or(1),
                 }),
-                None => Ok(()),
+                (None, Some(k)) => Err(EngineError::CasesFailed {
+                    message: format!(
+                        "case {k} checkpointed and stopped: run the same command again to go on"
+                    ),
+                    code: 3,
+                }),
+                (None, None) => Ok(()),
             };
+        }
+        if !tally.stopped.is_empty() || stop.requested() {
+            // Gather what finished, then say how to go on.
+            study::collect(&plan, &cases, &out)?;
+            let list: Vec<String> = tally.stopped.iter().map(usize::to_string).collect();
+            return Err(EngineError::CasesFailed {
+                message: format!(
+                    "stopped: {} case(s) checkpointed ({}){}; run the same command again to go \
+                     on from their checkpoints; the finished cases are gathered in {}",
+                    list.len(),
+                    list.join(", "),
+                    match tally.failed.len() {
+                        0 => String::new(),
+                        n => format!(", {n} failed"),
+                    },
+                    out.join("study.csv").display()
+                ),
+                code: 3,
+            });
         }
         if !tally.failed.is_empty() {
             // Gather what finished, then fail.

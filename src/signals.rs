@@ -1,8 +1,44 @@
-//! Signals of `sdg run`: requests to checkpoint and stop, heard by a thread of their own.
+//! Signals of `sdg run` and `sdg study`: requests to checkpoint and stop, heard by a thread of
+//! their own.
 
 use std::sync::Arc;
 
+use sdg_engine::study::Stop;
 use sdg_engine::{Control, EngineError};
+
+/// What a signal asks of the process that hears it.
+pub(crate) trait Requests: Send + Sync + 'static {
+    /// SIGTERM, SIGINT or SIGHUP (`name`): checkpoint and stop; returns what to tell the user.
+    fn stop(&self, name: &str) -> String;
+    /// SIGUSR1: a checkpoint, and go on.
+    fn checkpoint(&self);
+}
+
+impl Requests for Control {
+    fn stop(&self, name: &str) -> String {
+        Control::stop(self, format!("{name} received"));
+        format!("{name}: writing a checkpoint, then stopping (again to exit at once)")
+    }
+
+    fn checkpoint(&self) {
+        Control::checkpoint(self);
+        aside(|| tracing::info!("SIGUSR1: a checkpoint at the next quiescent point"));
+    }
+}
+
+impl Requests for Stop {
+    fn stop(&self, name: &str) -> String {
+        self.request();
+        format!(
+            "{name}: the running cases write a checkpoint and stop, no other case starts; run \
+             the study again to go on (again to exit at once)"
+        )
+    }
+
+    fn checkpoint(&self) {
+        Stop::checkpoint(self);
+    }
+}
 
 /// A second SIGTERM or SIGINT within this long of the first is taken as the same request.
 const SAME_REQUEST: std::time::Duration = std::time::Duration::from_secs(1);
@@ -12,8 +48,9 @@ const SAME_REQUEST: std::time::Duration = std::time::Duration::from_secs(1);
 /// it too, for faults of file writes: `engine/src/output/fault.rs`.)
 const FAULT: &str = "SDG_FAULT";
 
-/// Turns signals into requests to the run: SIGTERM, SIGINT and SIGHUP (the terminal or the
-/// job's session gone) checkpoint and stop (exit 3), SIGUSR1 checkpoints and goes on. A second
+/// Turns signals into requests to the run (or the study's runs): SIGTERM, SIGINT and SIGHUP
+/// (the terminal or the job's session gone) checkpoint and stop (exit 3), SIGUSR1 checkpoints
+/// and goes on. A second
 /// SIGTERM, SIGINT or SIGHUP, [`SAME_REQUEST`] or more after the first, ends the process at
 /// once with code 130, without waiting for the checkpoint (the one before it is left whole).
 /// Started first thing in `sdg run`, so that a signal during set-up stops the run the same
@@ -23,7 +60,7 @@ const FAULT: &str = "SDG_FAULT";
 /// run would go on deaf to them. Nothing in it may panic on output (its messages are dropped if
 /// stderr cannot be written), and should it panic all the same (a bug) the process exits at once
 /// with code 1, as after SIGKILL (files are written whole or not at all).
-pub(crate) fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError> {
+pub(crate) fn listen_to_signals(control: Arc<impl Requests>) -> Result<(), EngineError> {
     use tokio::signal::unix::{SignalKind, signal};
     let failed = |e: std::io::Error| EngineError::Runtime(format!("signal handling: {e}"));
     let runtime = tokio::runtime::Builder::new_current_thread()
@@ -53,7 +90,6 @@ pub(crate) fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError
                         panic!("{FAULT}=signal-listener: a panic on SIGUSR1");
                     }
                     control.checkpoint();
-                    aside(|| tracing::info!("SIGUSR1: a checkpoint at the next quiescent point"));
                     continue;
                 }
             };
@@ -70,10 +106,8 @@ pub(crate) fn listen_to_signals(control: Arc<Control>) -> Result<(), EngineError
                 std::process::exit(130);
             }
             stopping = Some(std::time::Instant::now());
-            control.stop(format!("{name} received"));
-            aside(move || {
-                note!("{name}: writing a checkpoint, then stopping (again to exit at once)");
-            });
+            let message = control.stop(name);
+            aside(move || note!("{message}"));
         }
     };
     std::thread::Builder::new()

@@ -369,8 +369,9 @@ fn a_killed_study_resumes_to_the_same_table() {
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!out.join("study.csv").exists());
-    // Its run of the third case notices and exits, unless it finished first (a case takes
-    // about 0.1 s, the check for the parent as long): then it counts as finished.
+    // Its run of the third case sees its standard input end, checkpoints and stops, unless it
+    // finished first (a case takes about 0.1 s): then it counts as finished. Run again, the
+    // case goes on from its checkpoint.
     std::thread::sleep(Duration::from_millis(300));
     let err = study(&[&file, "--output", o, "--threads", "1"]);
     assert!(
@@ -379,6 +380,105 @@ fn a_killed_study_resumes_to_the_same_table() {
         "{err}"
     );
     assert_eq!(read(&out.join("study.csv")), read(&whole.join("study.csv")));
+}
+
+/// SIGTERM to a study: its running case checkpoints and stops (SIGUSR1 before it asks for a
+/// checkpoint and the case goes on), no other case starts, the study exits 3; run again, the
+/// case goes on from its checkpoint and the study ends with the `study.csv` of a study never
+/// stopped. A case folder of another config has its checkpoints removed before it runs.
+#[test]
+fn a_stopped_study_goes_on_from_its_cases_checkpoints() {
+    let (dir, file) = study_folder(
+        "base = \"base.toml\"\nmetrics = [\"patches\", \"vertices\", \"energy.final\"]\n\
+         [axes]\n\"mesh.ny\" = { draws = 2, first = 24 }\n[set]\n\"mesh.nx\" = 48\n\
+         \"time.end\" = 5e-7\n\"scheduler.deterministic\" = true\n",
+    );
+    let whole = dir.path().join("whole");
+    let w = whole.to_str().unwrap();
+    study(&[&file, "--output", w, "--threads", "1", "--quiet"]);
+    let out = dir.path().join("out");
+    let o = out.to_str().unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_sdg"))
+        .args(["study", &file, "--output", o, "--threads", "1", "--quiet"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let kill = |name: &str| {
+        let status = Command::new("kill")
+            .args([format!("-{name}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(status.success());
+    };
+    let start = Instant::now();
+    while !out.join("cases/000/log.txt").exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no case started");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    // A case takes about 2 s (4 s on a loaded machine); its first checkpoint is on request.
+    let checkpoints = out.join("cases/000/checkpoints");
+    kill("USR1");
+    while common::checkpoints(&checkpoints).is_empty() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no checkpoint");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(
+        !out.join("cases/000/summary.json").exists(),
+        "the case ended first"
+    );
+    kill("TERM");
+    let ended = child.wait_with_output().unwrap();
+    let err = stderr(&ended);
+    assert_eq!(ended.status.code(), Some(3), "{err}");
+    assert!(err.contains("stopped: 1 case(s) checkpointed (0)"), "{err}");
+    let record = json(&out.join("cases/000/case.json"));
+    assert_eq!(record["exit_code"].as_i64(), Some(3));
+    assert!(
+        !out.join("cases/001/case.json").exists(),
+        "a case started after the stop"
+    );
+    let csv = read(&out.join("study.csv"));
+    assert!(
+        csv.contains(",stopped\n") && csv.contains(",pending\n"),
+        "{csv}"
+    );
+    assert_eq!(json(&out.join("study.json"))["stopped"].as_u64(), Some(1));
+    let err = study(&[&file, "--output", o, "--threads", "1"]);
+    assert!(
+        err.contains("2 cases, 0 finished before; running 2, 1 from their checkpoints"),
+        "{err}"
+    );
+    assert_eq!(read(&out.join("study.csv")), read(&whole.join("study.csv")));
+    let summary = json(&out.join("cases/000/summary.json"));
+    assert!(
+        summary["checkpoint"]["restarted_from"].is_string(),
+        "{summary}"
+    );
+    // The study changed: case 1's folder holds checkpoints of another config, which go.
+    let stale = out.join("cases/001/checkpoints");
+    std::fs::create_dir_all(&stale).unwrap();
+    std::fs::copy(
+        &common::checkpoints(&checkpoints)[0],
+        stale.join("checkpoint_000000.sdgc"),
+    )
+    .unwrap();
+    let changed = read(Path::new(&file)).replace("5e-7", "4e-7");
+    std::fs::write(&file, changed).unwrap();
+    study(&[
+        &file,
+        "--output",
+        o,
+        "--threads",
+        "1",
+        "--case",
+        "1",
+        "--quiet",
+    ]);
+    let summary = json(&out.join("cases/001/summary.json"));
+    assert!(
+        summary["checkpoint"]["restarted_from"].is_null(),
+        "{summary}"
+    );
 }
 
 /// Bad studies exit 2 naming the study file and the key, before anything runs.

@@ -205,6 +205,12 @@ impl Folder {
     }
 }
 
+/// Whether `dir` holds a checkpoint file (valid or not: a restart from the folder takes the
+/// newest valid one, or says why there is none).
+pub(crate) fn holds_checkpoint(dir: &Path) -> bool {
+    !list(dir).is_empty()
+}
+
 /// The checkpoint files in `dir`, oldest first (by number).
 fn list(dir: &Path) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)

@@ -24,7 +24,7 @@ pub use error::StudyError;
 pub use file::Study;
 pub use metrics::{metric_keys, metric_value};
 pub use record::{CaseStatus, Collected, case_status};
-pub use runner::{PARENT_ENV, RunPlan, Tally, run_cases};
+pub use runner::{CHECKPOINT_BYTE, RunPlan, STUDY_ENV, Stop, Tally, run_cases};
 pub use slurm::write_slurm;
 pub use stats::{Stats, t_975};
 pub use table::collect;

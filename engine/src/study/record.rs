@@ -30,9 +30,11 @@ pub enum CaseStatus {
     Pending,
     /// Its run finished: `summary.json` is there, of this config.
     Done,
-    /// Its run ended with this exit code and no summary (1 failed, 2 refused, 3 stopped with a
-    /// checkpoint, other: killed by a signal or the code is unknown (-1)).
+    /// Its run ended with this exit code and no summary (1 failed, 2 refused, other: killed by
+    /// a signal or the code is unknown (-1)).
     Failed(i32),
+    /// Its run checkpointed and stopped (exit 3): run again, it goes on from the checkpoint.
+    Stopped,
     /// Started and not ended: running, or the study was killed while it ran.
     Unfinished,
     /// Its folder holds a run of another config (the study changed since): run again.
@@ -46,6 +48,7 @@ impl CaseStatus {
             Self::Pending => "pending",
             Self::Done => "done",
             Self::Failed(_) => "failed",
+            Self::Stopped => "stopped",
             Self::Unfinished => "unfinished",
             Self::Stale => "stale",
         }
@@ -93,9 +96,11 @@ pub fn case_status(case: &Case, dir: &Path) -> Result<CaseStatus, EngineError> {
     } else if dir.join(SUMMARY).is_file() {
         CaseStatus::Done
     } else {
-        record
-            .exit_code
-            .map_or(CaseStatus::Unfinished, CaseStatus::Failed)
+        match record.exit_code {
+            None => CaseStatus::Unfinished,
+            Some(3) => CaseStatus::Stopped,
+            Some(code) => CaseStatus::Failed(code),
+        }
     })
 }
 

@@ -30,7 +30,9 @@ pub fn write_slurm(
          # and, once the tasks have ended, gather the cases with\n\
          #   sdg study {file} --collect --output {out}\n\
          # A task whose case has finished with the same config does nothing: submit the array\n\
-         # again to run what failed or did not finish. Edit the #SBATCH lines for your cluster\n\
+         # again to run what failed or did not finish. Two minutes before the time limit Slurm\n\
+         # sends SIGTERM to the task (--signal): its case writes a checkpoint and stops (exit 3),\n\
+         # and the next submission goes on from there. Edit the #SBATCH lines for your cluster\n\
          # (remove one '#' to enable a line).\n\
          #SBATCH --job-name=sdg-study-{stem}\n\
          ##SBATCH --partition=PARTITION\n\
@@ -41,6 +43,7 @@ pub fn write_slurm(
          #SBATCH --ntasks=1\n\
          #SBATCH --cpus-per-task={threads}\n\
          #SBATCH --output={logs}/slurm-%A_%a.out\n\
+         #SBATCH --signal=B:TERM@120\n\
          \n\
          set -u\n\
          case=${{SLURM_ARRAY_TASK_ID:?submit with sbatch: the array task id is the case}}\n\

@@ -126,6 +126,7 @@ fn summary_json(study: &Study, groups: &[Group], collected: &Collected) -> Value
         "cases": collected.statuses.len(),
         "done": collected.count(|s| *s == CaseStatus::Done),
         "failed": collected.count(|s| matches!(s, CaseStatus::Failed(_))),
+        "stopped": collected.count(|s| *s == CaseStatus::Stopped),
         "metrics": study.metrics,
         "axes": axes,
         "groups": groups,
