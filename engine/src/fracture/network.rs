@@ -24,6 +24,7 @@ use std::collections::{BTreeMap, BinaryHeap};
 use serde::Serialize;
 
 use sdg_mesh::VertexId;
+use sdg_solver::crack::OPEN_DAMAGE;
 
 /// One crack edge of the network.
 #[derive(Clone, Copy, Debug)]
@@ -39,10 +40,6 @@ pub(crate) struct CrackLink {
     /// Its damage on the front, in [0, 1].
     pub(crate) damage: f64,
 }
-
-/// The damage from which a crack edge counts as open: its faces carry at most 1% of the
-/// bonded traction.
-pub const OPEN_DAMAGE: f64 = 0.99;
 
 /// The first macroscopic fork of the crack network.
 #[derive(Clone, Debug, PartialEq, Serialize)]

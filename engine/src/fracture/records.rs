@@ -369,7 +369,7 @@ fn first_branching(
 /// the branch added (found by where they lie: later splits keep them on the segment), tracked
 /// per branch as a cohesive crack is per tag ([`tips::tip_states`], speeds fitted over at
 /// least `length`, m: the damage law's process zone `c_R tau`): the tip is where
-/// the damage reaches `1 - eps`, behind the newest crack edge, whose insertion only marks where
+/// the damage reaches `OPEN_DAMAGE` (an open crack), behind the newest crack edge, whose insertion only marks where
 /// damage may start. The edges a nucleation makes are left out: the traction that exceeded the
 /// defect's strength loads them whole, so their points fail almost together (on the plate with
 /// right diagonals, four points over 2.9 um within 0.39 ns), which is no tip running; a nucleated
@@ -427,9 +427,9 @@ fn on_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::super::network::OPEN_DAMAGE;
     use super::*;
     use sdg_solver::crack::Level;
+    use sdg_solver::crack::OPEN_DAMAGE;
 
     /// Times written as they are on the run's clock.
     const UNIT_TIME: TimeConfig = TimeConfig {

@@ -2,7 +2,7 @@
 //! `crack`).
 //!
 //! Patches report where their faces crossed the crack-tip level (Xu-Needleman: the separation
-//! `delta_c`; damage: `D = 1 - eps`) and the level of the process zone's other end (the
+//! `delta_c`; damage: `D = OPEN_DAMAGE`, an open crack) and the level of the process zone's other end (the
 //! trailing edge `delta_T` behind the tip; the damage front `D = eps` ahead of it)
 //! ([`sdg_solver::crack`]). Per interface tag, each probe point keeps its first crossing of
 //! each level. The crack opens progressively, so in time order each first tip crossing is the

@@ -6,7 +6,7 @@ use super::contact::ContactParams;
 use super::damage::{DamageLaw, DamageParams};
 use super::registry::Law;
 use super::targets::Targets;
-use crate::crack::{Level, Tracking};
+use crate::crack::{Level, OPEN_DAMAGE, Tracking};
 use crate::face::STATE_COMPONENTS;
 use crate::system::{FrameTrace, System};
 
@@ -92,13 +92,17 @@ impl Contact {
     }
 
     /// What crack tracking follows on the law's faces: the damage of a damage law (tip at
-    /// `1 - eps`, zone's leading edge at `eps`), the normal separation of a cohesive one (tip at
-    /// `delta_c`, trailing edge at `delta_T`); `None` for plain contact.
+    /// [`OPEN_DAMAGE`], or `1 - eps` if lower; zone's leading edge at `eps`), the normal
+    /// separation of a cohesive one (tip at `delta_c`, trailing edge at `delta_T`); `None` for
+    /// plain contact.
     pub fn tracking(&self) -> Option<Tracking> {
         if let Some(d) = &self.damage {
             Some(Tracking {
                 component: 2,
-                levels: [(Level::Tip, 1.0 - d.eps), (Level::ZoneEnd, d.eps)],
+                levels: [
+                    (Level::Tip, OPEN_DAMAGE.min(1.0 - d.eps)),
+                    (Level::ZoneEnd, d.eps),
+                ],
             })
         } else {
             self.cohesive.map(|c| Tracking {
