@@ -19,7 +19,9 @@
 //!   scattered up to 1.13 c_R about a mean of 0.9 c_R); over two edges on each side it still
 //!   measured a tip that crosses each edge at once and then waits 8% off when the window cut
 //!   the crossings of an edge; over whole edges, within 1%. A crack whose
-//!   states span less than one edge has no speed (NaN): its
+//!   states span less than its length scale (a branch shorter than `c_R tau`) has no speed
+//!   (NaN): it fails within about `tau` as one stretch. Nor does a window spanning less than
+//!   one edge: its
 //!   crossings are the points of one face reaching the level, as the face's polynomial has it
 //!   (two points 1 um apart 3 ps apart on a nucleated branch of the branching plate), not a
 //!   tip running;
@@ -49,7 +51,7 @@ pub struct TipState {
     pub point: [f64; 2],
     /// Distance from the origin to the farthest tip so far, m.
     pub extension: f64,
-    /// Tip speed, m/s; NaN where the crack's states span less than one edge.
+    /// Tip speed, m/s; NaN where the crack spans less than its length scale or the window one edge.
     pub speed: f64,
     /// Length of the process zone, m.
     pub process_zone_length: f64,
@@ -128,7 +130,10 @@ fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
 /// edge of a zone about that long, so its advance over less measures the zone's inner
 /// structure and the probe points, not the crack (a whole overloaded stretch shorter than it
 /// fails within `tau`). On meshes whose edges are longer than a quarter of it, the
-/// [`SPEED_EDGES`] edges decide, and the window is the same as with `length` = 0.
+/// [`SPEED_EDGES`] edges decide, and the window is the same as with `length` = 0. A crack
+/// whose states span less than `length` has no speed (NaN at every state): all of it lies
+/// within one process zone, and its first states are a stretch failing at once, not a front
+/// running (a 6.8 um branch of the branching plate read 1.32 `c_R`).
 pub fn tip_states(crossings: &[Crossing], length: f64) -> Vec<TipState> {
     let tips = first_crossings(crossings, Level::Tip);
     let zone_ends = first_crossings(crossings, Level::ZoneEnd);
@@ -160,6 +165,12 @@ pub fn tip_states(crossings: &[Crossing], length: f64) -> Vec<TipState> {
     // the crack's origin and its last state the window keeps its width and shifts inward: a
     // half window would fit one or two face-by-face steps, not the speed.
     let (least, most) = (states[0].extension, extension);
+    if most - least < length {
+        for state in &mut states {
+            state.speed = f64::NAN;
+        }
+        return states;
+    }
     for (i, tip) in tips.iter().enumerate() {
         let reach = (SPEED_EDGES * tip.edge_length).max(0.5 * length);
         let lo = (states[i].extension - reach)
@@ -386,6 +397,28 @@ mod tests {
         assert!(fastest(0.0) > 2.0 * 300.0, "{}", fastest(0.0));
         let zone = fastest(40e-6);
         assert!(zone > 300.0 && zone < 300.0 * 1.2, "{zone}");
+    }
+
+    #[test]
+    fn a_crack_shorter_than_its_length_scale_has_no_speed() {
+        // A branch of 10 edges of 1 um whose first half fails within a nanosecond: over a
+        // length scale of 9 um it has a speed, over one of 11 um (longer than the branch:
+        // 9 um from its first state to its last) none, at any state.
+        let list: Vec<Crossing> = (0..10u32)
+            .map(|k| {
+                let t = if k < 5 { 1e-10 } else { 1e-9 } * f64::from(k);
+                Crossing {
+                    edge: k,
+                    edge_length: 1e-6,
+                    ..crossing(1e-6 * f64::from(k), t, Level::Tip)
+                }
+            })
+            .collect();
+        assert!(tip_states(&list, 9e-6).iter().all(|s| s.speed > 0.0));
+        let states = tip_states(&list, 11e-6);
+        assert_eq!(states.len(), 10);
+        assert!(states.iter().all(|s| s.speed.is_nan()), "{states:?}");
+        assert!((states[9].extension - 9e-6).abs() < 1e-18);
     }
 
     #[test]
