@@ -18,7 +18,7 @@ use clap::{Args, Parser, Subcommand};
 
 use std::sync::Arc;
 
-use sdg_engine::{Control, EngineError, LoadedConfig, Problem, RunOptions};
+use sdg_engine::{Control, EngineError, LoadedConfig, PartitionKind, Problem, RunOptions};
 
 /// `sdg --version`: the version, and `(features: mpi)` in a build with the cargo feature `mpi`
 /// (job scripts check it before they start ranks: examples/slurm/mpi.sbatch).
@@ -105,6 +105,27 @@ struct ScalingArgs {
     /// Draw the predicted speedup into this PNG file.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
+    /// Replay over N ranks, each with the worker counts of --workers (needs --config and
+    /// --latency-us; a trace without mesh-changing events).
+    #[arg(long, value_name = "N", requires_all = ["rank_config", "latency_us"])]
+    ranks: Option<NonZeroUsize>,
+    /// With --ranks: the traced run's config, whose mesh is partitioned.
+    #[arg(
+        long = "config",
+        id = "rank_config",
+        value_name = "FILE",
+        requires = "ranks"
+    )]
+    config: Option<PathBuf>,
+    /// With --ranks: the traced run's overrides (repeatable, applied in order).
+    #[arg(long = "set", value_name = "KEY=VALUE", requires = "ranks")]
+    set: Vec<String>,
+    /// With --ranks: how the vertices are split among them [default: coordinate].
+    #[arg(long, value_enum, requires = "ranks")]
+    partition: Option<PartitionArg>,
+    /// With --ranks: the delay of an update message between ranks, us.
+    #[arg(long, value_name = "US", requires = "ranks")]
+    latency_us: Option<f64>,
 }
 
 // What every command that reads a config takes: all that `validate` takes.
@@ -726,20 +747,43 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
     }
     let workers: Vec<usize> = args.workers.iter().map(|w| w.get()).collect();
     let overhead_s = args.overhead_us * 1e-6;
-    let scaling =
-        sdg_engine::trace::scaling_job(&args.trace, &workers, overhead_s, args.out.as_deref())?;
+    let model = rank_model(args)?;
+    let scaling = sdg_engine::trace::scaling_job(
+        &args.trace,
+        &workers,
+        overhead_s,
+        model.as_ref(),
+        args.out.as_deref(),
+    )?;
     let entries = sdg_engine::trace::read(&args.trace)?;
-    let one = sdg_engine::trace::replay(&entries, 1, overhead_s).wall_time_s;
-    match sdg_engine::trace::rounds(&entries) {
-        0 => say!(
+    let one = scaling.one_s;
+    match (&model, sdg_engine::trace::rounds(&entries)) {
+        (Some(model), _) => say!(
+            "model: {} ranks ({} partition), {} us per update between ranks, the asynchronous \
+             protocol's tents; {:.2}% of the dependencies cross ranks; workers are per rank",
+            model.ranks,
+            args.partition
+                .map_or(PartitionKind::default(), PartitionArg::kind)
+                .name(),
+            args.latency_us.unwrap_or_default(),
+            100.0 * scaling.cross_rank.unwrap_or(0.0)
+        ),
+        (None, 0) => say!(
             "model: the asynchronous scheduler (a trace without rounds; its {} refinements, \
              coarsenings and crack extensions run beside the tents that hold none of their vertices)",
             sdg_engine::trace::regions(&entries)
         ),
-        n => say!("model: the deterministic scheduler's {n} rounds"),
+        (None, n) => say!("model: the deterministic scheduler's {n} rounds"),
     }
     print_predictions(&scaling.predictions, one);
     let critical = scaling.critical_s;
+    if model.is_some() {
+        say!(
+            "critical path {critical:.4} s over the ranks: at most {:.2}x over one worker",
+            one / critical
+        );
+        return Ok(());
+    }
     let parts = sdg_engine::trace::critical_path_parts(&entries, overhead_s);
     say!(
         "critical path {critical:.4} s: at most {:.2}x over one worker; tents {:.4} s, events \
@@ -750,6 +794,34 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
         parts.scheduler_s
     );
     Ok(())
+}
+
+/// `sdg scaling --ranks`: the owners of the vertices of the traced run's mesh (its config and
+/// overrides) and the latency; `None` without `--ranks`.
+fn rank_model(args: &ScalingArgs) -> Result<Option<sdg_engine::trace::RankModel>, EngineError> {
+    let (Some(ranks), Some(config), Some(latency_us)) = (args.ranks, &args.config, args.latency_us)
+    else {
+        return Ok(None);
+    };
+    if !(latency_us.is_finite() && latency_us >= 0.0) {
+        return Err(EngineError::Input(format!(
+            "--latency-us: must be a time >= 0 in us, got {latency_us}"
+        )));
+    }
+    let problem = setup(&ConfigArgs {
+        config: config.clone(),
+        set: args.set.clone(),
+        quiet: true,
+    })?;
+    let kind = args
+        .partition
+        .map_or(PartitionKind::default(), PartitionArg::kind);
+    let partition = sdg_engine::partition_for(&problem.mesh, kind, ranks.get())?;
+    Ok(Some(sdg_engine::trace::RankModel {
+        owners: partition.owners().to_vec(),
+        ranks: ranks.get(),
+        latency_s: latency_us * 1e-6,
+    }))
 }
 
 /// Prints a table of predictions, with speedups over `one` (s, the 1-worker wall time).

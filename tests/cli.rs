@@ -893,6 +893,43 @@ fn a_traced_run_replays_on_more_workers() {
     assert!((1.0..=2.0).contains(&speedups[1]), "{speedups:?}");
     assert!(speedups[2] <= bound + 0.01, "{speedups:?} {bound}");
     assert!(png.is_file());
+    // Over ranks (the config's mesh partitioned): one rank is the scheduler's replay; two ranks
+    // of one worker at most halve the time, and a latency between them only delays.
+    let over_ranks = |ranks: &str, latency_us: &str| -> (f64, String) {
+        let out = sdg(&[
+            "scaling",
+            trace.to_str().unwrap(),
+            "--workers",
+            "1",
+            "--ranks",
+            ranks,
+            "--config",
+            &config,
+            "--latency-us",
+            latency_us,
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let table = String::from_utf8(out.stdout).unwrap();
+        let line = table.lines().nth(2).unwrap_or_else(|| panic!("{table}"));
+        (
+            line.split_whitespace().nth(2).unwrap().parse().unwrap(),
+            table,
+        )
+    };
+    let (one_rank, table) = over_ranks("1", "100");
+    assert_eq!(one_rank, 1.0, "{table}");
+    let (two, table) = over_ranks("2", "0");
+    assert!(
+        table.starts_with("model: 2 ranks (coordinate partition)"),
+        "{table}"
+    );
+    assert!(1.0 < two && two <= 2.0, "{table}");
+    let (late, table) = over_ranks("2", "1000");
+    assert!(late < two, "{table}");
+    expect_input_error(
+        &over_two_ranks(&trace, &config, &["--latency-us=-1"]),
+        &["--latency-us", ">= 0"],
+    );
     // A deterministic run's trace marks its rounds and is replayed as them.
     let (summary, text) = traced_run(&config, &out_dir, &trace, &["--deterministic"]);
     let rounds = summary["rounds"].as_u64().unwrap();
@@ -927,6 +964,19 @@ fn a_traced_run_replays_on_more_workers() {
         &["scaling", trace.to_str().unwrap()],
         &["trace.csv:1", "header"],
     );
+}
+
+/// `sdg scaling TRACE --ranks 2 --config CONFIG` and `more`.
+fn over_two_ranks<'a>(trace: &'a Path, config: &'a str, more: &[&'a str]) -> Vec<&'a str> {
+    let args = [
+        "scaling",
+        trace.to_str().unwrap(),
+        "--ranks",
+        "2",
+        "--config",
+        config,
+    ];
+    [&args[..], more].concat()
 }
 
 /// The number after `key` in `text`, up to `end`.
@@ -987,6 +1037,18 @@ fn a_traced_adaptive_run_replays_its_regional_events_beside_tents() {
         .unwrap_or_else(|| panic!("no 16-worker row in {table}"));
     let at_16: f64 = line.split_whitespace().nth(2).unwrap().parse().unwrap();
     assert!(at_16 <= bound + 0.01, "{table}");
+    // Runs over ranks do not change their mesh: such a trace is not replayed over them.
+    let set = [
+        "--set",
+        "time.end=3e-7",
+        "--set",
+        "output.snapshot_times=[]",
+    ];
+    let args = over_two_ranks(&trace, config.to_str().unwrap(), &set);
+    expect_input_error(
+        &[&args[..], &["--latency-us", "1"]].concat(),
+        &["--ranks", "mesh-changing"],
+    );
 }
 
 /// An output folder that cannot be made is bad input (exit 2) naming where it came from; an

@@ -28,7 +28,9 @@ pub mod trace;
 pub use config::{Config, ConfigError, LoadedConfig};
 #[cfg(feature = "mpi")]
 pub use distributed_run::solve_mpi;
-pub use distributed_run::{PartitionKind, RankOptions, causality, physics, solve_ranks};
+pub use distributed_run::{
+    PartitionKind, RankOptions, causality, partition_for, physics, solve_ranks,
+};
 pub use error::EngineError;
 pub use estimate::Estimate;
 pub use fracture::{CrackNetwork, CrackSummary, FractureSummary};

@@ -38,7 +38,7 @@ const RANDOM_SEED: u64 = 1;
 
 /// The partition of `mesh` over `ranks` ranks of `kind`; one that cannot be made (more ranks
 /// than vertices) is bad input.
-pub(crate) fn partition_for(
+pub fn partition_for(
     mesh: &sdg_mesh::Mesh,
     kind: PartitionKind,
     ranks: usize,

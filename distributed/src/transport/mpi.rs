@@ -23,11 +23,15 @@
 //! therefore takes all pending incoming messages (`MPI_Improbe` and a matched receive until
 //! none is left), posts the workers' messages (`MPI_Isend`), and when neither had anything to
 //! do sleeps on the workers' channel with a timeout that doubles from
-//! [`MpiOptions::min_poll`] to [`MpiOptions::max_poll`]. A worker's message wakes it at once,
-//! so outgoing messages leave without delay; an incoming message is noticed within
-//! `max_poll` when the thread was idle, and at once while it is busy. A blocking `MPI_Probe`
-//! would miss the workers' messages, and `MPI_Iprobe` in a loop would spin a core that the
-//! workers need (3 and 4 ranks run on 2 cores in CI).
+//! [`MpiOptions::min_poll`] to [`MpiOptions::max_poll`] while the worker waits for a message,
+//! and to [`MpiOptions::busy_poll`] while it works. A worker's message wakes it at once, so
+//! outgoing messages leave without delay, and so does a worker that starts waiting; an
+//! incoming message is noticed within `max_poll` while the worker waits for one, and within
+//! `busy_poll` while it has other tents to pitch. A blocking `MPI_Probe` would miss the
+//! workers' messages, and `MPI_Iprobe` in a loop would spin a core that the workers need (3
+//! and 4 ranks run on 2 cores in CI). Nor may the thread wake often while the worker works:
+//! at the 100 us of `max_poll` throughout, a rank of `plane_wave` alone (`mpirun -n 1`) solved
+//! its patches 20% slower than a run without MPI.
 //!
 //! # Sends that wait for their receiver
 //! The sends of one round are posted together and the thread goes on receiving (and sleeping
@@ -40,6 +44,8 @@
 //! the thread then finalises MPI, which waits for the other processes. [`MpiTransport::abort`]
 //! ends every process of the run with `MPI_Abort`.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use std::thread::JoinHandle;
 use std::time::Duration;
@@ -62,14 +68,16 @@ pub const TAG: ::mpi::Tag = 68;
 pub struct MpiOptions {
     /// First sleep after the last activity.
     pub min_poll: Duration,
-    /// Longest sleep: while idle, an incoming message is noticed at most this late.
+    /// Longest sleep while the worker waits for a message: it is noticed at most this late.
     pub max_poll: Duration,
+    /// Longest sleep while the worker has tents to pitch (messages wait in MPI meanwhile).
+    pub busy_poll: Duration,
 }
 
 impl Default for MpiOptions {
-    /// 10 us doubling to 100 us: an idle thread wakes about 10,000 times a second (a few
-    /// percent of a core), and a rank waiting for its neighbour's update loses at most about
-    /// 0.1 ms (plus the kernel's timer slack, 50 us by default). Pitching alone (0.3 us a tent)
+    /// 10 us doubling to 100 us while the worker waits: the thread wakes about 10,000 times a
+    /// second, and a rank waiting for its neighbour's update loses at most about 0.1 ms (plus
+    /// the kernel's timer slack, 50 us by default); to 2 ms while it works. Pitching alone (0.3 us a tent)
     /// is bound by that latency: on `examples/mpi_pitch.rs` with 2 ranks a cap of 500 us made
     /// the ranks wait 183 ms of 207 ms, 100 us 69 ms of 89 ms, 20 us 48 ms of 62 ms (the serial
     /// run takes 24 ms); with patch solves between updates it matters far less.
@@ -77,6 +85,7 @@ impl Default for MpiOptions {
         MpiOptions {
             min_poll: Duration::from_micros(10),
             max_poll: Duration::from_micros(100),
+            busy_poll: Duration::from_millis(2),
         }
     }
 }
@@ -110,6 +119,8 @@ enum Command {
     Abort {
         code: i32,
     },
+    /// The worker started waiting for a message: poll at `max_poll` at most.
+    Hurry,
 }
 
 /// An incoming message (or why its bytes were not one) and its sender.
@@ -123,6 +134,8 @@ pub struct MpiTransport {
     /// `None` once dropped: that ends the communication thread.
     commands: Option<Sender<Command>>,
     incoming: Receiver<Incoming>,
+    /// Set while the worker waits in [`Transport::receive`].
+    waiting: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -133,9 +146,18 @@ impl MpiTransport {
         let (commands, commands_rx) = mpsc::channel();
         let (incoming_tx, incoming) = mpsc::channel();
         let (ready_tx, ready) = mpsc::channel();
+        let waiting = Arc::new(AtomicBool::new(false));
+        let worker_waits = Arc::clone(&waiting);
         let thread = std::thread::Builder::new()
             .name("mpi".to_string())
-            .spawn(move || communicate(options, &commands_rx, &incoming_tx, &ready_tx))
+            .spawn(move || {
+                let channels = Channels {
+                    commands: &commands_rx,
+                    incoming: &incoming_tx,
+                    worker_waits: &worker_waits,
+                };
+                communicate(options, &channels, &ready_tx)
+            })
             .map_err(|e| MpiError::Thread(e.to_string()))?;
         match ready.recv() {
             Ok(Ok((rank, ranks))) => Ok(MpiTransport {
@@ -143,6 +165,7 @@ impl MpiTransport {
                 ranks,
                 commands: Some(commands),
                 incoming,
+                waiting,
                 thread: Some(thread),
             }),
             Ok(Err(e)) => {
@@ -204,14 +227,16 @@ impl Transport for MpiTransport {
     }
 
     fn receive(&mut self, timeout: Duration) -> Result<Option<(Rank, Message)>, TransportError> {
-        let next = if timeout.is_zero() {
-            self.incoming.try_recv().map_err(|e| match e {
-                TryRecvError::Empty => RecvTimeoutError::Timeout,
-                TryRecvError::Disconnected => RecvTimeoutError::Disconnected,
-            })
-        } else {
-            self.incoming.recv_timeout(timeout)
-        };
+        let mut next = self.incoming.try_recv().map_err(|e| match e {
+            TryRecvError::Empty => RecvTimeoutError::Timeout,
+            TryRecvError::Disconnected => RecvTimeoutError::Disconnected,
+        });
+        if !timeout.is_zero() && matches!(next, Err(RecvTimeoutError::Timeout)) {
+            self.waiting.store(true, Ordering::Relaxed);
+            self.command(Command::Hurry)?;
+            next = self.incoming.recv_timeout(timeout);
+            self.waiting.store(false, Ordering::Relaxed);
+        }
         match next {
             Ok((from, message)) => message.map(|m| Some((from, m))),
             Err(RecvTimeoutError::Timeout) => Ok(None),
@@ -235,14 +260,24 @@ impl Transport for MpiTransport {
     }
 }
 
+/// The communication thread's ends of the channels to the worker.
+struct Channels<'a> {
+    commands: &'a Receiver<Command>,
+    incoming: &'a Sender<Incoming>,
+    /// Set while the worker waits for a message.
+    worker_waits: &'a AtomicBool,
+}
+
 /// The communication thread: initialises MPI, says this rank and the number of ranks on
 /// `ready`, then moves messages until the worker drops its end of `commands`, and finalises.
 fn communicate(
     options: MpiOptions,
-    commands: &Receiver<Command>,
-    incoming: &Sender<Incoming>,
+    channels: &Channels<'_>,
     ready: &Sender<Result<(Rank, usize), MpiError>>,
 ) {
+    let Channels {
+        commands, incoming, ..
+    } = *channels;
     let Some((universe, provided)) = ::mpi::initialize_with_threading(Threading::Funneled) else {
         let _ = ready.send(Err(MpiError::AlreadyInitialised));
         return;
@@ -278,6 +313,7 @@ fn communicate(
                     send_all(&world, &mut outgoing, incoming, options);
                     world.abort(code);
                 }
+                Ok(Command::Hurry) => {}
                 Err(RecvTimeoutError::Timeout) => break,
                 Err(RecvTimeoutError::Disconnected) => {
                     open = false;
@@ -295,10 +331,15 @@ fn communicate(
         if !open {
             break;
         }
+        let longest = if channels.worker_waits.load(Ordering::Relaxed) {
+            options.max_poll
+        } else {
+            options.busy_poll
+        };
         pause = match (active, pause.is_zero()) {
             (true, _) => Duration::ZERO,
             (false, true) => options.min_poll,
-            (false, false) => (pause * 2).min(options.max_poll),
+            (false, false) => (pause * 2).min(longest),
         };
     }
     // The duplicate communicator is freed before MPI is finalised.

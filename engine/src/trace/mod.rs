@@ -20,18 +20,22 @@
 //! recording its settled tents in order), and is replayed as those rounds, which are the same
 //! for any thread count: a round's tents go to the first free worker in trace order, then its
 //! settling chunks the same way, then its events and the scheduler's own time run alone.
+//! Over ranks (`sdg scaling --ranks`, module `ranks`) the tents go to the ranks owning their
+//! vertices and a dependency between ranks waits for an update message's latency.
 //! Either way the replay predicts the wall time, the critical path (the time with unlimited
 //! workers) and the mean number of ready tents. The costs are those measured in the traced run,
 //! so the model leaves out what more threads do to each tent (shared caches and memory
 //! bandwidth) and the barriers' cost.
 
 mod entry;
+mod ranks;
 mod record;
 mod replay;
 #[cfg(test)]
 mod tests;
 
 pub use entry::{Entry, Kind, read};
+pub use ranks::RankModel;
 pub(crate) use record::{Tracer, check_path};
 pub use replay::{
     CriticalPath, Prediction, Scaling, critical_path, critical_path_parts, regions, replay, rounds,
