@@ -581,10 +581,11 @@ fn study(args: &StudyArgs) -> Result<(), EngineError> {
             let dir = study::case_dir(&out, case.index, cases.len());
             let status = study::case_status(case, &dir)?;
             say!(
-                "{:>4}  {:<10}  {}",
+                "{:>4}  {:<10}  {}{}",
                 case.index,
                 status.name(),
-                case.label(&plan.axes)
+                case.label(&plan.axes),
+                with_keys(case)
             );
         }
         return Ok(());
@@ -794,6 +795,20 @@ fn scaling(args: &ScalingArgs) -> Result<(), EngineError> {
         parts.scheduler_s
     );
     Ok(())
+}
+
+/// For `sdg study --dry-run`: the overrides of `case` that go with its axes' values (`with`),
+/// written out when there are at most three, else counted.
+fn with_keys(case: &sdg_engine::study::Case) -> String {
+    let rest: Vec<&str> = (case.overrides.iter().zip(&case.sources))
+        .filter(|(_, source)| source.contains(".with."))
+        .map(|(o, _)| o.as_str())
+        .collect();
+    match rest.len() {
+        0 => String::new(),
+        1..=3 => format!(" (with {})", rest.join(", ")),
+        n => format!(" (with {n} keys that go with these values)"),
+    }
 }
 
 /// `sdg scaling --ranks`: the owners of the vertices of the traced run's mesh (its config and
