@@ -76,14 +76,19 @@ pub(crate) fn run<'a, W: Work<'a>>(
     // The ready vertices (first among their neighbours) with their times. A round takes every
     // ready vertex and changes the front only at them, so the next round's ready vertices are
     // among the chosen ones and their neighbours, which the workers check and list in `found`,
-    // one list per worker. After events (which may renumber vertices) the calling
-    // thread scans the whole front again.
+    // one list per worker. Events change readiness only at the vertices they offer
+    // ([`crate::Changed::offer`], ids as after the event); a coarsening renumbers (the last
+    // vertex takes the removed one's id, and offers it), so after events the calling thread
+    // checks again every vertex found or offered that still exists (`offered`), as the
+    // asynchronous pool does. Only the first round scans the whole front.
     let mut ready: Vec<(f64, VertexId)> = Vec::with_capacity(n);
     let found: Vec<Mutex<Vec<(f64, VertexId)>>> = (0..threads)
         .map(|_| Mutex::new(Vec::with_capacity(n)))
         .collect();
     let mut taken = vec![false; n];
     let mut scan_all = true;
+    let mut offered: Vec<VertexId> = Vec::new();
+    let mut after_events = false;
     let wait = |barrier: &Barrier| {
         let idle = Instant::now();
         barrier.wait();
@@ -178,6 +183,19 @@ pub(crate) fn run<'a, W: Work<'a>>(
                     }
                     found.clear();
                 }
+                if after_events {
+                    // Found before the events: ids and readiness as they were; offered: ids
+                    // as after the event that offered them. Each is checked again now.
+                    offered.extend(ready.drain(..).map(|(_, v)| v));
+                    offered.sort_unstable();
+                    offered.dedup();
+                    ready.extend(
+                        (offered.drain(..))
+                            .filter(|&v| (v as usize) < n && is_first_among_neighbours(s, t_end, v))
+                            .map(|v| (s.front().time(v), v)),
+                    );
+                    after_events = false;
+                }
                 if scan_all {
                     ready.extend(
                         (0..n as VertexId)
@@ -268,9 +286,10 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 let mut guard = state.write();
                 let running = Instant::now();
                 for event in events.take() {
-                    event.run_alone(&mut **guard, &events);
+                    let changed = event.run_alone(&mut **guard, &events);
+                    offered.extend(changed.offer);
                     stats.events += 1;
-                    scan_all = true;
+                    after_events = true;
                 }
                 event_time.add_since(running);
                 n = guard.mesh().vertices().len();
