@@ -31,6 +31,7 @@ mod entry;
 mod ranks;
 mod record;
 mod replay;
+mod scaling;
 #[cfg(test)]
 mod tests;
 
@@ -38,6 +39,6 @@ pub use entry::{Entry, Kind, read};
 pub use ranks::RankModel;
 pub(crate) use record::{Tracer, check_path};
 pub use replay::{
-    CriticalPath, Prediction, Scaling, critical_path, critical_path_parts, regions, replay, rounds,
-    scaling_job,
+    CriticalPath, Prediction, critical_path, critical_path_parts, regions, replay, rounds,
 };
+pub use scaling::{Scaling, scaling_job};
