@@ -222,10 +222,16 @@ pub(crate) fn run<'a, W: Work<'a>>(
                     ends,
                     ..
                 } = &mut *r;
+                // `taken` is true only where the last round took a vertex (ids as then; those
+                // an event removed are cut off already): clearing those is clearing it all.
+                for &v in touched.iter() {
+                    if let Some(t) = taken.get_mut(v as usize) {
+                        *t = false;
+                    }
+                }
                 chosen.clear();
                 touched.clear();
                 ends.clear();
-                taken.fill(false);
                 // Every ready vertex is chosen; none is a neighbour of another, and `taken`
                 // lists each neighbour shared by two of them once.
                 for &(_, v) in &ready {
