@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# A run over MPI ranks measured against the same run on threads and against what `sdg scaling
+# A run over MPI ranks (of one or two threads) measured against the same run on threads and
+# against what `sdg scaling
 # --ranks 2` predicts from a trace of the threaded run on 2 threads (whose tents cost what they
 # cost with both cores busy, as on 2 ranks). REPEAT rounds (default 3), each running
 # every variant once in turn, so that a noisy host weighs on all alike; prints a markdown row
@@ -41,6 +42,10 @@ for r in $(seq "$repeat"); do
       --output "$out/m$n"
     echo "mpirun_-n_$n $(wall "$out/m$n")" >> "$out/times"
   done
+  # One rank of two threads, given both cores (mpirun binds a rank to one core otherwise).
+  mpirun -n 1 --map-by slot:PE=2 "$SDG_MPI" run configs/plane_wave.toml "${set_[@]}" --mpi \
+    --threads 2 --quiet --force --output "$out/m1t2"
+  echo "mpirun_-n_1_--threads_2 $(wall "$out/m1t2")" >> "$out/times"
   echo "round $r of $repeat done" >&2
 done
 python3 - "$out/times" "$cells" "$latency" <<'PY'

@@ -193,12 +193,14 @@ struct RunArgs {
     #[arg(long, value_name = "FILE")]
     trace: Option<PathBuf>,
     /// Split the front over N ranks, threads of this process (no mesh-changing events): the
-    /// same state hash as a run on threads.
-    #[arg(long, value_name = "N", conflicts_with = "threads")]
+    /// same state hash as a run on threads. With --threads T, each rank solves its tents on T
+    /// threads (default 1).
+    #[arg(long, value_name = "N")]
     ranks: Option<NonZeroUsize>,
     /// One rank per MPI process: start with `mpirun -n N sdg run CONFIG --mpi` (a build with
-    /// the cargo feature `mpi`).
-    #[arg(long, conflicts_with_all = ["threads", "ranks"])]
+    /// the cargo feature `mpi`); with --threads T each rank solves its tents on T threads
+    /// (default 1).
+    #[arg(long, conflicts_with = "ranks")]
     mpi: bool,
     /// How the vertices are split among the ranks (with --ranks or --mpi) [default:
     /// coordinate].

@@ -66,13 +66,14 @@ pub(crate) fn solve_mpi(
 /// The line of totals of a run over ranks that wrote `summary` into `dir`.
 pub(crate) fn totals(summary: &RunSummary, partition: PartitionKind, dir: &Path) -> String {
     format!(
-        "{} patches (order {}) to t = {:e} s in {:.3} s on {} ranks ({} partition); energy \
-         balance residual {:.1e}; outputs in {}",
+        "{} patches (order {}) to t = {:e} s in {:.3} s on {} ranks of {} threads ({} \
+         partition); energy balance residual {:.1e}; outputs in {}",
         summary.patches,
         summary.order,
         summary.final_time,
         summary.wall_time_s,
         summary.ranks,
+        summary.threads / summary.ranks.max(1),
         partition.name(),
         summary.energy.balance_residual_rel,
         dir.display()

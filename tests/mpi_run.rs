@@ -28,9 +28,9 @@ fn mpirun(ranks: usize, args: &[&str]) -> Output {
 }
 
 /// Runs `name` on one thread and over 2 in-process ranks, then under `mpirun` for each
-/// `(ranks, partition)`, and checks the state hash, patches, ranks, history and snapshots of
-/// each (snapshots written as ASCII).
-fn check(name: &str, overrides: &[&str], cases: &[(usize, &str)]) {
+/// `(ranks, partition, solving threads per rank)`, and checks the state hash, patches, ranks,
+/// history and snapshots of each (snapshots written as ASCII).
+fn check(name: &str, overrides: &[&str], cases: &[(usize, &str, usize)]) {
     let dir = tempfile::tempdir().unwrap();
     let run = |extra: &[&str], out: &Path| {
         let args = run_args(name, overrides, extra, out);
@@ -42,9 +42,17 @@ fn check(name: &str, overrides: &[&str], cases: &[(usize, &str)]) {
     let (threads_out, ranks_out) = (dir.path().join("threads"), dir.path().join("ranks"));
     let threads = run(&["--threads", "1"], &threads_out);
     run(&["--ranks", "2"], &ranks_out);
-    for &(ranks, partition) in cases {
-        let out = dir.path().join(format!("{ranks}-{partition}"));
-        let args = run_args(name, overrides, &["--mpi", "--partition", partition], &out);
+    for &(ranks, partition, per_rank) in cases {
+        let out = dir.path().join(format!("{ranks}-{partition}-{per_rank}"));
+        let per_rank_arg = per_rank.to_string();
+        let extra = [
+            "--mpi",
+            "--partition",
+            partition,
+            "--threads",
+            &per_rank_arg,
+        ];
+        let args = run_args(name, overrides, &extra, &out);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let result = mpirun(ranks, &args);
         assert!(
@@ -59,6 +67,7 @@ fn check(name: &str, overrides: &[&str], cases: &[(usize, &str)]) {
         );
         assert_eq!(mpi["patches"], threads["patches"]);
         assert_eq!(mpi["ranks"], ranks);
+        assert_eq!(mpi["threads"], ranks * per_rank);
         assert_eq!(mpi["energy"]["final"], threads["energy"]["final"]);
         assert_eq!(
             std::fs::read_to_string(out.join("history.csv")).unwrap(),
@@ -84,10 +93,11 @@ fn plane_wave_over_mpi_is_the_run_on_one_thread() {
         "output.vtu=\"ascii\"",
     ];
     let cases = [
-        (1, "coordinate"),
-        (2, "metis"),
-        (3, "random"),
-        (4, "stripes"),
+        (1, "coordinate", 2),
+        (2, "metis", 1),
+        (2, "coordinate", 2),
+        (3, "random", 1),
+        (4, "stripes", 1),
     ];
     check("plane_wave.toml", &overrides, &cases);
 }
@@ -102,7 +112,7 @@ fn frictional_interface_over_mpi_is_the_run_on_one_thread() {
         "output.interface_probes=[]",
         "output.png=false",
     ];
-    check("stick_slip.toml", &overrides, &[(3, "random")]);
+    check("stick_slip.toml", &overrides, &[(3, "random", 2)]);
 }
 
 #[test]

@@ -20,7 +20,8 @@ fn run(name: &str, overrides: &[&str], extra: &[&str], out: &Path) -> serde_json
 }
 
 /// Runs the shipped config `name` with `overrides` (ASCII VTU, `snapshots` snapshots) on
-/// `--threads 2` and over each of `cases` (ranks, partition), and checks that every run over
+/// `--threads 2` and over each of `cases` (ranks, partition, solving threads per rank), and
+/// checks that every run over
 /// ranks writes the same `history.csv`, byte for byte, whose rows balance the energy, start
 /// with the threaded run's first row and end with its last front (time, patches, energy), and
 /// that each snapshot's pieces hold the threaded run's slices.
@@ -28,23 +29,31 @@ fn assert_same_outputs_over_ranks(
     name: &str,
     overrides: &[&str],
     snapshots: usize,
-    cases: &[(usize, &str)],
+    cases: &[(usize, &str, usize)],
 ) {
     let dir = tempfile::tempdir().unwrap();
     let threads_out = dir.path().join("threads");
     let threads = run(name, overrides, &["--threads", "2"], &threads_out);
     let threads_rows = history_rows(&threads_out);
     let mut first_history: Option<String> = None;
-    for &(ranks, partition) in cases {
-        let out = dir.path().join(format!("{ranks}-{partition}"));
-        let count = ranks.to_string();
+    for &(ranks, partition, per_rank) in cases {
+        let out = dir.path().join(format!("{ranks}-{partition}-{per_rank}"));
+        let (count, per_rank_arg) = (ranks.to_string(), per_rank.to_string());
         let summary = run(
             name,
             overrides,
-            &["--ranks", &count, "--partition", partition],
+            &[
+                "--ranks",
+                &count,
+                "--partition",
+                partition,
+                "--threads",
+                &per_rank_arg,
+            ],
             &out,
         );
         assert_eq!(summary["state_hash"], threads["state_hash"]);
+        assert_eq!(summary["threads"], ranks * per_rank);
         let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
         match &first_history {
             None => first_history = Some(history),
@@ -92,11 +101,12 @@ fn history_and_snapshots_over_ranks_are_the_threaded_runs_for_every_partition() 
         "output.vtu=\"ascii\"",
     ];
     let cases = [
-        (1, "coordinate"),
-        (2, "random"),
-        (3, "coordinate"),
-        (3, "metis"),
-        (4, "stripes"),
+        (1, "coordinate", 1),
+        (1, "coordinate", 3),
+        (2, "random", 2),
+        (3, "coordinate", 1),
+        (3, "metis", 1),
+        (4, "stripes", 2),
     ];
     assert_same_outputs_over_ranks("plane_wave.toml", &overrides, 4, &cases);
 }
@@ -112,7 +122,7 @@ fn history_and_snapshots_of_a_frictional_interface_over_ranks_are_the_threaded_r
         "output.png=false",
         "output.vtu=\"ascii\"",
     ];
-    let cases = [(2, "coordinate"), (3, "random"), (4, "metis")];
+    let cases = [(2, "coordinate", 1), (3, "random", 2), (4, "metis", 1)];
     assert_same_outputs_over_ranks("stick_slip.toml", &overrides, 2, &cases);
 }
 
@@ -290,17 +300,10 @@ fn what_ranks_cannot_do_yet_is_bad_input_naming_the_key() {
         assert!(err.contains(needle), "{all:?}: `{needle}` not in {err}");
         assert!(!err.contains("panicked"), "{err}");
     }
-    // --partition needs --ranks; --ranks takes no --threads.
+    // --partition needs --ranks; --ranks and --mpi exclude each other.
     for args in [
         &["run", "configs/plane_wave.toml", "--partition", "random"][..],
-        &[
-            "run",
-            "configs/plane_wave.toml",
-            "--ranks",
-            "2",
-            "--threads",
-            "2",
-        ],
+        &["run", "configs/plane_wave.toml", "--ranks", "2", "--mpi"],
     ] {
         assert_eq!(sdg(args).status.code(), Some(2), "{args:?}");
     }

@@ -376,8 +376,8 @@ fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
     assert_eq!(jobs(&out), ["job 301: sdg exited 0 (3 ranks)"]);
     let sdg = env!("CARGO_BIN_EXE_sdg");
     let call = format!(
-        "--mpi=pmix --kill-on-bad-exit=1 {sdg} run configs/plane_wave.toml --mpi --output {} \
-         --log-level info {}",
+        "--mpi=pmix --cpus-per-task=2 --kill-on-bad-exit=1 {sdg} run configs/plane_wave.toml \
+         --mpi --threads 2 --output {} --log-level info {}",
         out.display(),
         args.join(" ")
     );
@@ -393,7 +393,7 @@ fn mpi_sbatch_runs_one_rank_per_task_or_refuses_a_build_without_mpi() {
     let (code, text) = job(303, "2", &out, &[("SDG_LAUNCHER", "mpirun")]);
     assert_eq!(code, 0, "{text}");
     assert!(
-        text.contains("mpirun --mca odls_base_sigkill_timeout 20 -n 2 "),
+        text.contains("mpirun --mca odls_base_sigkill_timeout 20 -n 2 --map-by slot:PE=2 "),
         "{text}"
     );
     assert_eq!(ranks(&out), 2);

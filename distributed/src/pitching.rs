@@ -65,7 +65,21 @@ pub struct Options {
     pub idle_limit: Duration,
     /// When to stop before the end time.
     pub pause: Pause,
+    /// Threads that solve a rank's tents ([`crate::solve_rank`]), at least 1, the rank's own
+    /// included. With more than one, the rank's thread pitches and talks to the other ranks
+    /// while the others solve, keeping up to [`IN_FLIGHT_PER_THREAD`] tents per thread in
+    /// flight, and solves one of them itself when it has nothing else to do; the tents are
+    /// the same for any count.
+    pub threads: usize,
 }
+
+/// Tents a rank keeps in flight per solving thread ([`Options::threads`]): enough that a thread
+/// that finishes finds the next while the rank's thread is busy.
+pub const IN_FLIGHT_PER_THREAD: usize = 4;
+
+/// Longest a rank with tents in flight and nothing to pitch waits for one to land before it
+/// looks for updates again.
+const LANDING_WAIT: Duration = Duration::from_micros(200);
 
 impl Options {
     /// A rank seeded `seed` that reports a stall after `idle_limit`, running to the end time.
@@ -74,6 +88,7 @@ impl Options {
             seed,
             idle_limit,
             pause: Pause::default(),
+            threads: 1,
         }
     }
 }
@@ -223,6 +238,33 @@ pub(crate) trait Work {
     /// has its new time already).
     fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError>;
 
+    /// Starts what [`Work::tent`] does for `tent` on a thread of the work's own and returns
+    /// true; false when the work has no threads ([`Work::tent`] is called then). Until
+    /// [`Work::finish`] returns it, no neighbour of the tent's vertex is pitched.
+    fn start(&mut self, tent: &Tent) -> bool {
+        let _ = tent;
+        false
+    }
+
+    /// Does the work of a tent [`Work::start`]ed before that no thread of the work has taken
+    /// yet, on the caller's thread, completed as [`Work::tent`] would; `None` if there is none.
+    fn help(&mut self, view: &LocalView, front: &Front) -> Result<Option<Tent>, PitchingError> {
+        let _ = (view, front);
+        Ok(None)
+    }
+
+    /// A tent [`Work::start`]ed before whose work is done, completed as [`Work::tent`] would,
+    /// waiting up to `wait` for one; `None` if none is done by then.
+    fn finish(
+        &mut self,
+        view: &LocalView,
+        front: &Front,
+        wait: Duration,
+    ) -> Result<Option<Tent>, PitchingError> {
+        let _ = (view, front, wait);
+        Ok(None)
+    }
+
     /// Writes into `update`'s (empty) cells what rank `to` reads of the last tent at owned
     /// local vertex `v`.
     fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update);
@@ -300,6 +342,9 @@ struct Runner<'v, T, W> {
     work: W,
     /// Per local vertex, tents pitched at it (owned) or as last heard (ghost).
     generation: Vec<u32>,
+    /// Per local vertex, whether its tent is in flight ([`Work::start`]), and how many are.
+    in_flight: Vec<bool>,
+    flying: usize,
     /// Candidates to try, and whether each local vertex is one.
     candidates: Vec<VertexId>,
     queued: Vec<bool>,
@@ -339,13 +384,14 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
     }
 
     /// True when owned `v` is below the limit and first in `(time, global id)` among its
-    /// neighbours on this rank's view.
+    /// neighbours on this rank's view, and neither it nor a neighbour has a tent in flight.
     fn is_first(&self, v: VertexId) -> bool {
         let (t, g) = (self.front.time(v), self.view.global(v));
         t < self.limit
+            && !self.in_flight[v as usize]
             && self.view.mesh().vertex_neighbors(v).iter().all(|&w| {
                 let tw = self.front.time(w);
-                tw > t || (tw == t && self.view.global(w) > g)
+                !self.in_flight[w as usize] && (tw > t || (tw == t && self.view.global(w) > g))
             })
     }
 
@@ -372,8 +418,9 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
             .map_err(|source| PitchingError::Transport { rank, source })
     }
 
+    /// Pitches `v`, which passed the rule, and has the work do its tent: here, then its
+    /// updates and candidates; or on the work's threads, and those when it is done.
     fn pitch(&mut self, v: VertexId) -> Result<(), PitchingError> {
-        let rank = self.rank();
         let t_old = self.front.time(v);
         let tent = self
             .pitcher
@@ -381,12 +428,47 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
             .filter(|tent| tent.t_new > t_old);
         let Some(tent) = tent else {
             return Err(PitchingError::NoAdvance {
-                rank,
+                rank: self.rank(),
                 vertex: self.view.global(v),
                 time: t_old,
             });
         };
+        if self.work.start(&tent) {
+            self.in_flight[v as usize] = true;
+            self.flying += 1;
+            return Ok(());
+        }
         self.work.tent(self.view, self.front, &tent)?;
+        self.after_tent(&tent)
+    }
+
+    /// Takes the tents in flight whose work is done, waiting up to `wait` for the first;
+    /// returns how many.
+    fn land(&mut self, wait: Duration) -> Result<usize, PitchingError> {
+        let mut landed = 0;
+        let mut wait = wait;
+        while self.flying > 0 {
+            let Some(tent) = self.work.finish(self.view, self.front, wait)? else {
+                break;
+            };
+            self.landed(&tent)?;
+            landed += 1;
+            wait = Duration::ZERO;
+        }
+        Ok(landed)
+    }
+
+    /// A tent in flight whose work is done: [`Runner::after_tent`].
+    fn landed(&mut self, tent: &Tent) -> Result<(), PitchingError> {
+        self.in_flight[tent.vertex as usize] = false;
+        self.flying -= 1;
+        self.after_tent(tent)
+    }
+
+    /// After the work did `tent` at an owned vertex: its generation, its updates to the ranks
+    /// holding it as a ghost, and the candidates it makes.
+    fn after_tent(&mut self, tent: &Tent) -> Result<(), PitchingError> {
+        let v = tent.vertex;
         self.generation[v as usize] += 1;
         if tent.t_new >= self.limit {
             self.below -= 1;
@@ -406,7 +488,7 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
         }
         self.report.tents.push(Tent {
             vertex: self.view.global(v),
-            ..tent
+            ..*tent
         });
         self.offer(v);
         self.offer_neighbours(v);
@@ -447,9 +529,10 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
         Ok(())
     }
 
-    /// True when this rank pitches no more: paused, or every owned vertex at the limit.
+    /// True when this rank pitches no more: paused, or every owned vertex at the limit; and
+    /// no tent in flight.
     fn stopped(&self) -> bool {
-        self.paused || self.below == 0
+        (self.paused || self.below == 0) && self.flying == 0
     }
 
     /// True when this rank is done and has heard all its neighbour ranks say so, with every
@@ -463,8 +546,9 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
                 .all(|&r| self.done[r as usize] == Some(self.received[r as usize]))
     }
 
-    fn run(&mut self, idle_limit: Duration) -> Result<(), PitchingError> {
+    fn run(&mut self, idle_limit: Duration, threads: usize) -> Result<(), PitchingError> {
         let rank = self.rank();
+        let most = IN_FLIGHT_PER_THREAD * threads;
         let transport_error = |source| PitchingError::Transport { rank, source };
         let mut said_done = false;
         loop {
@@ -484,7 +568,9 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
                     self.send(self.view.neighbour_ranks()[i], Message::Pause)?;
                 }
             }
+            self.land(Duration::ZERO)?;
             if !self.paused
+                && self.flying < most
                 && let Some(v) = self.next_ready()
             {
                 self.pitch(v)?;
@@ -500,6 +586,18 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
             }
             if self.finished() {
                 return Ok(());
+            }
+            if self.flying > 0 {
+                // Nothing to pitch until a tent lands or an update arrives: solve a tent no
+                // solving thread has taken, or wait for one to land briefly, then look for
+                // updates (not counted as waiting for other ranks).
+                match self.work.help(self.view, self.front)? {
+                    Some(tent) => self.landed(&tent)?,
+                    None => {
+                        self.land(LANDING_WAIT)?;
+                    }
+                }
+                continue;
             }
             let start = Instant::now();
             let message = self
@@ -558,6 +656,8 @@ pub(crate) fn run_rank<T: Transport, W: Work>(
         transport,
         work,
         generation: vec![0; n],
+        in_flight: vec![false; n],
+        flying: 0,
         candidates: Vec::new(),
         queued: vec![false; n],
         order: SplitMix64::new(options.seed ^ u64::from(view.rank())),
@@ -578,7 +678,7 @@ pub(crate) fn run_rank<T: Transport, W: Work>(
     for v in view.owned() {
         state.offer(v);
     }
-    match state.run(options.idle_limit) {
+    match state.run(options.idle_limit, options.threads.max(1)) {
         Ok(()) => {
             let mut report = state.report;
             report.below_end = view.owned().filter(|&v| front.time(v) < t_end).count();
@@ -700,7 +800,7 @@ fn abort_others<T: Transport>(transport: &mut T) {
     }
 }
 
-fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
+pub(crate) fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
     payload
         .downcast_ref::<&str>()
         .map(|s| s.to_string())

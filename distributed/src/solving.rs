@@ -27,6 +27,11 @@
 //! coefficients, all `f64` bits; only tents at vertices that another rank holds as a ghost send
 //! any, and solving an interior patch allocates nothing.
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
+use std::sync::{Mutex, TryLockError};
+use std::time::Duration;
+
 use sdg_mesh::{EdgeId, Front, Mesh, Tent, VertexId};
 use sdg_solver::boundary::Boundary;
 use sdg_solver::element::{FrontSolution, GEOMETRY_VALUES, Geometry};
@@ -34,13 +39,13 @@ use sdg_solver::face::{
     FACE_GEOMETRY_VALUES, FaceGeometry, FaceState, MAX_FACE_BASIS, STATE_COMPONENTS,
 };
 use sdg_solver::interface::Interfaces;
-use sdg_solver::patch::{Initial, Newton, PatchSolver};
+use sdg_solver::patch::{Initial, Newton, PatchReport, PatchSolver};
 use sdg_solver::system::System;
 
 use crate::partition::{Partition, Rank};
 use crate::pitching::{
     Causality, CellKind, Options, PitchingError, RankReport, SolvedPatch, Work, on_threads,
-    rank_start, run_rank,
+    panic_message, rank_start, run_rank,
 };
 use crate::transport::loopback::LoopbackOptions;
 use crate::transport::{Transport, Update};
@@ -144,7 +149,7 @@ impl Observer for () {
 
 /// A rank's patch solves: the [`Work`] of [`solve_rank`].
 struct Patches<'a, O> {
-    solver: PatchSolver,
+    solving: Solving<'a>,
     observer: &'a mut O,
     physics: Physics<'a>,
     solution: &'a FrontSolution,
@@ -169,35 +174,90 @@ fn spokes(mesh: &Mesh, v: VertexId) -> impl Iterator<Item = EdgeId> + '_ {
         .filter_map(move |&w| mesh.edge_between(v, w))
 }
 
-impl<O: Observer> Work for Patches<'_, O> {
-    fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError> {
-        let report = self
-            .solver
-            .solve(
-                view.mesh(),
-                front,
-                tent,
-                self.physics.boundary,
-                self.physics.initial,
-                self.solution,
-            )
-            .map_err(|source| PitchingError::Patch {
-                rank: view.rank(),
-                vertex: view.global(tent.vertex),
-                time: tent.t_old,
-                source,
-            })?;
-        // The engine's guard: a patch with a non-finite value is not stored.
-        if let Some((name, value)) = report.first_non_finite() {
-            return Err(PitchingError::NonFinite {
-                rank: view.rank(),
-                vertex: view.global(tent.vertex),
-                time: tent.t_old,
-                name,
-                value,
-            });
+/// Solves the patch of `tent` with `solver` and stores it in `solution`; a patch with a
+/// non-finite value is not stored (the engine's guard).
+fn solve_tent(
+    solver: &mut PatchSolver,
+    physics: &Physics<'_>,
+    (view, front, solution): (&LocalView, &Front, &FrontSolution),
+    tent: &Tent,
+) -> Result<PatchReport, PitchingError> {
+    let report = solver
+        .solve(
+            view.mesh(),
+            front,
+            tent,
+            physics.boundary,
+            physics.initial,
+            solution,
+        )
+        .map_err(|source| PitchingError::Patch {
+            rank: view.rank(),
+            vertex: view.global(tent.vertex),
+            time: tent.t_old,
+            source,
+        })?;
+    if let Some((name, value)) = report.first_non_finite() {
+        return Err(PitchingError::NonFinite {
+            rank: view.rank(),
+            vertex: view.global(tent.vertex),
+            time: tent.t_old,
+            name,
+            value,
+        });
+    }
+    solver.commit(solution);
+    Ok(report)
+}
+
+/// Where a rank's patches are solved: on the rank's thread with `solver`, and with
+/// [`Options::threads`] above 1 on solving threads too.
+struct Solving<'c> {
+    solver: PatchSolver,
+    crew: Option<Crew<'c>>,
+}
+
+/// The channels to a rank's solving threads: tents go in on `tents` and are taken from
+/// `taken` (by the rank's thread too, when it has nothing else to do); what [`solve_tent`]
+/// returned comes back on `solved`.
+struct Crew<'c> {
+    tents: Sender<Tent>,
+    taken: &'c Mutex<Receiver<Tent>>,
+    solved: Receiver<(Tent, Result<PatchReport, PitchingError>)>,
+}
+
+/// A solving thread: solves the tents it takes from `tents` with `solver` until the channel
+/// closes, and gives back each result (a panic as [`PitchingError::Panic`]).
+fn solving_thread(
+    mut solver: PatchSolver,
+    physics: &Physics<'_>,
+    rank: (&LocalView, &Front, &FrontSolution),
+    tents: &Mutex<Receiver<Tent>>,
+    solved: &Sender<(Tent, Result<PatchReport, PitchingError>)>,
+) {
+    loop {
+        // One thread at a time waits on the channel; the lock is let go before solving.
+        let next = tents.lock().unwrap_or_else(|e| e.into_inner()).recv();
+        let Ok(tent) = next else { return };
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            solve_tent(&mut solver, physics, rank, &tent)
+        }))
+        .unwrap_or_else(|payload| {
+            Err(PitchingError::Panic {
+                rank: rank.0.rank(),
+                message: panic_message(payload),
+            })
+        });
+        if solved.send((tent, result)).is_err() {
+            return;
         }
-        self.solver.commit(self.solution);
+    }
+}
+
+impl<O: Observer> Patches<'_, O> {
+    /// What follows a stored patch, in the order of the tents: generations, the slope, the
+    /// report and the observer.
+    fn solved(&mut self, view: &LocalView, front: &Front, tent: &Tent, report: PatchReport) {
         let mut slope = 0.0_f64;
         for &t in view.mesh().vertex_triangles(tent.vertex) {
             self.generation[t as usize] += 1;
@@ -210,7 +270,63 @@ impl<O: Observer> Work for Patches<'_, O> {
             }
         }
         self.observer.solved(view, front, self.solution, tent);
+    }
+}
+
+impl<O: Observer> Work for Patches<'_, O> {
+    fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError> {
+        let solver = &mut self.solving.solver;
+        let report = solve_tent(solver, &self.physics, (view, front, self.solution), tent)?;
+        self.solved(view, front, tent, report);
         Ok(())
+    }
+
+    fn start(&mut self, tent: &Tent) -> bool {
+        // Solving threads gone show as a disconnected channel in `finish`.
+        (self.solving.crew.as_ref()).is_some_and(|crew| {
+            let _ = crew.tents.send(*tent);
+            true
+        })
+    }
+
+    fn help(&mut self, view: &LocalView, front: &Front) -> Result<Option<Tent>, PitchingError> {
+        let Some(crew) = &self.solving.crew else {
+            return Ok(None);
+        };
+        // A solving thread holding the lock waits on an empty channel or is taking the tent.
+        let next = match crew.taken.try_lock() {
+            Ok(taken) => taken.try_recv().ok(),
+            Err(TryLockError::Poisoned(taken)) => taken.into_inner().try_recv().ok(),
+            Err(TryLockError::WouldBlock) => None,
+        };
+        let Some(tent) = next else {
+            return Ok(None);
+        };
+        self.tent(view, front, &tent)?;
+        Ok(Some(tent))
+    }
+
+    fn finish(
+        &mut self,
+        view: &LocalView,
+        front: &Front,
+        wait: Duration,
+    ) -> Result<Option<Tent>, PitchingError> {
+        let Some(crew) = &self.solving.crew else {
+            return Ok(None);
+        };
+        let (tent, report) = match crew.solved.recv_timeout(wait) {
+            Ok(done) => done,
+            Err(RecvTimeoutError::Timeout) => return Ok(None),
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err(PitchingError::Panic {
+                    rank: view.rank(),
+                    message: "the solving threads are gone".into(),
+                });
+            }
+        };
+        self.solved(view, front, &tent, report?);
+        Ok(Some(tent))
     }
 
     fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update) {
@@ -386,8 +502,17 @@ pub fn solve_rank_observed<T: Transport, O: Observer>(
             });
         }
     }
-    let patches = Patches {
-        solver,
+    let threads = options.threads.max(1);
+    let (tents, taken) = channel::<Tent>();
+    let (solved, done) = channel();
+    let taken = Mutex::new(taken);
+    let crew = (threads > 1).then(|| Crew {
+        tents,
+        taken: &taken,
+        solved: done,
+    });
+    let work = Patches {
+        solving: Solving { solver, crew },
         observer,
         physics,
         solution,
@@ -396,7 +521,20 @@ pub fn solve_rank_observed<T: Transport, O: Observer>(
         stride: GEOMETRY_VALUES + ENERGY_VALUES + size,
         patches: Vec::new(),
     };
-    run_rank(view, pitcher, front, transport, patches, options)
+    if threads == 1 {
+        return run_rank(view, pitcher, front, transport, work, options);
+    }
+    std::thread::scope(|s| {
+        let rank = (view, front, solution);
+        for _ in 1..threads {
+            let (physics, taken, solved) = (&physics, &taken, solved.clone());
+            let solver = physics.solver(max_star);
+            s.spawn(move || solving_thread(solver, physics, rank, taken, &solved));
+        }
+        drop(solved);
+        // Returning drops `work` and its end of `tents`: the solving threads end.
+        run_rank(view, pitcher, front, transport, work, options)
+    })
 }
 
 /// Runs [`solve_rank`] for every rank of `partition` on threads of this process, connected by

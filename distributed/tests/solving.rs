@@ -177,11 +177,12 @@ const FIFO: LoopbackOptions = LoopbackOptions {
     fifo: true,
 };
 
-/// Solves `problem` on `ranks` ranks of `partition` with seeded delays; asserts that the
-/// elements and faces are `reference`'s and the tents `tents`; returns the updates sent.
+/// Solves `problem` on `ranks` ranks of `partition` with seeded delays, `threads` solving
+/// threads each; asserts that the elements and faces are `reference`'s and the tents `tents`;
+/// returns the updates sent.
 fn check(
     problem: &Problem,
-    partition: &Partition,
+    (partition, threads): (&Partition, usize),
     seed: u64,
     fifo: bool,
     reference: &Gathered,
@@ -193,12 +194,16 @@ fn check(
         max_delay: Duration::from_micros(200),
         fifo,
     };
-    let result =
-        solve_threads(mesh, partition, causality, physics, delays, &options(seed)).unwrap();
+    let options = Options {
+        threads,
+        ..options(seed)
+    };
+    let result = solve_threads(mesh, partition, causality, physics, delays, &options).unwrap();
     let got = gather(mesh, &result, causality.t_end);
     assert!(
         got == *reference,
-        "{} ranks, seed {seed}, fifo {fifo}: elements or faces differ from the serial run's",
+        "{} ranks of {threads} threads, seed {seed}, fifo {fifo}: elements or faces differ \
+         from the serial run's",
         partition.ranks()
     );
     assert_eq!(
@@ -216,6 +221,9 @@ fn elements_are_the_serial_runs_for_every_partition_and_timing() {
     let n = mesh.vertices().len();
     let (reference, tents) = serial(&problem);
     assert!(tents > 8 * n, "{tents} tents on {n} vertices");
+    // One rank solving with three threads.
+    let one = Partition::coordinate(mesh, 1).unwrap();
+    check(&problem, (&one, 3), 1, true, &reference, tents);
     let mut messages = 0;
     for ranks in 2..=4 {
         let partitions = [
@@ -226,7 +234,10 @@ fn elements_are_the_serial_runs_for_every_partition_and_timing() {
         for (k, partition) in partitions.iter().enumerate() {
             for fifo in [true, false] {
                 let seed = (ranks * 10 + k) as u64;
-                messages += check(&problem, partition, seed, fifo, &reference, tents);
+                // 1 to 3 solving threads per rank.
+                let threads = if fifo { 1 } else { ranks - 1 };
+                let run = (partition, threads);
+                messages += check(&problem, run, seed, fifo, &reference, tents);
             }
         }
     }
@@ -260,7 +271,8 @@ fn interface_states_are_the_serial_runs_over_ranks() {
         ];
         for (k, partition) in partitions.iter().enumerate() {
             let seed = (ranks * 10 + k) as u64;
-            messages += check(&problem, partition, seed, k == 0, &reference, tents);
+            let run = (partition, 1 + k);
+            messages += check(&problem, run, seed, k == 0, &reference, tents);
         }
     }
     eprintln!("{tents} tents a run, {faces} interface faces, {messages} updates sent");
@@ -283,7 +295,7 @@ fn friction_cohesion_and_damage_states_are_the_serial_runs_over_ranks() {
         let (reference, tents) = serial(&problem);
         let faces = reference.faces.iter().flatten().count();
         let partition = Partition::random(&problem.mesh, 3, 7).unwrap();
-        let messages = check(&problem, &partition, 3, false, &reference, tents);
+        let messages = check(&problem, (&partition, 2), 3, false, &reference, tents);
         eprintln!("{name}: {tents} tents, {faces} interface faces, {messages} updates sent");
         assert!(
             faces >= 2 && opened(&reference) > 0,

@@ -61,6 +61,7 @@ pub fn solve_ranks(
 ) -> Result<(RunSummary, PathBuf), EngineError> {
     refuse(problem, options, ranks)?;
     let set_up = SetUp::new(problem, options, ranks.ranks, true)?;
+    warn_if_oversubscribed(ranks.ranks * set_up.threads, "this process's ranks");
     let partition = partition_for(&problem.mesh, ranks.partition, ranks.ranks)?;
     let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
     tracing::info!(
@@ -160,6 +161,7 @@ pub fn solve_mpi(
     let (rank, ranks) = (transport.rank(), transport.ranks());
     let result = (|| {
         let set_up = SetUp::new(problem, options, ranks, rank == 0)?;
+        warn_if_oversubscribed(set_up.threads, &format!("rank {rank}"));
         let partition_of = partition_for(&problem.mesh, partition, ranks)?;
         let shared = set_up.shared(problem, (&partition_of, partition));
         // Every rank set up before any sends (a barrier).
@@ -198,6 +200,8 @@ struct SetUp {
     request: sdg_distributed::PauseRequest,
     /// The scheduler mode asked for (`summary.json`'s `mode`).
     mode: &'static str,
+    /// Threads that solve each rank's tents.
+    threads: usize,
 }
 
 impl SetUp {
@@ -257,6 +261,7 @@ impl SetUp {
             control,
             request,
             mode,
+            threads: options.threads.unwrap_or(1).max(1),
         })
     }
 
@@ -277,8 +282,23 @@ impl SetUp {
             request: self.request.clone(),
             estimate: &self.estimate,
             mode: self.mode,
+            threads: self.threads,
             started: Instant::now(),
         }
+    }
+}
+
+/// Warns when `threads` solving threads of `who` exceed the cores this process may use (its
+/// CPU affinity): under `mpirun`, which binds each process to one core unless told otherwise,
+/// they would share it.
+fn warn_if_oversubscribed(threads: usize, who: &str) {
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+    if threads > cores {
+        tracing::warn!(
+            "{who}: {threads} solving threads on {cores} cores this process may use; with \
+             --mpi --threads T start each rank on T cores (mpirun --map-by slot:PE=T, srun \
+             --cpus-per-task=T)"
+        );
     }
 }
 

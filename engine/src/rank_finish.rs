@@ -37,6 +37,8 @@ pub(crate) struct End<'a> {
     pub(crate) checkpoints: (u64, f64),
     /// `summary.json`'s `mode`.
     pub(crate) mode: &'static str,
+    /// Threads that solved each rank's tents.
+    pub(crate) threads: usize,
 }
 
 /// The energy of the initial front of `problem` (scaled units), integrated on `threads`
@@ -82,6 +84,7 @@ pub(crate) fn finish(
     )?;
     summary.wall_time_s = wall_time_s;
     summary.mode = end.mode;
+    summary.threads = ranks * end.threads;
     summary.patches_per_second = patches.len() as f64 / end.wall_time_s.max(f64::MIN_POSITIVE);
     summary.distributed = Some(distributed_summary(end.partition, gathered));
     summary.snapshots = end.snapshots;

@@ -59,6 +59,8 @@ pub(crate) struct Shared<'a> {
     pub(crate) estimate: &'a Estimate,
     /// The scheduler mode asked for: without events the ranks' tents are those of both modes.
     pub(crate) mode: &'static str,
+    /// Threads that solve each rank's tents (`--threads`; 1 unless asked).
+    pub(crate) threads: usize,
     /// When the solve started.
     pub(crate) started: Instant,
 }
@@ -194,6 +196,7 @@ pub(crate) fn run_rank<T: Transport>(
                 at,
                 requested: Some(shared.request.clone()),
             },
+            threads: shared.threads,
             ..Options::new(u64::from(rank), IDLE_LIMIT)
         };
         let state = (&view, &pitcher, &front, &solution);
@@ -227,6 +230,7 @@ pub(crate) fn run_rank<T: Transport>(
                 wall_time_s: shared.started.elapsed().as_secs_f64(),
                 checkpoints: written,
                 mode: shared.mode,
+                threads: shared.threads,
             };
             return finish(problem, shared.dir, end, *shared.estimate)
                 .map(Some)
