@@ -217,7 +217,8 @@ impl SetUp {
         let Start {
             state, max_star, ..
         } = Start::new(problem)?;
-        let estimate = state.estimate(problem, max_star, ranks, false);
+        let threads = options.threads.unwrap_or(1).max(1);
+        let estimate = state.estimate(problem, max_star, ranks * threads, false);
         let restored = match &options.restart {
             Some(path) => Some(checkpoint::restore(path, config)?),
             None => None,
@@ -261,7 +262,7 @@ impl SetUp {
             control,
             request,
             mode,
-            threads: options.threads.unwrap_or(1).max(1),
+            threads,
         })
     }
 
