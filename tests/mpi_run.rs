@@ -115,6 +115,40 @@ fn frictional_interface_over_mpi_is_the_run_on_one_thread() {
     check("stick_slip.toml", &overrides, &[(3, "random", 2)]);
 }
 
+/// A deterministic run with mesh-changing events (crack growth) under `mpirun`: the rounds
+/// split over the processes, each holding the whole state, give the threaded deterministic
+/// run's state and bookkeeping.
+#[test]
+fn a_cracking_run_over_mpi_is_the_threaded_deterministic_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let overrides = ["output.png=false"];
+    let threads_out = dir.path().join("threads");
+    let args = run_args(
+        "crack_growth.toml",
+        &overrides,
+        &["--threads", "2", "--deterministic"],
+        &threads_out,
+    );
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = sdg(&args);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let threads = summary(&threads_out);
+    for (ranks, per_rank) in [(2, 1), (3, 1)] {
+        let out = dir.path().join(format!("{ranks}"));
+        let per_rank_arg = per_rank.to_string();
+        let extra = ["--mpi", "--deterministic", "--threads", &per_rank_arg];
+        let args = run_args("crack_growth.toml", &overrides, &extra, &out);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let result = mpirun(ranks, &args);
+        assert!(result.status.success(), "{}", stderr(&result));
+        let mpi = summary(&out);
+        for key in ["state_hash", "patches", "energy", "crack", "fracture"] {
+            assert_eq!(mpi[key], threads[key], "{ranks} ranks: {key}");
+        }
+        assert_eq!(mpi["ranks"], ranks);
+    }
+}
+
 #[test]
 fn a_run_under_mpirun_without_mpi_is_refused() {
     let dir = tempfile::tempdir().unwrap();

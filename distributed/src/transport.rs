@@ -169,6 +169,10 @@ pub trait Transport: Send {
     /// barrier), after every message this rank sent before. Collective: every rank calls it
     /// with as many values. Messages arriving meanwhile wait for the next [`Self::receive`].
     fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError>;
+
+    /// What every rank gave as `bytes`, by rank, once every rank has called it (a barrier),
+    /// after every message this rank sent before. Collective, like [`Self::sum`].
+    fn all_gather(&mut self, bytes: Vec<u8>) -> Result<Vec<Vec<u8>>, TransportError>;
 }
 
 impl Update {

@@ -163,6 +163,11 @@ impl Transport for Reversing {
         self.0.sum(values)
     }
 
+    fn all_gather(&mut self, bytes: Vec<u8>) -> Result<Vec<Vec<u8>>, TransportError> {
+        self.flush()?;
+        self.0.all_gather(bytes)
+    }
+
     fn is_fifo(&self) -> bool {
         false
     }
@@ -336,6 +341,10 @@ impl Transport for Lossy {
 
     fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
         self.0.sum(values)
+    }
+
+    fn all_gather(&mut self, bytes: Vec<u8>) -> Result<Vec<Vec<u8>>, TransportError> {
+        self.0.all_gather(bytes)
     }
 
     fn is_fifo(&self) -> bool {

@@ -20,7 +20,9 @@
 //! deterministic rounds' vertices, those first in `(time, id)` among their neighbours), so a
 //! run over ranks is the threaded run of either mode. What cannot be honoured yet is refused
 //! as bad input (exit 2), naming the key and why: mesh-changing events (`[adapt]`,
-//! `[fracture]`), `--trace`, interface probes and the spacetime mesh.
+//! `[fracture]`) in asynchronous mode, `--trace`, interface probes and the spacetime mesh.
+//! Deterministic runs with events go to [`crate::rank_rounds`] instead: rounds split over
+//! ranks that each hold the whole state.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -59,6 +61,9 @@ pub fn solve_ranks(
     options: &RunOptions,
     ranks: &RankOptions,
 ) -> Result<(RunSummary, PathBuf), EngineError> {
+    if split_rounds(problem, options) && ranks.ranks > 0 && options.trace.is_none() {
+        return crate::rank_rounds::solve_split_ranks(problem, options, ranks.ranks);
+    }
     refuse(problem, options, ranks)?;
     let set_up = SetUp::new(problem, options, ranks.ranks, true)?;
     warn_if_oversubscribed(ranks.ranks * set_up.threads, "this process's ranks");
@@ -148,6 +153,9 @@ pub fn solve_mpi(
     partition: PartitionKind,
 ) -> Result<Option<(RunSummary, PathBuf)>, EngineError> {
     use sdg_distributed::{MpiOptions, MpiTransport, Transport};
+    if split_rounds(problem, options) && options.trace.is_none() {
+        return crate::rank_rounds::solve_split_mpi(problem, options);
+    }
     refuse(
         problem,
         options,
@@ -303,18 +311,28 @@ fn warn_if_oversubscribed(threads: usize, who: &str) {
     }
 }
 
+/// True for a deterministic run with mesh-changing events: its rounds are split over ranks that
+/// each hold the whole state ([`crate::rank_rounds`]).
+fn split_rounds(problem: &Problem, options: &RunOptions) -> bool {
+    let config = &problem.loaded.config;
+    (config.adapt.enabled || config.fracture.is_some())
+        && (options.deterministic || config.scheduler.deterministic)
+}
+
 /// What a run over ranks cannot do yet, as bad input naming the key or option and why.
 fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Result<(), EngineError> {
     let config = &problem.loaded.config;
     let file = problem.loaded.file.display();
-    let events = "mesh-changing events do not run over ranks yet";
+    let events = "mesh-changing events run over ranks in deterministic mode only (--deterministic \
+                  or scheduler.deterministic = true)";
+    let split = split_rounds(problem, options);
     let refusals = [
         (ranks.ranks == 0).then(|| "--ranks: must be at least 1".to_string()),
-        config.adapt.enabled.then(|| {
-            format!("{file}: adapt.enabled: {events}; run on threads (without --ranks or --mpi)")
+        (config.adapt.enabled && !split).then(|| {
+            format!("{file}: adapt.enabled: {events}, or on threads (without --ranks or --mpi)")
         }),
-        config.fracture.is_some().then(|| {
-            format!("{file}: [fracture]: {events}; run on threads (without --ranks or --mpi)")
+        (config.fracture.is_some() && !split).then(|| {
+            format!("{file}: [fracture]: {events}, or on threads (without --ranks or --mpi)")
         }),
         options
             .trace

@@ -57,7 +57,7 @@ impl sdg_scheduler::State for Frontier {
 }
 
 /// A coarsening patch solved by the tent at its vertex, applied by an event.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Coarsening {
     /// The vertex to remove and its position, m (to notice renumbering).
     pub(crate) vertex: VertexId,
@@ -191,6 +191,21 @@ impl Frontier {
     /// Marks the next tent at `v` as accepted whatever its indicator.
     pub(crate) fn insist(&mut self, v: VertexId) {
         *self.insist[v as usize].get_mut() = true;
+    }
+
+    /// Whether the next tent at `v` must be accepted (read without clearing).
+    pub(crate) fn insist_flag(&self, v: VertexId) -> bool {
+        self.insist[v as usize].load(Ordering::Relaxed)
+    }
+
+    /// Sets what [`Frontier::insist_flag`] reads, for a tent at `v` solved elsewhere.
+    pub(crate) fn set_insist_flag(&self, v: VertexId, insist: bool) {
+        self.insist[v as usize].store(insist, Ordering::Relaxed);
+    }
+
+    /// Whether the element under triangle `t` was accepted below the lower tolerance.
+    pub(crate) fn calm(&self, t: TriangleId) -> bool {
+        self.calm[t as usize].load(Ordering::Relaxed)
     }
 
     /// True (once) when the tent at `v`, whose claim the caller holds, must be accepted.

@@ -19,6 +19,7 @@ mod rank_checkpoint;
 mod rank_finish;
 mod rank_outputs;
 mod rank_prior;
+mod rank_rounds;
 mod rank_run;
 mod rank_setup;
 pub mod solve;

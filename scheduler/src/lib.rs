@@ -148,7 +148,39 @@ pub trait Work<'a>: Sync {
     fn round(&self, serial: Duration) {
         let _ = serial;
     }
+
+    /// Deterministic mode split over processes that each hold the whole state and run the same
+    /// rounds: whether this process solves the round's `index`-th tent, at `v`. The others
+    /// come from [`Work::exchange`]. All, by default.
+    fn solves(&self, index: usize, v: VertexId) -> bool {
+        let _ = (index, v);
+        true
+    }
+
+    /// Deterministic mode split over processes ([`Work::solves`]): called on the calling thread
+    /// once every tent of the round this process solves has run, before any is settled, with
+    /// the round's vertices in order and per vertex what its tent gave (a panic as its
+    /// message), `None` where another process solved it. Gives the others this process's
+    /// results and fills in theirs, applying what their tents wrote to `state`. An error ends
+    /// the run. Nothing, by default.
+    fn exchange(
+        &self,
+        state: &Self::State,
+        round: &[VertexId],
+        results: &mut [Option<Tried<Self::Outcome, Self::Error>>],
+    ) -> Result<(), Self::Error> {
+        let _ = (state, round, results);
+        Ok(())
+    }
+
+    /// True when the rounds are split over processes and [`Work::exchange`] must be called.
+    fn exchanges(&self) -> bool {
+        false
+    }
 }
+
+/// What a tent gave: its outcome or error, or the message of its panic.
+pub type Tried<O, E> = Result<Result<O, E>, String>;
 
 /// An event: runs with exclusive access to the state (no tent in flight) and reports what it
 /// changed.

@@ -21,12 +21,9 @@ use std::time::Instant;
 use parking_lot::{Mutex, RwLock};
 
 use crate::{
-    Clock, Events, Lease, RunError, State, Stats, VertexId, Work, below_end,
+    Clock, Events, Lease, RunError, State, Stats, Tried, VertexId, Work, below_end,
     is_first_among_neighbours, panic_message,
 };
-
-/// What a worker's tent gave: its outcome or error, or the message of its panic.
-type Tried<O, E> = Result<Result<O, E>, String>;
 
 /// Chosen tents per work item of a round's settling: items of a fixed size make the trace the
 /// same for any thread count.
@@ -94,15 +91,17 @@ pub(crate) fn run<'a, W: Work<'a>>(
         barrier.wait();
         wait_time.add_since(idle);
     };
-    // Solves chosen tents of the round until none is left and waits for the others, then
-    // settles chunks of them until none is left and waits again.
-    let share = |id: usize, scratch: &mut W::Scratch| {
+    let split = work.exchanges();
+    let solve = |id: usize, scratch: &mut W::Scratch| {
         {
             let r = round.read();
             let state = state.read();
             loop {
                 let i = r.next.fetch_add(1, Ordering::Relaxed);
                 let Some(&v) = r.chosen.get(i) else { break };
+                if split && !work.solves(i, v) {
+                    continue;
+                }
                 // A panic is handed to the calling thread, which ends the run; the solving
                 // thread goes on to the barrier so that nobody waits for it.
                 let result = catch_unwind(AssertUnwindSafe(|| {
@@ -115,6 +114,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
             }
         }
         wait(&barrier);
+    };
+    let settle = |id: usize| {
         {
             let r = round.read();
             let state = state.read();
@@ -152,6 +153,16 @@ pub(crate) fn run<'a, W: Work<'a>>(
             }
         }
         wait(&barrier);
+    };
+    // Solves chosen tents of the round until none is left and waits for the others (and, split
+    // over processes, for the calling thread's exchange), then settles chunks of them until
+    // none is left and waits again.
+    let share = |id: usize, scratch: &mut W::Scratch| {
+        solve(id, scratch);
+        if split {
+            wait(&barrier);
+        }
+        settle(id);
     };
     let mut scratch = scratch.into_iter();
     let mut own = scratch.next().expect("at least one thread");
@@ -257,7 +268,24 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 drop(guard);
                 let mut serial = choosing.elapsed();
                 wait(&barrier);
-                share(0, &mut own);
+                solve(0, &mut own);
+                let mut exchanged = Ok(());
+                if split {
+                    // The workers wait at the barrier meanwhile.
+                    let mut r = round.write();
+                    let mut results: Vec<_> = (r.results.iter_mut())
+                        .map(|slot| slot.get_mut().take())
+                        .collect();
+                    let guard = state.read();
+                    exchanged = work.exchange(&**guard, &r.chosen, &mut results);
+                    for (slot, result) in r.results.iter_mut().zip(results) {
+                        *slot.get_mut() = result;
+                    }
+                    drop((r, guard));
+                    wait(&barrier);
+                }
+                settle(0);
+                exchanged.map_err(RunError::Work)?;
                 let recording = Instant::now();
                 let mut r = round.write();
                 let chosen = std::mem::take(&mut r.chosen);

@@ -331,6 +331,21 @@ pub fn summary_json(out: &Path) -> serde_json::Value {
     serde_json::from_str(&text).unwrap()
 }
 
+/// Runs the shipped config `name` with `overrides` and `extra` arguments into `out`
+/// ([`run_args`]), asserting that it succeeds; returns its `summary.json`.
+pub fn run_shipped(
+    name: &str,
+    overrides: &[&str],
+    extra: &[&str],
+    out: &Path,
+) -> serde_json::Value {
+    let args = run_args(name, overrides, extra, out);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = sdg(&args);
+    assert!(result.status.success(), "{args:?}: {}", stderr(&result));
+    summary_json(out)
+}
+
 /// The cells of the ASCII VTU files `paths` of snapshots, each as the text of its points'
 /// coordinates and point values and its area, sorted: the same for the same slices in any
 /// order and split among any files.

@@ -82,16 +82,18 @@ impl Mailbox {
     }
 }
 
-/// The ranks' meeting point for [`Transport::sum`]: the sums of the round being collected.
+/// The ranks' meeting point for the collectives ([`Transport::all_gather`], and
+/// [`Transport::sum`] over it): what each rank gave in the round being collected.
 #[derive(Debug, Default)]
 struct Tally {
     /// Rounds completed so far.
     round: u64,
-    /// Ranks that have added their values to this round.
+    /// Ranks that have given their bytes to this round.
     arrived: usize,
-    sums: Vec<u64>,
-    /// The sums of the last completed round.
-    last: Vec<u64>,
+    /// By rank, what it gave to this round.
+    given: Vec<Vec<u8>>,
+    /// What the ranks gave to the last completed round.
+    last: Arc<[Vec<u8>]>,
 }
 
 /// How often a rank waiting at the tally looks for an abort in its mailbox.
@@ -205,22 +207,33 @@ impl Transport for Loopback {
     }
 
     fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let given = self.all_gather(bytes)?;
+        let mut sums = vec![0u64; values.len()];
+        for bytes in &given {
+            for (sum, chunk) in sums.iter_mut().zip(bytes.chunks_exact(8)) {
+                *sum += u64::from_le_bytes(chunk.try_into().expect("8 bytes"));
+            }
+        }
+        Ok(sums)
+    }
+
+    fn all_gather(&mut self, bytes: Vec<u8>) -> Result<Vec<Vec<u8>>, TransportError> {
+        let ranks = self.mailboxes.len();
         let (tally, met) = &*self.tally;
         let lock = || tally.lock().unwrap_or_else(|e| e.into_inner());
         let mut t = lock();
         if t.arrived == 0 {
-            t.sums = vec![0; values.len()];
+            t.given = vec![Vec::new(); ranks];
         }
-        for (sum, v) in t.sums.iter_mut().zip(values) {
-            *sum += v;
-        }
+        t.given[self.rank as usize] = bytes;
         t.arrived += 1;
-        if t.arrived == self.mailboxes.len() {
+        if t.arrived == ranks {
             t.arrived = 0;
             t.round += 1;
-            t.last = std::mem::take(&mut t.sums);
+            t.last = std::mem::take(&mut t.given).into();
             met.notify_all();
-            return Ok(t.last.clone());
+            return Ok(t.last.to_vec());
         }
         let round = t.round;
         while t.round == round {
@@ -240,7 +253,7 @@ impl Transport for Loopback {
             drop(inbox);
             t = lock();
         }
-        Ok(t.last.clone())
+        Ok(t.last.to_vec())
     }
 }
 
@@ -324,5 +337,34 @@ mod tests {
             Err(TransportError::NoSuchRank { to: 2, ranks: 2 })
         );
         assert!(ends[0].is_fifo() && ends[0].ranks() == 2 && ends[1].rank() == 1);
+    }
+
+    #[test]
+    fn every_rank_gathers_what_each_gave_by_rank_round_after_round() {
+        let ends = Loopback::connect(3, options(true, 0));
+        let gathered: Vec<Vec<Vec<Vec<u8>>>> = std::thread::scope(|s| {
+            let handles: Vec<_> = (ends.into_iter())
+                .map(|mut end| {
+                    s.spawn(move || {
+                        let r = end.rank() as u8;
+                        // Rounds of different lengths, the sums between them.
+                        let mut rounds = Vec::new();
+                        for round in 0..4_u8 {
+                            rounds.push(end.all_gather(vec![r; usize::from(round + r)]).unwrap());
+                            assert_eq!(end.sum(&[u64::from(r), 1]).unwrap(), [3, 3]);
+                        }
+                        rounds
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        for rounds in &gathered {
+            for (round, parts) in rounds.iter().enumerate() {
+                let expected: Vec<Vec<u8>> =
+                    (0..3_u8).map(|r| vec![r; round + usize::from(r)]).collect();
+                assert_eq!(parts, &expected);
+            }
+        }
     }
 }

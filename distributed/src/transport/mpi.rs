@@ -52,6 +52,7 @@ use std::time::Duration;
 
 use ::mpi::Threading;
 use ::mpi::collective::SystemOperation;
+use ::mpi::datatype::PartitionMut;
 use ::mpi::point_to_point::MatchedReceiveVec;
 use ::mpi::request::{Request, scope};
 use ::mpi::topology::SimpleCommunicator;
@@ -115,6 +116,10 @@ enum Command {
     Sum {
         values: Vec<u64>,
         reply: Sender<Vec<u64>>,
+    },
+    Gather {
+        bytes: Vec<u8>,
+        reply: Sender<Vec<Vec<u8>>>,
     },
     Abort {
         code: i32,
@@ -248,6 +253,13 @@ impl Transport for MpiTransport {
         true
     }
 
+    /// `MPI_Allgatherv` on the communication thread, after the messages sent before.
+    fn all_gather(&mut self, bytes: Vec<u8>) -> Result<Vec<Vec<u8>>, TransportError> {
+        let (reply, gathered) = mpsc::channel();
+        self.command(Command::Gather { bytes, reply })?;
+        gathered.recv().map_err(|_| TransportError::Closed)
+    }
+
     /// `MPI_Allreduce`: messages arriving meanwhile wait in MPI. A rank that never calls it
     /// (one that died) leaves the others waiting until `mpirun` ends them.
     fn sum(&mut self, values: &[u64]) -> Result<Vec<u64>, TransportError> {
@@ -309,6 +321,10 @@ fn communicate(
                     world.all_reduce_into(&values[..], &mut sums[..], SystemOperation::sum());
                     let _ = reply.send(sums);
                 }
+                Ok(Command::Gather { bytes, reply }) => {
+                    send_all(&world, &mut outgoing, incoming, options);
+                    let _ = reply.send(all_gather(&world, &bytes));
+                }
                 Ok(Command::Abort { code }) => {
                     send_all(&world, &mut outgoing, incoming, options);
                     world.abort(code);
@@ -345,6 +361,31 @@ fn communicate(
     // The duplicate communicator is freed before MPI is finalised.
     drop(world);
     drop(universe);
+}
+
+/// What every rank gave as `bytes`, by rank (`MPI_Allgather` of the lengths, then
+/// `MPI_Allgatherv`).
+fn all_gather(world: &SimpleCommunicator, bytes: &[u8]) -> Vec<Vec<u8>> {
+    let ranks = world.size() as usize;
+    let length = i32::try_from(bytes.len()).expect("a gathered part below 2 GiB");
+    let mut lengths = vec![0_i32; ranks];
+    world.all_gather_into(&length, &mut lengths[..]);
+    let starts: Vec<i32> = (lengths.iter())
+        .scan(0_i32, |at, &l| {
+            let start = *at;
+            *at += l;
+            Some(start)
+        })
+        .collect();
+    let total: usize = lengths.iter().map(|&l| l as usize).sum();
+    let mut all = vec![0_u8; total];
+    {
+        let mut parts = PartitionMut::new(&mut all[..], &lengths[..], &starts[..]);
+        world.all_gather_varcount_into(bytes, &mut parts);
+    }
+    (starts.iter().zip(&lengths))
+        .map(|(&s, &l)| all[s as usize..(s + l) as usize].to_vec())
+        .collect()
 }
 
 /// Passes every message that has arrived to the worker; returns how many.

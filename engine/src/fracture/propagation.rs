@@ -30,7 +30,7 @@ use crate::frontier::Frontier;
 use crate::solve::context::{Solve, initial_state};
 
 /// A tip's directions to extend along, found by the tent at its vertex.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Extension {
     /// The tip's position (m), to notice renumbering.
     at: [f64; 2],

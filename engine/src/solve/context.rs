@@ -58,6 +58,8 @@ pub(crate) struct Solve<'a> {
     pub(crate) next_wall_checkpoint_ns: AtomicU64,
     /// Records every tent and event with `--trace`.
     pub(crate) tracer: Option<Tracer>,
+    /// This rank's part when the rounds are split over ranks ([`super::split`]).
+    pub(crate) split: Option<super::split::Split>,
 }
 
 /// The scaled initial state at `x`.

@@ -14,7 +14,7 @@ pub struct Control {
 }
 
 /// What was asked since the last checkpoint.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Request {
     /// Write a checkpoint and go on.
     pub(crate) checkpoint: bool,
@@ -22,6 +22,24 @@ pub(crate) struct Request {
     pub(crate) stop: Option<String>,
     /// Write a checkpoint and fail (exit code 1): a patch failed a guard.
     pub(crate) failure: Option<String>,
+}
+
+impl Request {
+    /// Adds what `other` asks: a checkpoint, and a stop or failure reason where this has none.
+    pub(crate) fn merge(&mut self, other: Request) {
+        self.checkpoint |= other.checkpoint;
+        if self.stop.is_none() {
+            self.stop = other.stop;
+        }
+        if self.failure.is_none() {
+            self.failure = other.failure;
+        }
+    }
+
+    /// True when anything is asked.
+    pub(crate) fn any(&self) -> bool {
+        self.checkpoint || self.stop.is_some() || self.failure.is_some()
+    }
 }
 
 impl Control {

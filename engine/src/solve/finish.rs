@@ -16,6 +16,7 @@ use crate::plot;
 use super::checkpoint::Counts;
 use super::context::{Solve, initial_state};
 use super::outputs::{front_cracks, initial_tip_points};
+use super::split::Split;
 use super::summary::{
     CheckpointSummary, EnergySummary, ErrorSummary, InterfaceSummary, RunSummary, Timings,
     state_hash,
@@ -135,8 +136,8 @@ impl Solve<'_> {
             state_hash: state_hash(front, solution, basis.len() * width),
             wall_time_s,
             patches_per_second: book.patches as f64 / wall_time_s.max(f64::MIN_POSITIVE),
-            threads: scheduler.threads,
-            ranks: 1,
+            threads: scheduler.threads * self.split.as_ref().map_or(1, Split::ranks),
+            ranks: self.split.as_ref().map_or(1, Split::ranks),
             distributed: None,
             peak_memory_bytes: estimate::peak_resident_bytes(),
             estimate,

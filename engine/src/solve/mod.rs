@@ -19,6 +19,7 @@ pub(crate) mod history;
 pub(crate) mod outputs;
 pub(crate) mod restart;
 pub(crate) mod run;
+pub(crate) mod split;
 pub(crate) mod start;
 pub(crate) mod summary;
 pub(crate) mod tent;

@@ -26,14 +26,16 @@ pub fn solve_job(
     problem: &Problem,
     options: &RunOptions,
 ) -> Result<(RunSummary, PathBuf), EngineError> {
-    run_job(problem, options, None)
+    run_job(problem, options, None, None)
 }
 
-/// [`solve_job`], with `intervention` (its time and change) applied once mid-run.
+/// [`solve_job`], with `intervention` (its time and change) applied once mid-run, and with
+/// `split` as this rank's part of rounds split over ranks ([`super::split`]).
 pub(crate) fn run_job(
     problem: &Problem,
     options: &RunOptions,
     intervention: Option<(f64, Intervention)>,
+    split: Option<super::split::Split>,
 ) -> Result<(RunSummary, PathBuf), EngineError> {
     let config = &problem.loaded.config;
     let scheduler = options.scheduler(problem);
@@ -52,14 +54,17 @@ pub(crate) fn run_job(
     let folder = prepare_folder(problem, options, &dir, restored.is_some())?;
     let start = (&state, adapt, max_star);
     let intervention = intervention.unzip();
-    let solve = Solve::new(
-        problem,
-        options,
-        start,
-        scheduler.threads,
-        &dir,
-        intervention,
-    );
+    let solve = Solve {
+        split,
+        ..Solve::new(
+            problem,
+            options,
+            start,
+            scheduler.threads,
+            &dir,
+            intervention,
+        )
+    };
     let (mut state, mut counts, mut checkpoints) =
         solve.resume(state, restored, &folder, &dir, options)?;
     let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
@@ -248,7 +253,10 @@ impl Solve<'_> {
                 break;
             }
             // Quiescent: no tent in flight, no event queued.
-            let request = self.control.take();
+            let request = match &self.split {
+                Some(split) => split.take_request(&self.control),
+                None => self.control.take(),
+            };
             let path = match self.checkpoint(folder, state, counts, checkpoints) {
                 Ok(path) => path,
                 Err(e) => {
@@ -311,5 +319,5 @@ pub fn solve_job_with(
             "an intervention {after:e} s after the start is not within the run's {t_end:e} s"
         )));
     }
-    run_job(problem, options, Some((after, Box::new(action))))
+    run_job(problem, options, Some((after, Box::new(action))), None)
 }

@@ -246,6 +246,7 @@ impl<'a> Solve<'a> {
             started: Instant::now(),
             next_wall_checkpoint_ns: AtomicU64::new(u64::MAX),
             tracer: options.trace.as_ref().map(|_| Tracer::new()),
+            split: None,
         }
     }
 }

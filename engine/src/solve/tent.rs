@@ -182,7 +182,7 @@ pub(crate) fn momentum_residual(totals: &PatchReport) -> f64 {
 }
 
 /// What one tent hands to the bookkeeping.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub(crate) enum Outcome {
     /// The patch is stored and the vertex advanced.
     Accepted {
@@ -225,7 +225,7 @@ pub(crate) enum Outcome {
 /// What a patch's interface faces add to the outputs: `samples` are the interface probes on
 /// it, `cuts` its faces' cuts by snapshot planes, `crossings` its cohesive faces'
 /// crack-tracking crossings with their edge's tag.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(crate) struct InterfaceRecords {
     pub(crate) samples: Vec<(usize, InterfaceSample)>,
     pub(crate) cuts: Vec<interface::Cut>,

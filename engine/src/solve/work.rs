@@ -4,7 +4,7 @@ use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use sdg_mesh::TriangleId;
-use sdg_scheduler::{Changed, Events, Lease, Region, VertexId, Work};
+use sdg_scheduler::{Changed, Events, Lease, Region, Tried, VertexId, Work};
 use sdg_solver::patch::PatchSolver;
 
 use crate::error::EngineError;
@@ -239,6 +239,40 @@ impl<'a> Work<'a> for Solve<'a> {
     }
 
     fn pause(&self) -> bool {
+        match &self.split {
+            Some(split) => split.pause(),
+            None => self.local_pause(),
+        }
+    }
+
+    fn solves(&self, index: usize, _: VertexId) -> bool {
+        self.split.as_ref().is_none_or(|split| split.solves(index))
+    }
+
+    fn exchanges(&self) -> bool {
+        self.split.is_some()
+    }
+
+    fn exchange(
+        &self,
+        state: &Frontier,
+        round: &[VertexId],
+        results: &mut [Option<Tried<Outcome, EngineError>>],
+    ) -> Result<(), EngineError> {
+        let Some(split) = &self.split else {
+            return Ok(());
+        };
+        // The wall-time and checkpoint-time requests are made here, so that every rank hears
+        // of them at the same round.
+        self.local_pause();
+        split.exchange(state, round, results, self.control.take())
+    }
+}
+
+impl Solve<'_> {
+    /// Whether this process asks to pause: a request of the control, the wall-time limit or a
+    /// checkpoint by wall time (which it asks of the control).
+    pub(crate) fn local_pause(&self) -> bool {
         if self.control.is_pending() {
             return true;
         }

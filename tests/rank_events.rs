@@ -1,0 +1,104 @@
+//! `sdg run --ranks N --deterministic` of configs with mesh-changing events (`[adapt]`,
+//! `[fracture]`): the rounds split over ranks that each hold the whole state give the threaded
+//! deterministic run's state hash, patches, events and energies, for any rank and thread
+//! count; a run stopped mid-run goes on from its checkpoint over other ranks or on threads to
+//! the same state.
+
+mod common;
+
+use common::run_shipped as run;
+use common::{run_args, sdg, stderr, summary_json};
+
+/// Asserts that `ranks` is the run `threads`: the same state, patches, rounds' outcomes and
+/// bookkeeping (rank 0 keeps the threaded run's books).
+fn assert_same_run(what: &str, threads: &serde_json::Value, ranks: &serde_json::Value) {
+    for key in ["state_hash", "patches", "elements", "vertices", "mode"] {
+        assert_eq!(ranks[key], threads[key], "{what}: {key}");
+    }
+    for block in ["energy", "adapt", "crack", "fracture"] {
+        assert_eq!(ranks[block], threads[block], "{what}: {block}");
+    }
+}
+
+#[test]
+fn adaptive_and_cracking_runs_over_ranks_are_the_threaded_deterministic_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &[&str]); 2] = [
+        (
+            "adaptive_pulse.toml",
+            &[
+                "time.end=4e-6",
+                "output.snapshot_times=[]",
+                "output.png=false",
+            ],
+        ),
+        ("crack_growth.toml", &["output.png=false"]),
+    ];
+    for (name, overrides) in cases {
+        let reference = dir.path().join(format!("{name}-threads"));
+        let threads = run(
+            name,
+            overrides,
+            &["--threads", "2", "--deterministic"],
+            &reference,
+        );
+        assert_eq!(threads["mode"], "deterministic");
+        for (ranks, per_rank) in [(3, 1), (2, 2)] {
+            let out = dir.path().join(format!("{name}-{ranks}-{per_rank}"));
+            let (ranks_arg, per_rank_arg) = (ranks.to_string(), per_rank.to_string());
+            let extra = [
+                "--ranks",
+                &ranks_arg,
+                "--threads",
+                &per_rank_arg,
+                "--deterministic",
+            ];
+            let summary = run(name, overrides, &extra, &out);
+            assert_same_run(&format!("{name} on {ranks} ranks"), &threads, &summary);
+            assert_eq!(summary["ranks"], ranks);
+            assert_eq!(summary["threads"], ranks * per_rank);
+        }
+    }
+    // The cracks grew and the mesh changed: there were events to split.
+    let growth = summary_json(&dir.path().join("crack_growth.toml-threads"));
+    assert!(
+        growth["crack"]["branches"].as_u64().unwrap() > 0,
+        "{growth}"
+    );
+}
+
+#[test]
+fn a_cracking_run_over_ranks_stopped_mid_run_goes_on_over_other_ranks_and_on_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let overrides = ["output.png=false"];
+    let name = "crack_growth.toml";
+    let reference = dir.path().join("reference");
+    let expected = run(
+        name,
+        &overrides,
+        &["--threads", "1", "--deterministic"],
+        &reference,
+    );
+    let out = dir.path().join("stopped");
+    let args = run_args(
+        name,
+        &overrides,
+        &["--ranks", "2", "--deterministic", "--max-wall-time", "1"],
+        &out,
+    );
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = sdg(&args);
+    // Stopped mid-run on any machine this test runs on (the run takes seconds).
+    assert_eq!(result.status.code(), Some(3), "{}", stderr(&result));
+    assert!(!out.join("summary.json").exists());
+    let folder = out.join("checkpoints").display().to_string();
+    let on_threads = dir.path().join("restart-threads");
+    let extra = ["--threads", "2", "--deterministic", "--restart", &folder];
+    let threads = run(name, &overrides, &extra, &on_threads);
+    assert_eq!(threads["state_hash"], expected["state_hash"]);
+    assert_eq!(threads["patches"], expected["patches"]);
+    let extra = ["--ranks", "3", "--deterministic", "--restart", &folder];
+    let ranks = run(name, &overrides, &extra, &out);
+    assert_eq!(ranks["state_hash"], expected["state_hash"]);
+    assert_eq!(ranks["patches"], expected["patches"]);
+}
