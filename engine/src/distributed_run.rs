@@ -21,7 +21,7 @@
 //! run over ranks is the threaded run of either mode. What cannot be honoured yet is refused
 //! as bad input (exit 2), naming the key and why: mesh-changing events (`[adapt]`,
 //! `[fracture]`) in asynchronous mode, `--trace`, interface probes and the spacetime mesh.
-//! Deterministic runs with events go to [`crate::rank_rounds`] instead: rounds split over
+//! Deterministic runs with events go to the module `rank_rounds` instead: rounds split over
 //! ranks that each hold the whole state.
 
 use std::path::{Path, PathBuf};
