@@ -147,7 +147,8 @@ fn abort_others(transport: &mut dyn Transport) {
 /// `mpirun -n N sdg run CONFIG --mpi` of a config with events, deterministic: this process's
 /// rank of the split rounds over MPI. Returns the summary and folder on rank 0, `None` on the
 /// others. A rank that fails by itself reports its error and ends every rank with exit code 1
-/// (`MPI_Abort`); a stop ends every rank with exit code 3 once each has written its checkpoint.
+/// (`MPI_Abort`); a stop ends every rank with exit code 3 once each has written its checkpoint,
+/// rank 0 naming its own (the others' are scratch, removed).
 #[cfg(feature = "mpi")]
 pub(crate) fn solve_split_mpi(
     problem: &Problem,
@@ -172,13 +173,17 @@ pub(crate) fn solve_split_mpi(
             let _ = std::fs::remove_dir_all(scratch(rank as usize));
             Ok(None)
         }
-        Err(e) => {
-            let word = if e.exit_code() == 3 {
-                "stopped"
+        // Rank 0 wrote the checkpoint the run goes on from; the others' are scratch.
+        Err(e) if e.exit_code() == 3 => {
+            if rank == 0 {
+                crate::progress::note(format_args!("stopped: {e}"));
             } else {
-                "error"
-            };
-            crate::progress::note(format_args!("{word}: rank {rank}: {e}"));
+                let _ = std::fs::remove_dir_all(scratch(rank as usize));
+            }
+            transport.abort(3)
+        }
+        Err(e) => {
+            crate::progress::note(format_args!("error: rank {rank}: {e}"));
             transport.abort(e.exit_code().into())
         }
     }
