@@ -2,12 +2,12 @@
 //! `[fracture]`): the rounds split over ranks that each hold the whole state give the threaded
 //! deterministic run's state hash, patches, events and energies, for any rank and thread
 //! count; a run stopped mid-run goes on from its checkpoint over other ranks or on threads to
-//! the same state.
+//! the same state; only rank 0 writes files.
 
 mod common;
 
 use common::run_shipped as run;
-use common::{run_args, sdg, stderr, summary_json};
+use common::{run_args, stderr, summary_json};
 
 /// Asserts that `ranks` is the run `threads`: the same state, patches, rounds' outcomes and
 /// bookkeeping (rank 0 keeps the threaded run's books).
@@ -86,8 +86,15 @@ fn a_cracking_run_over_ranks_stopped_mid_run_goes_on_over_other_ranks_and_on_thr
         &["--ranks", "2", "--deterministic", "--max-wall-time", "1"],
         &out,
     );
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let result = sdg(&args);
+    // The ranks but 0 write no file, not even into a temporary folder: one that cannot be
+    // made changes nothing.
+    let not_a_folder = dir.path().join("tmp-is-a-file");
+    std::fs::write(&not_a_folder, b"").unwrap();
+    let result = std::process::Command::new(env!("CARGO_BIN_EXE_sdg"))
+        .args(&args)
+        .env("TMPDIR", &not_a_folder)
+        .output()
+        .expect("the sdg binary runs");
     // Stopped mid-run on any machine this test runs on (the run takes seconds).
     assert_eq!(result.status.code(), Some(3), "{}", stderr(&result));
     assert!(!out.join("summary.json").exists());

@@ -1,9 +1,8 @@
 //! Runs over ranks with mesh-changing events (`[adapt]`, `[fracture]`), in deterministic mode:
 //! every rank runs the threaded engine's rounds on its own copy of the whole state and solves
 //! its share of each round's tents, the ranks exchanging their results once a round
-//! ([`crate::solve::split`]). Rank 0 writes the outputs and checkpoints into the output folder;
-//! the others write theirs into a folder of their own under the system's temporary folder,
-//! removed at the end.
+//! ([`crate::solve::split`]). Rank 0 writes the outputs and checkpoints; the others, whose
+//! state is a copy of rank 0's, write no file.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -102,9 +101,6 @@ pub(crate) fn solve_split_ranks(
             })
             .collect()
     });
-    for rank in 1..ranks {
-        let _ = std::fs::remove_dir_all(scratch(rank));
-    }
     let mut results = results.into_iter();
     let first = results.next().expect("at least one rank");
     // A failure of rank 0, or else of the first other rank that failed.
@@ -114,13 +110,8 @@ pub(crate) fn solve_split_ranks(
     }
 }
 
-/// Where rank `rank` (not 0) writes what rank 0 writes into the output folder.
-fn scratch(rank: usize) -> PathBuf {
-    std::env::temp_dir().join(format!("sdg-{}-rank-{rank}", std::process::id()))
-}
-
 /// What rank `rank` runs with: `options` with 1 worker unless they ask for more; the ranks
-/// but 0 quietly into [`scratch`].
+/// but 0 without progress or trace (they write no file).
 fn rank_options(options: &RunOptions, rank: usize) -> RunOptions {
     let options = RunOptions {
         threads: Some(options.threads.unwrap_or(1)),
@@ -130,8 +121,8 @@ fn rank_options(options: &RunOptions, rank: usize) -> RunOptions {
         return options;
     }
     RunOptions {
-        output_dir: Some(scratch(rank)),
         progress: false,
+        trace: None,
         ..options
     }
 }
@@ -147,8 +138,8 @@ fn abort_others(transport: &mut dyn Transport) {
 /// `mpirun -n N sdg run CONFIG --mpi` of a config with events, deterministic: this process's
 /// rank of the split rounds over MPI. Returns the summary and folder on rank 0, `None` on the
 /// others. A rank that fails by itself reports its error and ends every rank with exit code 1
-/// (`MPI_Abort`); a stop ends every rank with exit code 3 once each has written its checkpoint,
-/// rank 0 naming its own (the others' are scratch, removed).
+/// (`MPI_Abort`); a stop ends every rank with exit code 3 once rank 0 has written its
+/// checkpoint, which it names.
 #[cfg(feature = "mpi")]
 pub(crate) fn solve_split_mpi(
     problem: &Problem,
@@ -169,16 +160,11 @@ pub(crate) fn solve_split_mpi(
     let transport = end.into_inner();
     match result {
         Ok(done) if rank == 0 => Ok(Some(done)),
-        Ok(_) => {
-            let _ = std::fs::remove_dir_all(scratch(rank as usize));
-            Ok(None)
-        }
-        // Rank 0 wrote the checkpoint the run goes on from; the others' are scratch.
+        Ok(_) => Ok(None),
+        // Rank 0 wrote the checkpoint the run goes on from.
         Err(e) if e.exit_code() == 3 => {
             if rank == 0 {
                 crate::progress::note(format_args!("stopped: {e}"));
-            } else {
-                let _ = std::fs::remove_dir_all(scratch(rank as usize));
             }
             transport.abort(3)
         }

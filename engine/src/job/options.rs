@@ -45,13 +45,23 @@ impl RunOptions {
         }
     }
 
+    /// The output folder for `problem` and where it came from (`--output` or `output.dir`).
+    fn output_path(&self, problem: &Problem) -> (PathBuf, &'static str) {
+        match &self.output_dir {
+            Some(dir) => (dir.clone(), "--output"),
+            None => (problem.loaded.config.output.dir.clone(), "output.dir"),
+        }
+    }
+
+    /// The output folder for `problem`, not created (a rank that writes nothing).
+    pub(crate) fn output_folder(&self, problem: &Problem) -> PathBuf {
+        self.output_path(problem).0
+    }
+
     /// The output folder for `problem`, created; a folder that cannot be created is bad input,
     /// named with where it came from (`--output` or `output.dir`).
     pub fn output_dir(&self, problem: &Problem) -> Result<PathBuf, EngineError> {
-        let (dir, from) = match &self.output_dir {
-            Some(dir) => (dir.clone(), "--output"),
-            None => (problem.loaded.config.output.dir.clone(), "output.dir"),
-        };
+        let (dir, from) = self.output_path(problem);
         let bad = |reason: String| {
             EngineError::Input(format!(
                 "{from} {}: cannot create the output folder: {reason}",

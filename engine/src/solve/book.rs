@@ -185,19 +185,21 @@ pub(crate) struct Book {
 
 impl Book {
     /// Makes a book read from a checkpoint ready to go on: scratch for `basis_len` basis
-    /// functions of `width` fields, snapshots written to `dir` in `vtu` (those written before
-    /// into another folder copied there).
+    /// functions of `width` fields, snapshots written to `output`'s folder in its format (those
+    /// written before into another folder copied there); `None` for a run that writes nothing.
     pub(crate) fn resume(
         &mut self,
-        dir: &std::path::Path,
-        vtu: crate::config::VtuFormat,
+        output: Option<(&std::path::Path, crate::config::VtuFormat)>,
         basis_len: usize,
         width: usize,
     ) -> Result<(), crate::error::EngineError> {
         self.phi = vec![0.0; basis_len];
         self.values = vec![0.0; width];
         self.coefficients = vec![0.0; basis_len * width];
-        self.snapshots.set_output(dir, vtu)
+        match output {
+            Some((dir, vtu)) => self.snapshots.set_output(dir, vtu),
+            None => Ok(()),
+        }
     }
 }
 

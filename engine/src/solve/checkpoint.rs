@@ -154,6 +154,16 @@ impl Folder {
         numbered.map(|n| n + 1).fold(written + 1, u64::max)
     }
 
+    /// The file name of checkpoint number `number`.
+    fn name(number: u64) -> String {
+        format!("checkpoint_{number:06}.sdgc")
+    }
+
+    /// Where checkpoint number `number` is written.
+    pub(crate) fn path(&self, number: u64) -> PathBuf {
+        self.dir.join(Self::name(number))
+    }
+
     /// Writes checkpoint number `counts.written` of `frontier` and `book` (held still by the
     /// caller), then removes all but the newest `keep`. Returns its path.
     pub(crate) fn write(
@@ -184,7 +194,7 @@ impl Folder {
         bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
         bytes.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
         bytes.extend_from_slice(&payload);
-        let name = format!("checkpoint_{:06}.sdgc", counts.written);
+        let name = Self::name(counts.written);
         // Made here, not with its parents: an output folder removed under the job is an error.
         match std::fs::create_dir(&self.dir) {
             Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => {

@@ -97,6 +97,12 @@ impl Solve<'_> {
 }
 
 impl Solve<'_> {
+    /// Whether this run writes files (outputs, checkpoints): all but the ranks other than 0 of
+    /// rounds split over ranks, whose state is a copy of rank 0's.
+    pub(crate) fn writes(&self) -> bool {
+        self.split.as_ref().is_none_or(super::split::Split::writes)
+    }
+
     /// Runs the event `action`, traced with `--trace` as one that holds the whole state.
     pub(crate) fn traced<T>(&self, action: impl FnOnce() -> T) -> T {
         match &self.tracer {

@@ -29,7 +29,8 @@ impl Solve<'_> {
     /// Writes the outputs of the run that brought the front to `state` and its `summary.json`
     /// into `dir`, from its `counts`, `checkpoints` and `estimate` on `scheduler`. Returns the
     /// summary and the folder; a file that cannot be written is an error after every other
-    /// file was tried (no `summary.json` then).
+    /// file was tried (no `summary.json` then). A run that writes no files ([`Solve::writes`])
+    /// returns the summary only.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn finish(
         &self,
@@ -55,10 +56,10 @@ impl Solve<'_> {
         self.history_row(state, &mut book);
         // A snapshot that cannot be written fails the run (exit 1, no summary.json) after every
         // other output is written.
-        let snapshots = book
-            .snapshots
-            .flush(t_end)
-            .and_then(|_| book.snapshots.finish());
+        let snapshots = match self.writes() {
+            true => (book.snapshots.flush(t_end)).and_then(|_| book.snapshots.finish()),
+            false => Ok(()),
+        };
         tracing::info!(patches = stats.tents, wall_time_s, "solve finished");
         if book.unresolved as f64 > 0.01 * book.patches as f64 {
             tracing::warn!(
@@ -174,6 +175,9 @@ impl Solve<'_> {
             min_edge,
             max_edge,
         };
+        if !self.writes() {
+            return Ok((summary, dir.to_path_buf()));
+        }
         let mut written = vec![
             snapshots,
             write_output(dir, "history.csv", book.history.as_bytes()).map(drop),

@@ -39,13 +39,17 @@ impl Solve<'_> {
             .store(book.energy_max.to_bits(), Ordering::Relaxed);
     }
 
-    /// Cuts the elements under `triangles`, just solved, by the snapshot planes.
+    /// Cuts the elements under `triangles`, just solved, by the snapshot planes (not in a run
+    /// that writes no files, [`Solve::writes`]).
     pub(crate) fn add_to_snapshots(
         &self,
         book: &mut Book,
         solution: &FrontSolution,
         triangles: &[TriangleId],
     ) {
+        if !self.writes() {
+            return;
+        }
         for &t in triangles {
             if solution.load(t as usize, &mut book.geometry, &mut book.coefficients) {
                 let (phi, values, geometry, coefficients) = (

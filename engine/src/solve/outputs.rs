@@ -27,11 +27,15 @@ impl Solve<'_> {
     /// (a row for the front as it is), the probes, the crack tips crossed so far and the
     /// fracture outputs of the front as it is; complete snapshots are already written. Each
     /// is tried whatever became of the others (the run is failing or stopping already: a
-    /// full disk may still take the small files); failures are logged.
+    /// full disk may still take the small files); failures are logged. Nothing when the run
+    /// writes no files ([`Solve::writes`]).
     pub(crate) fn write_partial_outputs(&self, state: &Frontier, dir: &Path) {
         let config = &self.problem.loaded.config;
         let mut book = self.book.lock();
         book.progress.finish();
+        if !self.writes() {
+            return;
+        }
         let warn = |what: &str, result: Result<(), EngineError>| {
             if let Err(e) = result {
                 tracing::error!("{what} of the stopped run not written: {e}");

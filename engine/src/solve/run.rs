@@ -17,6 +17,7 @@ use crate::progress::Progress;
 use super::checkpoint::{self, Counts, Folder, Restored};
 use super::context::{Intervention, Live, Solve};
 use super::restart::extend;
+use super::split::Split;
 use super::start::{Start, patch_solver};
 use super::summary::{CheckpointSummary, RunSummary};
 
@@ -35,7 +36,7 @@ pub(crate) fn run_job(
     problem: &Problem,
     options: &RunOptions,
     intervention: Option<(f64, Intervention)>,
-    split: Option<super::split::Split>,
+    split: Option<Split>,
 ) -> Result<(RunSummary, PathBuf), EngineError> {
     let config = &problem.loaded.config;
     let scheduler = options.scheduler(problem);
@@ -50,8 +51,18 @@ pub(crate) fn run_job(
         None => None,
     };
     let estimate = announce(problem, options, estimate, restored.as_ref())?;
-    let dir = options.output_dir(problem)?;
-    let folder = prepare_folder(problem, options, &dir, restored.is_some())?;
+    // The ranks but 0 of split rounds hold copies of rank 0's state and write nothing.
+    let (dir, folder) = match split.as_ref().is_none_or(Split::writes) {
+        true => {
+            let dir = options.output_dir(problem)?;
+            let folder = prepare_folder(problem, options, &dir, restored.is_some())?;
+            (dir, folder)
+        }
+        false => {
+            let dir = options.output_folder(problem);
+            (dir.clone(), Folder::new(config, &dir))
+        }
+    };
     let start = (&state, adapt, max_star);
     let intervention = intervention.unzip();
     let solve = Solve {
@@ -192,7 +203,8 @@ impl Solve<'_> {
         counts.written = folder.next_number(counts.written);
         let mut state = restored.frontier;
         let mut book = restored.book;
-        book.resume(dir, config.output.vtu, self.basis.len(), self.width)?;
+        let output = self.writes().then_some((dir, config.output.vtu));
+        book.resume(output, self.basis.len(), self.width)?;
         if checkpoint::extends(&restored.header.config, config) {
             extend(&mut state, &mut book, config, t_end, &file)?;
         }

@@ -86,6 +86,12 @@ impl Split {
         }
     }
 
+    /// Whether this is rank 0, the one that writes the run's files: the others hold copies of
+    /// its state and write nothing.
+    pub(crate) fn writes(&self) -> bool {
+        self.rank == 0
+    }
+
     /// The ranks the rounds are split over.
     pub(crate) fn ranks(&self) -> usize {
         self.ranks

@@ -193,7 +193,7 @@ impl<'a> Work<'a> for Solve<'a> {
         book.max_slope_ratio = book.max_slope_ratio.max(slope);
         // Timed only when there is output to make: deterministic rounds record their tents on
         // one thread, and two clock reads per tent are a measurable part of that.
-        if book.snapshots.pending_within(span.0, span.1) {
+        if self.writes() && book.snapshots.pending_within(span.0, span.1) {
             let started = Instant::now();
             self.add_to_snapshots(book, &state.solution, mesh.vertex_triangles(v));
             book.timings.output_s += started.elapsed().as_secs_f64();
@@ -201,7 +201,8 @@ impl<'a> Work<'a> for Solve<'a> {
         book.progress.advance(t_new - t_old, book.patches);
         let mut passed = std::mem::take(&mut book.passed);
         book.milestones.advance(t_old, t_new, &mut passed);
-        for &(t, _) in passed.iter().filter(|p| p.1 == Milestone::Snapshot) {
+        let snapshots = passed.iter().filter(|p| p.1 == Milestone::Snapshot);
+        for &(t, _) in snapshots.filter(|_| self.writes()) {
             let started = Instant::now();
             book.snapshots.flush(t)?;
             book.timings.output_s += started.elapsed().as_secs_f64();
