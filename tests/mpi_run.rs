@@ -2,7 +2,8 @@
 //! count of `sdg run --threads 1`, the `history.csv` of the run over in-process ranks and
 //! snapshot pieces holding the threaded run's slices; a run under `mpirun` without `--mpi` is
 //! refused; SIGTERM to `mpirun` checkpoints and stops every rank, and SIGKILL of one rank ends
-//! the others within 10 s; either run goes on from its checkpoint on any number of ranks or on
+//! the others within 10 s (of a plane wave, and of a cracking run whose rounds are split over
+//! the ranks); either run goes on from its checkpoint on any number of ranks or on
 //! threads to the state of the run never stopped. Built
 //! only with the feature `mpi`; needs OpenMPI's `mpirun` on the PATH.
 
@@ -183,7 +184,18 @@ fn long_plane_wave(end: &str, every: &str) -> Vec<String> {
 /// `odls_base_sigkill_timeout` set to `kill_after` s: on SIGTERM `mpirun` sends the ranks SIGCONT,
 /// SIGTERM that long after, and SIGKILL as long after that.
 fn spawn_mpirun(overrides: &[&str], out: &Path, kill_after: &str) -> Child {
-    let args = run_args("plane_wave.toml", overrides, &["--mpi"], out);
+    spawn_mpirun_of("plane_wave.toml", overrides, &["--mpi"], out, kill_after)
+}
+
+/// [`spawn_mpirun`] of the shipped config `name` with `extra` arguments.
+fn spawn_mpirun_of(
+    name: &str,
+    overrides: &[&str],
+    extra: &[&str],
+    out: &Path,
+    kill_after: &str,
+) -> Child {
+    let args = run_args(name, overrides, extra, out);
     Command::new("mpirun")
         .args(["--mca", "odls_base_sigkill_timeout", kill_after])
         .args(["-n", "2", env!("CARGO_BIN_EXE_sdg")])
@@ -315,20 +327,7 @@ fn sigkill_of_one_rank_ends_the_others_and_the_last_checkpoint_goes_on() {
     );
     let out = dir.path().join("killed");
     let child = spawn_mpirun(&overrides, &out, "1");
-    wait_for_first_checkpoint(&out);
-    let pid = rank_pid(&out, 1).expect("rank 1 runs");
-    assert!(
-        Command::new("kill")
-            .args(["-KILL", &pid])
-            .status()
-            .unwrap()
-            .success()
-    );
-    let killed = Instant::now();
-    let result = wait_within(child, Duration::from_secs(10)).expect("the others end within 10 s");
-    assert!(!result.status.success());
-    assert!(killed.elapsed() < Duration::from_secs(10));
-    assert!(!out.join("summary.json").exists());
+    kill_rank_1(child, &out);
     let folder = out.join("checkpoints").display().to_string();
     let restarted = dir.path().join("restarted");
     let args = run_args(
@@ -345,4 +344,52 @@ fn sigkill_of_one_rank_ends_the_others_and_the_last_checkpoint_goes_on() {
         (s["state_hash"].clone(), s["patches"].as_u64().unwrap()),
         expected
     );
+}
+
+#[test]
+fn sigkill_of_one_rank_of_a_cracking_run_ends_the_other_and_its_checkpoint_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    // Rounds split over the ranks, each holding the whole state; rank 0 checkpoints.
+    let overrides = ["output.png=false", "checkpoint.every_sim_s=1e-7"];
+    let deterministic = ["--deterministic"];
+    let reference = dir.path().join("reference");
+    let args = run_args("crack_growth.toml", &overrides, &deterministic, &reference);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = sdg(&args);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let expected = summary(&reference);
+    let out = dir.path().join("killed");
+    let extra = ["--mpi", "--deterministic"];
+    let child = spawn_mpirun_of("crack_growth.toml", &overrides, &extra, &out, "1");
+    kill_rank_1(child, &out);
+    let folder = out.join("checkpoints").display().to_string();
+    let restarted = dir.path().join("restarted");
+    let extra = ["--mpi", "--deterministic", "--restart", &folder];
+    let args = run_args("crack_growth.toml", &overrides, &extra, &restarted);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let result = mpirun(2, &args);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let s = summary(&restarted);
+    for key in ["state_hash", "patches", "crack"] {
+        assert_eq!(s[key], expected[key], "{key}");
+    }
+}
+
+/// Kills rank 1 of the `mpirun` `child` writing into `out` with SIGKILL once the run's first
+/// checkpoint is written, and checks that the run ends within 10 s, failed, without a summary.
+fn kill_rank_1(child: Child, out: &Path) {
+    wait_for_first_checkpoint(out);
+    let pid = rank_pid(out, 1).expect("rank 1 runs");
+    assert!(
+        Command::new("kill")
+            .args(["-KILL", &pid])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let killed = Instant::now();
+    let result = wait_within(child, Duration::from_secs(10)).expect("the others end within 10 s");
+    assert!(!result.status.success());
+    assert!(killed.elapsed() < Duration::from_secs(10));
+    assert!(!out.join("summary.json").exists());
 }
