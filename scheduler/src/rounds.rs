@@ -32,10 +32,6 @@ const CHUNK: usize = 16;
 /// Shared state of one round.
 struct Round<O, E> {
     chosen: Vec<VertexId>,
-    /// The vertices the chosen ones took, each chosen vertex with its neighbours not taken
-    /// before: `chosen[i]` took `touched[ends[i - 1]..ends[i]]` (from 0 for the first).
-    touched: Vec<VertexId>,
-    ends: Vec<usize>,
     /// The next chosen tent to solve, and the next chunk of them to settle.
     next: AtomicUsize,
     next_chunk: AtomicUsize,
@@ -54,8 +50,6 @@ pub(crate) fn run<'a, W: Work<'a>>(
     let events: Events<'a, W::State> = Events::default();
     let round: RwLock<Round<W::Outcome, W::Error>> = RwLock::new(Round {
         chosen: Vec::with_capacity(n),
-        touched: Vec::with_capacity(n),
-        ends: Vec::with_capacity(n),
         next: AtomicUsize::new(0),
         next_chunk: AtomicUsize::new(0),
         results: Vec::new(),
@@ -73,7 +67,8 @@ pub(crate) fn run<'a, W: Work<'a>>(
     // The ready vertices (first among their neighbours) with their times. A round takes every
     // ready vertex and changes the front only at them, so the next round's ready vertices are
     // among the chosen ones and their neighbours, which the workers check and list in `found`,
-    // one list per worker. Events change readiness only at the vertices they offer
+    // one list per worker (a neighbour of two chosen vertices twice: sorted, the copies are
+    // adjacent and dropped). Events change readiness only at the vertices they offer
     // ([`crate::Changed::offer`], ids as after the event); a coarsening renumbers (the last
     // vertex takes the removed one's id, and offers it), so after events the calling thread
     // checks again every vertex found or offered that still exists (`offered`), as the
@@ -82,7 +77,6 @@ pub(crate) fn run<'a, W: Work<'a>>(
     let found: Vec<Mutex<Vec<(f64, VertexId)>>> = (0..threads)
         .map(|_| Mutex::new(Vec::with_capacity(n)))
         .collect();
-    let mut taken = vec![false; n];
     let mut scan_all = true;
     let mut offered: Vec<VertexId> = Vec::new();
     let mut after_events = false;
@@ -142,12 +136,14 @@ pub(crate) fn run<'a, W: Work<'a>>(
                         *slot = Some(Err(panic_message(payload)));
                     }
                 }
-                let from = if start == 0 { 0 } else { r.ends[start - 1] };
+                let mesh = state.mesh();
                 found.extend(
-                    r.touched[from..r.ends[end - 1]]
-                        .iter()
-                        .filter(|&&v| is_first_among_neighbours(&**state, t_end, v))
-                        .map(|&v| (state.front().time(v), v)),
+                    (r.chosen[start..end].iter())
+                        .flat_map(|&v| {
+                            std::iter::once(v).chain(mesh.vertex_neighbors(v).iter().copied())
+                        })
+                        .filter(|&v| is_first_among_neighbours(&**state, t_end, v))
+                        .map(|v| (state.front().time(v), v)),
                 );
                 work.settled(begun.elapsed());
             }
@@ -227,38 +223,10 @@ pub(crate) fn run<'a, W: Work<'a>>(
                     return Ok(true);
                 }
                 ready.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                let Round {
-                    chosen,
-                    touched,
-                    ends,
-                    ..
-                } = &mut *r;
-                // `taken` is true only where the last round took a vertex (ids as then; those
-                // an event removed are cut off already): clearing those is clearing it all.
-                for &v in touched.iter() {
-                    if let Some(t) = taken.get_mut(v as usize) {
-                        *t = false;
-                    }
-                }
-                chosen.clear();
-                touched.clear();
-                ends.clear();
-                // Every ready vertex is chosen; none is a neighbour of another, and `taken`
-                // lists each neighbour shared by two of them once.
-                for &(_, v) in &ready {
-                    chosen.push(v);
-                    if !taken[v as usize] {
-                        taken[v as usize] = true;
-                        touched.push(v);
-                    }
-                    for &w in s.mesh().vertex_neighbors(v) {
-                        if !taken[w as usize] {
-                            taken[w as usize] = true;
-                            touched.push(w);
-                        }
-                    }
-                    ends.push(touched.len());
-                }
+                ready.dedup_by_key(|&mut (_, v)| v);
+                // Every ready vertex is chosen; none is a neighbour of another.
+                r.chosen.clear();
+                r.chosen.extend(ready.iter().map(|&(_, v)| v));
                 let len = r.chosen.len();
                 r.results.resize_with(len, || Mutex::new(None));
                 r.next.store(0, Ordering::Relaxed);
@@ -327,7 +295,6 @@ pub(crate) fn run<'a, W: Work<'a>>(
                 }
                 event_time.add_since(running);
                 n = guard.mesh().vertices().len();
-                taken.resize(n, false);
                 work.round(serial);
             }
         }))
