@@ -345,7 +345,9 @@ struct Runner<'v, T, W> {
     /// Per local vertex, whether its tent is in flight ([`Work::start`]), and how many are.
     in_flight: Vec<bool>,
     flying: usize,
-    /// Candidates to try, and whether each local vertex is one.
+    /// Candidates to try: those that other ranks hold as ghosts (whose tents the neighbour
+    /// ranks wait for), tried first, and the others; and whether each local vertex is one.
+    shared: Vec<VertexId>,
     candidates: Vec<VertexId>,
     queued: Vec<bool>,
     order: SplitMix64,
@@ -373,7 +375,10 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
     fn offer(&mut self, v: VertexId) {
         if self.view.is_owned(v) && !self.queued[v as usize] && self.front.time(v) < self.limit {
             self.queued[v as usize] = true;
-            self.candidates.push(v);
+            match self.view.sharers(v).is_empty() {
+                true => self.candidates.push(v),
+                false => self.shared.push(v),
+            }
         }
     }
 
@@ -395,19 +400,21 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
             })
     }
 
-    /// A candidate that passes the rule, in seeded random order; drops those that do not (what
-    /// blocks them offers them again when it moves).
+    /// A candidate that passes the rule, one that other ranks hold first, each in seeded random
+    /// order; drops those that do not pass (what blocks them offers them again when it moves).
     fn next_ready(&mut self) -> Option<VertexId> {
-        while !self.candidates.is_empty() {
-            let v = self
-                .candidates
-                .swap_remove(self.order.below(self.candidates.len()));
+        loop {
+            let pool = match (self.shared.is_empty(), self.candidates.is_empty()) {
+                (false, _) => &mut self.shared,
+                (true, false) => &mut self.candidates,
+                (true, true) => return None,
+            };
+            let v = pool.swap_remove(self.order.below(pool.len()));
             self.queued[v as usize] = false;
             if self.is_first(v) {
                 return Some(v);
             }
         }
-        None
     }
 
     fn send(&mut self, to: Rank, message: Message) -> Result<(), PitchingError> {
@@ -658,6 +665,7 @@ pub(crate) fn run_rank<T: Transport, W: Work>(
         generation: vec![0; n],
         in_flight: vec![false; n],
         flying: 0,
+        shared: Vec::new(),
         candidates: Vec::new(),
         queued: vec![false; n],
         order: SplitMix64::new(options.seed ^ u64::from(view.rank())),
