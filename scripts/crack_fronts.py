@@ -7,8 +7,11 @@ where `D` reached 0.99). Distances are along the branch's path, the polyline of 
 Per branch with a fitted speed: its edges, the extensions `max_tip_speed` refused for now, the
 edge front's speed over windows of at least `c_R tau` (median and largest over c_R), the lead of
 the edge front over the debonded front at each tip state (least, median, largest, in um), and
-the debonded front's largest fitted speed over c_R (`speed_m_s` of crack_tips.csv). A last line
-gives the largest of each over all branches.
+the debonded front's largest fitted speed over c_R (`speed_m_s` of crack_tips.csv). A line
+gives the largest of each over all branches, and the last lines the debonded front's largest
+least-squares speed over windows of 1, 1.5, 2 and 3 `c_R tau` of its extension (each window
+the states whose extension lies within it, from a tip state's on), to show how much of a
+speed above c_R is the front's moving within its process zone.
 
     python3 scripts/crack_fronts.py RUN_FOLDER [c_R in m/s, default 938.93] [c_R tau in m, default 9.4e-6]
 
@@ -107,6 +110,36 @@ for branch, tips in states.items():
         totals["edge"] = max(totals["edge"], max(speeds))
         totals["lead"] = max(totals["lead"], max(leads))
         totals["debonded"] = max(totals["debonded"], max(fitted))
+
+
+def largest_fit(width):
+    """The largest least-squares speed of the debonded front over windows of extension `width`
+    (the states whose extension lies from a state's to `width` beyond it, spanning at least 90%
+    of it), over c_R, and its branch."""
+    best = (0.0, "")
+    for branch, tips in extensions.items():
+        for _, e0 in tips:
+            window = [(t, e) for t, e in tips if e0 <= e <= e0 + width]
+            if window[-1][1] - e0 < 0.9 * width:
+                continue
+            n = len(window)
+            mean_t = sum(t for t, _ in window) / n
+            mean_e = sum(e for _, e in window) / n
+            stt = sum((t - mean_t) ** 2 for t, _ in window)
+            if stt > 0:
+                v = sum((t - mean_t) * (e - mean_e) for t, e in window) / stt / c_r
+                best = max(best, (v, branch))
+    return best
+
+
+extensions = {}
+for r in csv.DictReader(open(run / "crack_tips.csv", newline="")):
+    extensions.setdefault(r["branch"], []).append((float(r["t_s"]), float(r["extension_m"])))
+for tips in extensions.values():
+    tips.sort()
 if show is None:
     print(f"largest: edge front {totals['edge']:.3f} c_R over c_R tau windows, lead "
           f"{totals['lead'] * 1e6:.1f} um, debonded front {totals['debonded']:.3f} c_R")
+    for k in (1.0, 1.5, 2.0, 3.0):
+        v, branch = largest_fit(k * zone)
+        print(f"debonded front over {k:g} c_R tau: largest {v:.3f} c_R (branch {branch or '-'})")
