@@ -120,7 +120,7 @@ def largest_fit(width):
     for branch, tips in extensions.items():
         for _, e0 in tips:
             window = [(t, e) for t, e in tips if e0 <= e <= e0 + width]
-            if window[-1][1] - e0 < 0.9 * width:
+            if max(e for _, e in window) - e0 < 0.9 * width:
                 continue
             n = len(window)
             mean_t = sum(t for t, _ in window) / n
@@ -142,4 +142,5 @@ if show is None:
           f"{totals['lead'] * 1e6:.1f} um, debonded front {totals['debonded']:.3f} c_R")
     for k in (1.0, 1.5, 2.0, 3.0):
         v, branch = largest_fit(k * zone)
-        print(f"debonded front over {k:g} c_R tau: largest {v:.3f} c_R (branch {branch or '-'})")
+        found = f"largest {v:.3f} c_R (branch {branch})" if branch else "no window spans it"
+        print(f"debonded front over {k:g} c_R tau: {found}")
