@@ -746,15 +746,19 @@ def estimate(runs):
 # branching_study: the branching plate over draws and resolutions (`sdg study`)
 
 
-def branching_study(runs):
-    """Per resolution of configs/studies/branching_convergence.toml: the statistics of its
-    study.json, from results/branching_convergence (the study's --output folder, kept in the
-    repository)."""
-    folder = Path(__file__).resolve().parent.parent / "results" / "branching_convergence"
+def study_json(name):
+    """The study.json of results/NAME (a study's --output folder, kept in the repository) and
+    its folder."""
+    folder = Path(__file__).resolve().parent.parent / "results" / name
     path = folder / "study.json"
     if not path.is_file():
-        raise Missing("branching_convergence")
-    study = json.loads(path.read_text())
+        raise Missing(name)
+    return folder, json.loads(path.read_text())
+
+
+def branching_rows(folder, study, label):
+    """One row per group of a branching study with cases done: `label(group)`, then the fork,
+    speed, balance and cost statistics of its study.json."""
 
     def interval(m, scale, unit, digits):
         if not m or m["mean"] is None:
@@ -776,12 +780,16 @@ def branching_study(runs):
         short_t = m.get("fracture.short_macro_branching.time")
         short_d = m.get("fracture.short_macro_branching.distance")
         speed = m.get("crack.max_branch_speed_over_c_r")
-        over = m.get("crack.states_over_c_r")
         balance = m.get("energy.balance_residual_rel")
         forked = round(fork_t["present"] * g["done"]) if fork_t else 0
+        over = (
+            f"{sum_of(folder, 'crack.states_over_c_r', g):,}"
+            if "crack.states_over_c_r" in m
+            else ""
+        )
         out.append(
             [
-                f"{g['axes']['adapt.min_edge'] * 1e6:g} um",
+                label(g),
                 f"{g['done']} of {g['cases']}",
                 f"{forked} of {g['done']}",
                 interval(fork_t, 1e6, "us", 3),
@@ -790,30 +798,56 @@ def branching_study(runs):
                 interval(short_t, 1e6, "us", 3),
                 interval(short_d, 1e3, "mm", 2),
                 f"{speed['mean']:.2f} ({speed['min']:.2f} to {speed['max']:.2f})" if speed else "",
-                f"{sum_of(folder, 'crack.states_over_c_r', g):,}" if over else "",
+                over,
                 e(balance["max"], 1) if balance else "",
                 f"{m['patches']['mean'] / 1e6:.1f}M" if "patches" in m else "",
                 f"{m['wall_time_s']['mean']:.0f} s" if "wall_time_s" in m else "",
             ]
         )
-    return table(
-        [
-            "`adapt.min_edge`",
-            "draws done",
-            "forked (two arms past 1 mm)",
-            "fork time, mean [95% interval]",
-            "fork distance from the notch",
-            "angle between its arms (at 1 mm)",
-            "first fork with 0.2 mm arms: time",
-            "its distance",
-            "largest branch speed / `c_R`: mean (least to largest) over draws",
-            "tip states above `c_R`, all draws",
-            "largest energy balance residual",
-            "patches (mean)",
-            "wall time (mean)",
-        ],
-        out,
-    ) + f"\n\nCommand: `sdg study {study['study']} --output results/branching_convergence`, its cases one or two at a time beside other work (wall times measure that)."
+    return out
+
+
+BRANCHING_HEADER = [
+    "draws done",
+    "forked (two arms past 1 mm)",
+    "fork time, mean [95% interval]",
+    "fork distance from the notch",
+    "angle between its arms (at 1 mm)",
+    "first fork with 0.2 mm arms: time",
+    "its distance",
+    "largest branch speed / `c_R`: mean (least to largest) over draws",
+    "tip states above `c_R`, all draws",
+    "largest energy balance residual",
+    "patches (mean)",
+    "wall time (mean)",
+]
+
+
+def branching_study(runs):
+    """Per resolution of configs/studies/branching_convergence.toml: the statistics of its
+    study.json, from results/branching_convergence."""
+    folder, study = study_json("branching_convergence")
+    rows = branching_rows(
+        folder, study, lambda g: f"{g['axes']['adapt.min_edge'] * 1e6:g} um"
+    )
+    return table(["`adapt.min_edge`"] + BRANCHING_HEADER, rows) + (
+        f"\n\nCommand: `sdg study {study['study']} --output results/branching_convergence`, its "
+        "cases one or two at a time beside other work (wall times measure that)."
+    )
+
+
+def branching_async(runs):
+    """configs/studies/branching_async.toml (the shipped config's asynchronous tent order)
+    beside the deterministic rounds of the same draws, branching_convergence's 5 um level."""
+    folder, study = study_json("branching_async")
+    det_folder, det = study_json("branching_convergence")
+    det["groups"] = [g for g in det["groups"] if g["axes"]["adapt.min_edge"] == 5e-6]
+    rows = branching_rows(det_folder, det, lambda g: "deterministic rounds")
+    rows += branching_rows(folder, study, lambda g: "asynchronous, 2 threads")
+    return table(["tent order (5 um)"] + BRANCHING_HEADER, rows) + (
+        f"\n\nCommand: `sdg study {study['study']} --output results/branching_async --threads 2`, "
+        "its cases one at a time beside other work (wall times measure that)."
+    )
 
 
 def sum_of(folder, key, group):
@@ -841,6 +875,7 @@ TABLES = {
     "fracture": fracture,
     "branching": branching,
     "branching_study": branching_study,
+    "branching_async": branching_async,
     "status": status,
 }
 
