@@ -833,7 +833,7 @@ fn rank_model(args: &ScalingArgs) -> Result<Option<sdg_engine::trace::RankModel>
     let kind = args
         .partition
         .map_or(PartitionKind::default(), PartitionArg::kind);
-    let partition = sdg_engine::partition_for(&problem.mesh, kind, ranks.get())?;
+    let partition = sdg_engine::partition_for(&problem, kind, ranks.get())?;
     Ok(Some(sdg_engine::trace::RankModel {
         owners: partition.owners().to_vec(),
         ranks: ranks.get(),

@@ -7,11 +7,11 @@ use sdg_engine::{EngineError, PartitionKind, Problem, RunOptions, RunSummary};
 /// `--partition`.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub(crate) enum PartitionArg {
-    /// Recursive coordinate bisection weighted by star size.
+    /// Recursive coordinate bisection weighted by work (tents times star size).
     Coordinate,
-    /// METIS's k-way partition of the vertex graph weighted by star size (fewest cut edges).
+    /// METIS's k-way partition of the vertex graph weighted by work (fewest cut edges).
     Metis,
-    /// Stripes along x of equal weight.
+    /// Stripes along x of equal work.
     Stripes,
     /// Seeded random owners (for tests: nearly every vertex on a rank boundary).
     Random,

@@ -2,8 +2,8 @@
 //! same tents as one process.
 //!
 //! What exists:
-//! - [`partition`]: owner ranks of the vertices, by recursive coordinate bisection weighted by
-//!   star size, stripes along x, or seeded random owners;
+//! - [`partition`]: owner ranks of the vertices, by recursive coordinate bisection, METIS or
+//!   stripes along x, weighted by star size or by the caller's weights, or seeded random owners;
 //! - [`view`]: each rank's local view (owned vertices, every triangle with an owned corner, the
 //!   one-vertex-deep ghost layer) as an ordinary mesh numbered in global id order, with the
 //!   global ids kept;
@@ -40,7 +40,7 @@ pub mod transport;
 pub mod view;
 
 pub use gathering::{Gathered, gather, gather_threads};
-pub use partition::{Partition, PartitionError, Rank};
+pub use partition::{Partition, PartitionError, Rank, star_weights};
 pub use pitching::{
     Causality, CellKind, Options, Pause, PauseRequest, PitchingError, RankReport, SolvedPatch,
     pitch_rank, run_threads,

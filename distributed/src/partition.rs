@@ -1,10 +1,12 @@
 //! Partitions of a mesh's vertices among ranks: which rank owns (pitches) each vertex.
 //!
-//! A vertex's weight is its star size (the number of its triangles): a tent costs about one
-//! patch element per star triangle, so equal weights mean equal work per rank. Four partitions
-//! exist: recursive coordinate bisection ([`Partition::coordinate`], the default for runs),
-//! METIS's multilevel k-way partition of the vertex graph ([`Partition::metis`], fewest cut
-//! edges), stripes along x ([`Partition::striped`]) and seeded random owners
+//! A vertex's weight is the work its tents will cost: by default its star size (the number of
+//! its triangles: a tent costs about one patch element per star triangle), or weights the
+//! caller gives (`*_weighted`: a run weighs each vertex's star by its tents to the end time,
+//! since tents per vertex differ over a mesh). Equal weights mean equal work per rank. Four
+//! partitions exist: recursive coordinate bisection ([`Partition::coordinate`], the default
+//! for runs), METIS's multilevel k-way partition of the vertex graph ([`Partition::metis`],
+//! fewest cut edges), stripes along x ([`Partition::striped`]) and seeded random owners
 //! ([`Partition::random`], for tests: nearly every vertex is on a rank boundary).
 
 use sdg_mesh::{Mesh, VertexId};
@@ -23,6 +25,8 @@ pub enum PartitionError {
     TooFewVertices { ranks: usize, vertices: usize },
     #[error("the owner list has {got} entries, but the mesh has {vertices} vertices")]
     Length { got: usize, vertices: usize },
+    #[error("the weight list has {got} entries, but the mesh has {vertices} vertices")]
+    Weights { got: usize, vertices: usize },
     #[error("vertex {vertex} is owned by rank {rank}, but there are only {ranks} ranks")]
     RankOutOfRange {
         vertex: VertexId,
@@ -90,12 +94,30 @@ impl Partition {
     /// side of its bounding box into two parts whose weights are in the ratio of their rank counts
     /// (`ranks / 2` to the rest), to within one vertex's weight.
     pub fn coordinate(mesh: &Mesh, ranks: usize) -> Result<Self, PartitionError> {
-        Self::bisected(mesh, ranks, Cut::Longest)
+        Self::coordinate_weighted(mesh, ranks, &star_weights(mesh))
+    }
+
+    /// [`Partition::coordinate`] with a weight per vertex.
+    pub fn coordinate_weighted(
+        mesh: &Mesh,
+        ranks: usize,
+        weights: &[u64],
+    ) -> Result<Self, PartitionError> {
+        Self::bisected(mesh, ranks, weights, Cut::Longest)
     }
 
     /// Stripes across x of equal weight (star size), to within one vertex's weight per cut.
     pub fn striped(mesh: &Mesh, ranks: usize) -> Result<Self, PartitionError> {
-        Self::bisected(mesh, ranks, Cut::X)
+        Self::striped_weighted(mesh, ranks, &star_weights(mesh))
+    }
+
+    /// [`Partition::striped`] with a weight per vertex.
+    pub fn striped_weighted(
+        mesh: &Mesh,
+        ranks: usize,
+        weights: &[u64],
+    ) -> Result<Self, PartitionError> {
+        Self::bisected(mesh, ranks, weights, Cut::X)
     }
 
     /// Seeded random owners: the first `ranks` vertices of a random permutation go to ranks
@@ -120,26 +142,36 @@ impl Partition {
     /// fixed seed: the same partition for the same mesh on every rank and every run. METIS
     /// minimizes the cut edges (so the messages) at up to 3% imbalance.
     pub fn metis(mesh: &Mesh, ranks: usize) -> Result<Self, PartitionError> {
+        Self::metis_weighted(mesh, ranks, &star_weights(mesh))
+    }
+
+    /// [`Partition::metis`] with a weight per vertex.
+    pub fn metis_weighted(
+        mesh: &Mesh,
+        ranks: usize,
+        weights: &[u64],
+    ) -> Result<Self, PartitionError> {
         check_sizes(mesh, ranks)?;
+        check_weights(mesh, weights)?;
         let n = mesh.vertices().len();
         let too_large = || PartitionError::Metis(format!("a graph of {n} vertices is too large"));
         let idx = |k: usize| metis::Idx::try_from(k).map_err(|_| too_large());
         let mut xadj = Vec::with_capacity(n + 1);
         let mut adjncy = Vec::new();
-        let mut weights = Vec::with_capacity(n);
+        let mut vwgt = Vec::with_capacity(n);
         xadj.push(0);
         for v in 0..n as VertexId {
             for &w in mesh.vertex_neighbors(v) {
                 adjncy.push(idx(w as usize)?);
             }
             xadj.push(idx(adjncy.len())?);
-            weights.push(idx(mesh.vertex_triangles(v).len())?);
+            vwgt.push(metis::Idx::try_from(weights[v as usize]).map_err(|_| too_large())?);
         }
         let mut part = vec![0; n];
         let failed = |e: &dyn std::fmt::Display| PartitionError::Metis(e.to_string());
         metis::Graph::new(1, idx(ranks)?, &xadj, &adjncy)
             .map_err(|e| failed(&e))?
-            .set_vwgt(&weights)
+            .set_vwgt(&vwgt)
             .set_option(metis::option::Seed(METIS_SEED))
             .part_kway(&mut part)
             .map_err(|e| failed(&e))?;
@@ -147,14 +179,17 @@ impl Partition {
         Self::from_owners(mesh, owner, ranks)
     }
 
-    fn bisected(mesh: &Mesh, ranks: usize, cut: Cut) -> Result<Self, PartitionError> {
+    fn bisected(
+        mesh: &Mesh,
+        ranks: usize,
+        weights: &[u64],
+        cut: Cut,
+    ) -> Result<Self, PartitionError> {
         check_sizes(mesh, ranks)?;
-        let weights: Vec<u64> = (0..mesh.vertices().len() as VertexId)
-            .map(|v| mesh.vertex_triangles(v).len() as u64)
-            .collect();
+        check_weights(mesh, weights)?;
         let mut vertices: Vec<VertexId> = (0..mesh.vertices().len() as VertexId).collect();
         let mut owner = vec![0; vertices.len()];
-        bisect(mesh, &weights, &mut vertices, 0, ranks, cut, &mut owner);
+        bisect(mesh, weights, &mut vertices, 0, ranks, cut, &mut owner);
         Ok(Self { ranks, owner })
     }
 
@@ -173,21 +208,38 @@ impl Partition {
         &self.owner
     }
 
-    /// Per rank, the summed star sizes of its vertices.
-    pub fn weights(&self, mesh: &Mesh) -> Vec<u64> {
-        let mut weights = vec![0; self.ranks];
-        for (v, &r) in self.owner.iter().enumerate() {
-            weights[r as usize] += mesh.vertex_triangles(v as VertexId).len() as u64;
+    /// Per rank, the summed `weights` of its vertices (one per vertex, e.g. [`star_weights`]).
+    pub fn weights(&self, weights: &[u64]) -> Vec<u64> {
+        let mut sums = vec![0; self.ranks];
+        for (&r, &w) in self.owner.iter().zip(weights) {
+            sums[r as usize] += w;
         }
-        weights
+        sums
     }
 
-    /// The heaviest rank's weight over the mean weight (1 is perfect balance).
-    pub fn imbalance(&self, mesh: &Mesh) -> f64 {
-        let weights = self.weights(mesh);
-        let total: u64 = weights.iter().sum();
-        let max = weights.iter().copied().max().unwrap_or(0);
+    /// The heaviest rank's summed `weights` over the mean (1 is perfect balance).
+    pub fn imbalance(&self, weights: &[u64]) -> f64 {
+        let sums = self.weights(weights);
+        let total: u64 = sums.iter().sum();
+        let max = sums.iter().copied().max().unwrap_or(0);
         max as f64 * self.ranks as f64 / total as f64
+    }
+}
+
+/// Every vertex's star size (its number of triangles): the default weights.
+pub fn star_weights(mesh: &Mesh) -> Vec<u64> {
+    (0..mesh.vertices().len() as VertexId)
+        .map(|v| mesh.vertex_triangles(v).len() as u64)
+        .collect()
+}
+
+fn check_weights(mesh: &Mesh, weights: &[u64]) -> Result<(), PartitionError> {
+    match weights.len() == mesh.vertices().len() {
+        true => Ok(()),
+        false => Err(PartitionError::Weights {
+            got: weights.len(),
+            vertices: mesh.vertices().len(),
+        }),
     }
 }
 
@@ -279,7 +331,7 @@ mod tests {
         let mesh = rectangle(64, 64, 0.0, 0);
         for ranks in 2..=8 {
             let p = Partition::coordinate(&mesh, ranks).unwrap();
-            let imbalance = p.imbalance(&mesh);
+            let imbalance = p.imbalance(&star_weights(&mesh));
             assert!(imbalance <= 1.005, "{ranks} ranks: {imbalance}");
             assert_eq!(
                 Partition::from_owners(&mesh, p.owners().to_vec(), ranks),
@@ -315,9 +367,9 @@ mod tests {
             let p = Partition::metis(&mesh, ranks).unwrap();
             assert_eq!(p, Partition::metis(&mesh, ranks).unwrap(), "seeded");
             assert!(
-                p.imbalance(&mesh) <= 1.031,
+                p.imbalance(&star_weights(&mesh)) <= 1.031,
                 "{ranks} ranks: {}",
-                p.imbalance(&mesh)
+                p.imbalance(&star_weights(&mesh))
             );
             let coordinate = Partition::coordinate(&mesh, ranks).unwrap();
             assert!(
@@ -348,7 +400,11 @@ mod tests {
         by_x.sort_by(|&a, &b| mesh.vertex(a)[0].total_cmp(&mesh.vertex(b)[0]));
         let ranks: Vec<Rank> = by_x.iter().map(|&v| p.owner(v)).collect();
         assert!(ranks.windows(2).all(|w| w[0] <= w[1]), "{ranks:?}");
-        assert!(p.imbalance(&mesh) < 1.03, "{}", p.imbalance(&mesh));
+        assert!(
+            p.imbalance(&star_weights(&mesh)) < 1.03,
+            "{}",
+            p.imbalance(&star_weights(&mesh))
+        );
     }
 
     #[test]
@@ -357,7 +413,7 @@ mod tests {
         let a = Partition::random(&mesh, 7, 11).unwrap();
         assert_eq!(a, Partition::random(&mesh, 7, 11).unwrap());
         assert_ne!(a, Partition::random(&mesh, 7, 12).unwrap());
-        assert!(a.weights(&mesh).iter().all(|&w| w > 0));
+        assert!(a.weights(&star_weights(&mesh)).iter().all(|&w| w > 0));
         assert_eq!(Partition::random(&mesh, 25, 0).unwrap().ranks(), 25);
     }
 

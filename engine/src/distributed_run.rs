@@ -67,7 +67,7 @@ pub fn solve_ranks(
     refuse(problem, options, ranks)?;
     let set_up = SetUp::new(problem, options, ranks.ranks, true)?;
     warn_if_oversubscribed(ranks.ranks * set_up.threads, "this process's ranks");
-    let partition = partition_for(&problem.mesh, ranks.partition, ranks.ranks)?;
+    let partition = partition_for(problem, ranks.partition, ranks.ranks)?;
     let _span = tracing::info_span!("solve", config = %problem.loaded.file.display()).entered();
     tracing::info!(
         ranks = ranks.ranks,
@@ -170,7 +170,7 @@ pub fn solve_mpi(
     let result = (|| {
         let set_up = SetUp::new(problem, options, ranks, rank == 0)?;
         warn_if_oversubscribed(set_up.threads, &format!("rank {rank}"));
-        let partition_of = partition_for(&problem.mesh, partition, ranks)?;
+        let partition_of = partition_for(problem, partition, ranks)?;
         let shared = set_up.shared(problem, (&partition_of, partition));
         // Every rank set up before any sends (a barrier).
         transport.sum(&[0]).map_err(|e| {

@@ -202,6 +202,30 @@ struct Sample {
 /// at most `max_tents` tents and `max_seconds` of wall time, and extrapolates the tent count to
 /// the pitcher's end time (module docs).
 fn sample(mesh: &Mesh, pitcher: &Pitcher, max_tents: u64, max_seconds: f64) -> Sample {
+    let start = Instant::now();
+    let (per_vertex, pitched, exact) = tents_per_vertex(mesh, pitcher, max_tents, max_seconds);
+    let seconds_per_pitch = start.elapsed().as_secs_f64() / pitched.max(1) as f64;
+    Sample {
+        tents: if exact {
+            pitched as f64
+        } else {
+            per_vertex.iter().sum()
+        },
+        exact,
+        seconds_per_pitch,
+    }
+}
+
+/// The tents of every vertex to the pitcher's end time: pitched as [`sample`] does, exact when
+/// the front reaches the end time within `max_tents` and `max_seconds`, extrapolated otherwise
+/// (module docs). Also the tents pitched and whether the counts are exact. With
+/// `max_seconds` infinite the counts depend on the mesh and the pitcher alone.
+pub(crate) fn tents_per_vertex(
+    mesh: &Mesh,
+    pitcher: &Pitcher,
+    max_tents: u64,
+    max_seconds: f64,
+) -> (Vec<f64>, u64, bool) {
     let n = mesh.vertices().len();
     let t_end = pitcher.t_end();
     let front = Front::flat(n, 0.0);
@@ -232,20 +256,17 @@ fn sample(mesh: &Mesh, pitcher: &Pitcher, max_tents: u64, max_seconds: f64) -> S
         pitched += 1;
         queue.push(Reverse((tent.t_new.to_bits(), v)));
     }
-    let seconds_per_pitch = start.elapsed().as_secs_f64() / pitched.max(1) as f64;
+    let counts: Vec<f64> = counts.into_iter().map(|c| c as f64).collect();
     if exact || n == 0 {
-        return Sample {
-            tents: pitched as f64,
-            exact: true,
-            seconds_per_pitch,
-        };
+        return (counts, pitched, true);
     }
     let least_budget = |v: u32| least_budget(mesh, pitcher, v);
-    let (mut tents, mut gamma, mut measured) = (0.0, 0.0, 0usize);
+    let (mut gamma, mut measured) = (0.0, 0usize);
+    let mut tents = vec![0.0; n];
     for v in 0..n as u32 {
-        let (count, time) = (counts[v as usize] as f64, front.time(v));
+        let (count, time) = (counts[v as usize], front.time(v));
         if count > 0.0 {
-            tents += count * t_end / time;
+            tents[v as usize] = count * t_end / time;
             gamma += count * least_budget(v) / time;
             measured += 1;
         }
@@ -256,15 +277,11 @@ fn sample(mesh: &Mesh, pitcher: &Pitcher, max_tents: u64, max_seconds: f64) -> S
         1.0
     };
     for v in 0..n as u32 {
-        if counts[v as usize] == 0 {
-            tents += gamma * t_end / least_budget(v);
+        if counts[v as usize] == 0.0 {
+            tents[v as usize] = gamma * t_end / least_budget(v);
         }
     }
-    Sample {
-        tents,
-        exact: false,
-        seconds_per_pitch,
-    }
+    (tents, pitched, false)
 }
 
 /// Wall time of one patch solve on one thread, s: for up to 64 vertices spread over the mesh
