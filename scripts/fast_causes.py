@@ -35,22 +35,22 @@ CAUSES = ("arrest", "speed", "shield", "start", "other")
 def causes(run):
     """Counts of the causes of the states above c_R in `run`, and (states with a speed, those
     of them within `window` after a speed refusal)."""
-    marks = {}
+    marks, first_edge = {}, {}
     for e in csv.DictReader(open(run / "events.csv", newline="")):
+        if not e["branch"]:
+            continue
+        t = float(e["time_s"])
+        if e["event"] in ("extension", "branching", "nucleation"):
+            first_edge[e["branch"]] = min(first_edge.get(e["branch"], t), t)
         kind = e["reason"] if e["event"] == "refused" else e["event"]
         if kind in ("branching", "nucleation"):
             # A branching names its parent branch; the new branch starts with its first edge.
             kind = "start"
-        if e["branch"] and kind in CAUSES:
-            marks.setdefault(e["branch"], {}).setdefault(kind, []).append(float(e["time_s"]))
+        if kind in CAUSES:
+            marks.setdefault(e["branch"], {}).setdefault(kind, []).append(t)
     for times in marks.values():
         for kind in times:
             times[kind].sort()
-    first_edge = {}
-    for e in csv.DictReader(open(run / "events.csv", newline="")):
-        if e["branch"] and e["event"] in ("extension", "branching", "nucleation"):
-            t = float(e["time_s"])
-            first_edge[e["branch"]] = min(first_edge.get(e["branch"], t), t)
 
     def within(branch, kind, t):
         times = marks.get(branch, {}).get(kind, [])
