@@ -460,3 +460,70 @@ fn a_run_over_ranks_stopped_by_the_wall_time_limit_goes_on_to_the_same_state() {
     );
     assert_eq!(state(&out, 3), expected);
 }
+
+/// A damage interface that debonds under a plane wave: over ranks, and restarted over ranks or
+/// on threads from a checkpoint taken while it debonds, `crack_tips.csv` and the summary's
+/// `crack` block are the threaded run's.
+#[test]
+fn crack_tips_of_a_debonding_interface_over_ranks_are_the_threaded_runs() {
+    let checkpoint_time = 2.4355e-6;
+    let every = format!("checkpoint.every_sim_s={checkpoint_time:e}");
+    let overrides = [
+        "mesh.ny=32",
+        "solver.order=2",
+        &every,
+        "output.snapshot_times=[]",
+        "output.interface_probes=[]",
+        "output.png=false",
+    ];
+    let name = "damage_interface.toml";
+    let dir = tempfile::tempdir().unwrap();
+    let tips = |out: &Path| std::fs::read_to_string(out.join("crack_tips.csv")).unwrap();
+    let threads_out = dir.path().join("threads");
+    let threads = run(name, &overrides, &["--threads", "2"], &threads_out);
+    let expected = tips(&threads_out);
+    // The checkpoint falls while the interface debonds: tip states on both sides of it.
+    let times: Vec<f64> = (expected.lines().skip(1))
+        .map(|line| line.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert!(
+        times.iter().any(|&t| t < checkpoint_time) && times.iter().any(|&t| t > checkpoint_time),
+        "{times:?}"
+    );
+    let same = |out: &Path, what: &str| {
+        let summary = summary_json(out);
+        assert_eq!(tips(out), expected, "{what}");
+        assert_eq!(summary["crack"], threads["crack"], "{what}");
+        assert_eq!(summary["state_hash"], threads["state_hash"], "{what}");
+    };
+    let ranks = dir.path().join("ranks");
+    run(
+        name,
+        &overrides,
+        &["--ranks", "2", "--threads", "2"],
+        &ranks,
+    );
+    same(&ranks, "2 ranks");
+    let checkpoint = |out: &Path| {
+        let file = out.join("checkpoints/checkpoint_000000.sdgc");
+        file.display().to_string()
+    };
+    let cases = [
+        (
+            checkpoint(&ranks),
+            &["--ranks", "3", "--partition", "random"][..],
+        ),
+        (checkpoint(&ranks), &["--threads", "2"]),
+        (
+            checkpoint(&threads_out),
+            &["--ranks", "2", "--partition", "metis"],
+        ),
+    ];
+    for (i, (file, extra)) in cases.iter().enumerate() {
+        let out = dir.path().join(format!("restart-{i}"));
+        let mut args = vec!["--restart", file.as_str()];
+        args.extend_from_slice(extra);
+        run(name, &overrides, &args, &out);
+        same(&out, &format!("{args:?}"));
+    }
+}

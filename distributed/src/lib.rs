@@ -46,8 +46,8 @@ pub use pitching::{
     pitch_rank, run_threads,
 };
 pub use solving::{
-    Observer, Physics, RankSolution, rank_state, solve_rank, solve_rank_observed, solve_threads,
-    solve_threads_observed,
+    Observed, Observer, Physics, RankSolution, rank_state, solve_rank, solve_rank_observed,
+    solve_threads, solve_threads_observed,
 };
 pub use transport::loopback::{Loopback, LoopbackOptions};
 #[cfg(feature = "mpi")]

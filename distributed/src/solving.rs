@@ -34,6 +34,7 @@ use std::time::Duration;
 
 use sdg_mesh::{EdgeId, Front, Mesh, Tent, VertexId};
 use sdg_solver::boundary::Boundary;
+use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, GEOMETRY_VALUES, Geometry};
 use sdg_solver::face::{
     FACE_GEOMETRY_VALUES, FaceGeometry, FaceState, MAX_FACE_BASIS, STATE_COMPONENTS,
@@ -134,17 +135,38 @@ pub struct RankSolution {
 }
 
 /// What a rank's caller records of each of the rank's tents as it is solved (outputs such as
-/// snapshot slices and history sums), through [`solve_rank_observed`].
+/// snapshot slices, history sums and crack-tracking crossings), through
+/// [`solve_rank_observed`].
 pub trait Observer {
-    /// Called right after the patch of `tent` (at an owned local vertex of `view`) is stored in
-    /// `solution` (local ids), with `front` at the tent's new time. By the pitching rule the
-    /// times of the tent's neighbours in `front` are their current ones.
-    fn solved(&mut self, view: &LocalView, front: &Front, solution: &FrontSolution, tent: &Tent);
+    /// Called right after the patch of `solved.tent` (at an owned local vertex of `view`) is
+    /// stored in `solved.solution` (local ids), with `front` at the tent's new time. By the
+    /// pitching rule the times of the tent's neighbours in `front` are their current ones.
+    fn solved(&mut self, view: &LocalView, front: &Front, solved: Observed<'_>);
+}
+
+/// A patch as an [`Observer`] sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct Observed<'a> {
+    /// Its tent.
+    pub tent: &'a Tent,
+    /// The rank's elements and faces, the patch's stored.
+    pub solution: &'a FrontSolution,
+    /// Where its cohesive faces crossed the crack-tracking levels
+    /// ([`PatchSolver::crack_crossings`], local edge ids).
+    pub crossings: &'a [Crossing],
 }
 
 /// Observes nothing.
 impl Observer for () {
-    fn solved(&mut self, _: &LocalView, _: &Front, _: &FrontSolution, _: &Tent) {}
+    fn solved(&mut self, _: &LocalView, _: &Front, _: Observed<'_>) {}
+}
+
+/// A solved patch: its report and its crack-tracking crossings (local edge ids; empty, and
+/// not allocated, for most patches).
+#[derive(Debug)]
+struct Solved {
+    report: PatchReport,
+    crossings: Vec<Crossing>,
 }
 
 /// A rank's patch solves: the [`Work`] of [`solve_rank`].
@@ -181,7 +203,7 @@ fn solve_tent(
     physics: &Physics<'_>,
     (view, front, solution): (&LocalView, &Front, &FrontSolution),
     tent: &Tent,
-) -> Result<PatchReport, PitchingError> {
+) -> Result<Solved, PitchingError> {
     let report = solver
         .solve(
             view.mesh(),
@@ -207,7 +229,10 @@ fn solve_tent(
         });
     }
     solver.commit(solution);
-    Ok(report)
+    Ok(Solved {
+        report,
+        crossings: solver.crack_crossings().to_vec(),
+    })
 }
 
 /// Where a rank's patches are solved: on the rank's thread with `solver`, and with
@@ -223,7 +248,7 @@ struct Solving<'c> {
 struct Crew<'c> {
     tents: Sender<Tent>,
     taken: &'c Mutex<Receiver<Tent>>,
-    solved: Receiver<(Tent, Result<PatchReport, PitchingError>)>,
+    solved: Receiver<(Tent, Result<Solved, PitchingError>)>,
 }
 
 /// A solving thread: solves the tents it takes from `tents` with `solver` until the channel
@@ -233,7 +258,7 @@ fn solving_thread(
     physics: &Physics<'_>,
     rank: (&LocalView, &Front, &FrontSolution),
     tents: &Mutex<Receiver<Tent>>,
-    solved: &Sender<(Tent, Result<PatchReport, PitchingError>)>,
+    solved: &Sender<(Tent, Result<Solved, PitchingError>)>,
 ) {
     loop {
         // One thread at a time waits on the channel; the lock is let go before solving.
@@ -257,7 +282,8 @@ fn solving_thread(
 impl<O: Observer> Patches<'_, O> {
     /// What follows a stored patch, in the order of the tents: generations, the slope, the
     /// report and the observer.
-    fn solved(&mut self, view: &LocalView, front: &Front, tent: &Tent, report: PatchReport) {
+    fn solved(&mut self, view: &LocalView, front: &Front, tent: &Tent, solved: Solved) {
+        let Solved { report, crossings } = solved;
         let mut slope = 0.0_f64;
         for &t in view.mesh().vertex_triangles(tent.vertex) {
             self.generation[t as usize] += 1;
@@ -269,15 +295,20 @@ impl<O: Observer> Patches<'_, O> {
                 self.edge_generation[e as usize] += 1;
             }
         }
-        self.observer.solved(view, front, self.solution, tent);
+        let observed = Observed {
+            tent,
+            solution: self.solution,
+            crossings: &crossings,
+        };
+        self.observer.solved(view, front, observed);
     }
 }
 
 impl<O: Observer> Work for Patches<'_, O> {
     fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError> {
         let solver = &mut self.solving.solver;
-        let report = solve_tent(solver, &self.physics, (view, front, self.solution), tent)?;
-        self.solved(view, front, tent, report);
+        let solved = solve_tent(solver, &self.physics, (view, front, self.solution), tent)?;
+        self.solved(view, front, tent, solved);
         Ok(())
     }
 
@@ -315,7 +346,7 @@ impl<O: Observer> Work for Patches<'_, O> {
         let Some(crew) = &self.solving.crew else {
             return Ok(None);
         };
-        let (tent, report) = match crew.solved.recv_timeout(wait) {
+        let (tent, solved) = match crew.solved.recv_timeout(wait) {
             Ok(done) => done,
             Err(RecvTimeoutError::Timeout) => return Ok(None),
             Err(RecvTimeoutError::Disconnected) => {
@@ -325,7 +356,7 @@ impl<O: Observer> Work for Patches<'_, O> {
                 });
             }
         };
-        self.solved(view, front, &tent, report?);
+        self.solved(view, front, &tent, solved?);
         Ok(Some(tent))
     }
 

@@ -43,7 +43,7 @@ use crate::problem::Problem;
 use crate::progress::Progress;
 use crate::rank_outputs::{PARTS, history_csv};
 use crate::rank_prior::Prior;
-use crate::solve::book::{Book, Milestones};
+use crate::solve::book::{Book, Milestones, TaggedCrossing};
 use crate::solve::checkpoint::{Counts, Folder};
 
 /// What rank 0 writes a checkpoint from: the gathered state, the tents since the (re)start in
@@ -53,6 +53,8 @@ pub(crate) struct Pausing<'a> {
     pub(crate) serial: &'a [(Tent, SolvedPatch)],
     pub(crate) sums: &'a [[ExactSum; PARTS]],
     pub(crate) snapshots: Snapshots,
+    /// The crack-tracking crossings since the (re)start, with their edges' tags.
+    pub(crate) crossings: Vec<TaggedCrossing>,
     /// Energy of the initial front, scaled units.
     pub(crate) energy0: &'a FrontEnergy,
     /// Wall time of the solve since the (re)start, s.
@@ -82,6 +84,12 @@ pub(crate) fn write(
     )?;
     let mut book = book(problem, prior, at.serial, at.energy0.total);
     book.history = history;
+    book.crossings = prior
+        .crossings
+        .iter()
+        .copied()
+        .chain(at.crossings)
+        .collect();
     book.snapshots = at.snapshots.with_png(config.output.png);
     let snapshot_times: Vec<f64> = (config.output.snapshot_times.iter())
         .map(|&t| config.time.elapsed(t))

@@ -1,6 +1,7 @@
 //! The end of a run over ranks: rank 0 sums the gathered tents in serial order into
-//! `summary.json` (state hash, energies, Newton counts, the partition's traffic) and writes
-//! `history.csv` from the ranks' merged history sums.
+//! `summary.json` (state hash, energies, Newton counts, the partition's traffic), writes
+//! `history.csv` from the ranks' merged history sums and `crack_tips.csv` from their
+//! crack-tracking crossings (the tip states do not depend on the crossings' order).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -14,10 +15,11 @@ use sdg_solver::patch::{Initial, PatchSolver};
 use crate::error::EngineError;
 use crate::output::write_output;
 use crate::problem::Problem;
-use crate::rank_outputs::{history_csv, merged_sums};
+use crate::rank_outputs::{self, history_csv, merged_sums};
 use crate::rank_prior::Prior;
 use crate::rank_setup::PartitionKind;
 use crate::solve::context::initial_state;
+use crate::solve::outputs::{crack_tips, lefm, write_crack_tips};
 use crate::solve::summary::state_hash;
 use crate::solve::tent::momentum_residual;
 use crate::solve::{
@@ -91,7 +93,11 @@ pub(crate) fn finish(
     summary.checkpoint = end.prior.summary(end.checkpoints.0, end.checkpoints.1);
     let outputs: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
     let times = crate::solve::book::history_times(config.time.span()).len();
-    let (sums, _) = merged_sums(&outputs, times)?;
+    let (sums, rests) = merged_sums(&outputs, times)?;
+    let mut crossings = end.prior.crossings.clone();
+    for rest in rests {
+        crossings.extend(rank_outputs::crossings(rest)?.0);
+    }
     let history = history_csv(
         problem,
         end.prior,
@@ -99,9 +105,15 @@ pub(crate) fn finish(
         &sums,
         (&initial_energy, front, Some(&energy)),
     )?;
-    let written = vec![write_output(dir, "history.csv", history.as_bytes()).map(drop)];
+    let (crack_csv, crack) = crack_tips(problem, &problem.mesh, &crossings, &[]).unzip();
+    summary.lefm = lefm(problem, crack_csv.as_deref(), &history);
+    summary.crack = crack;
+    let mut written = vec![write_output(dir, "history.csv", history.as_bytes()).map(drop)];
     if config.output.png {
         crate::plot::write_history_png(dir, &history);
+    }
+    if let Some(csv) = crack_csv {
+        written.push(write_crack_tips(problem, dir, &csv));
     }
     crate::solve::finish::write_summary(dir, written, summary, finishing)
 }

@@ -12,6 +12,7 @@ use crate::error::EngineError;
 use crate::output::snapshot::Snapshots;
 use crate::problem::Problem;
 use crate::solve::CheckpointSummary;
+use crate::solve::book::TaggedCrossing;
 use crate::solve::checkpoint::{Folder, Restored};
 
 /// What a run over ranks did before it (re)started: nothing for a new run, the checkpoint's
@@ -40,6 +41,8 @@ pub(crate) struct Prior {
     pub(crate) restarted: Option<(PathBuf, f64)>,
     /// Its snapshots (schedule, files written, slices pending), for a restart.
     pub(crate) snapshots: Option<Snapshots>,
+    /// Crack-tracking crossings before, with their edges' tags.
+    pub(crate) crossings: Vec<TaggedCrossing>,
 }
 
 impl Prior {
@@ -60,6 +63,7 @@ impl Prior {
             written: 0,
             restarted: None,
             snapshots: None,
+            crossings: Vec::new(),
         }
     }
 
@@ -108,6 +112,7 @@ impl Prior {
             written: folder.next_number(restored.counts.written),
             restarted: Some((file, config.time.clock(restored.header.time))),
             snapshots: Some(book.snapshots),
+            crossings: book.crossings,
         };
         Ok((prior, front, restored.frontier.solution))
     }

@@ -29,7 +29,7 @@ use crate::estimate::Estimate;
 use crate::problem::Problem;
 use crate::rank_checkpoint::{self, Pausing};
 use crate::rank_finish::{End, finish, initial_energy};
-use crate::rank_outputs::{RankOutputs, merged_sums, pending};
+use crate::rank_outputs::{self, RankOutputs, merged_sums};
 use crate::rank_prior::Prior;
 use crate::rank_setup::{PartitionKind, causality, physics};
 use crate::solve::book::history_times;
@@ -289,10 +289,10 @@ pub(crate) fn run_rank<T: Transport>(
     }
 }
 
-/// Writes checkpoint number `number` on rank 0 from the `gathered` state after `elapsed` since
-/// the (re)start, with the snapshots of rank 0's `outputs` and the other ranks' pending slices,
-/// and the initial front's energy `energy0`. Returns the path, the seconds it took, the
-/// front's least time (s) and the number of snapshots every rank has written.
+/// Writes checkpoint number `number` on rank 0 from the `gathered` state after `elapsed` since the
+/// (re)start, with the snapshots of rank 0's `outputs`, the other ranks' pending slices, every
+/// rank's crack-tracking crossings and the initial front's energy `energy0`. Returns the path, the
+/// seconds it took, the front's least time (s) and the number of snapshots every rank has written.
 fn write_checkpoint(
     shared: &Shared<'_>,
     (gathered, outputs, energy0, elapsed): (
@@ -307,8 +307,12 @@ fn write_checkpoint(
     let values: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
     let times = history_times(problem.loaded.config.time.span()).len();
     let (sums, rests) = merged_sums(&values, times)?;
-    let pending: Vec<(usize, Vec<u8>)> =
-        rests.into_iter().map(pending).collect::<Result<_, _>>()?;
+    let (mut crossings, mut pending) = (Vec::new(), Vec::new());
+    for rest in rests {
+        let (theirs, rest) = rank_outputs::crossings(rest)?;
+        crossings.extend(theirs);
+        pending.push(rank_outputs::pending(rest)?);
+    }
     let next_all = pending.iter().map(|p| p.0).min().unwrap_or(0);
     let mut snapshots = outputs.stored_snapshots(next_all);
     for (_, cbor) in pending.iter().skip(1) {
@@ -322,6 +326,7 @@ fn write_checkpoint(
         serial: &serial,
         sums: &sums,
         snapshots,
+        crossings,
         energy0,
         wall_time_s: elapsed.as_secs_f64(),
     };

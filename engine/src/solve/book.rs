@@ -9,6 +9,9 @@ use sdg_solver::patch::{InterfaceSample, PatchReport};
 use crate::output::snapshot::Snapshots;
 use crate::progress::Progress;
 
+/// A crack-tracking crossing with the tag of its edge.
+pub(crate) type TaggedCrossing = (Option<TagId>, Crossing);
+
 /// History rows are written when the whole front has passed each of this many equal fractions
 /// of the end time (and at the end).
 const HISTORY_ROWS: usize = 100;
@@ -147,7 +150,7 @@ pub(crate) struct Book {
     /// Interface probe samples: `(probe index, sample)`.
     pub(crate) samples: Vec<(usize, InterfaceSample)>,
     /// Crack-tracking crossings of cohesive faces with the tag of their edge.
-    pub(crate) crossings: Vec<(Option<TagId>, Crossing)>,
+    pub(crate) crossings: Vec<TaggedCrossing>,
     /// Crack nucleation, extension, branching and arrest, in the order they happened.
     pub(crate) fracture_events: Vec<crate::fracture::records::FractureEvent>,
     pub(crate) nonlinear_patches: u64,

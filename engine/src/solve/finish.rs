@@ -15,7 +15,7 @@ use crate::plot;
 
 use super::checkpoint::Counts;
 use super::context::{Solve, initial_state};
-use super::outputs::{front_cracks, initial_tip_points};
+use super::outputs::{crack_tips, front_cracks, initial_tip_points, lefm, write_crack_tips};
 use super::split::Split;
 use super::summary::{
     CheckpointSummary, EnergySummary, ErrorSummary, InterfaceSummary, RunSummary, Timings,
@@ -94,7 +94,8 @@ impl Solve<'_> {
                 / book.nonlinear_patches.max(1) as f64,
             newton_iterations_max: book.newton_max,
         };
-        let (crack_csv, crack) = self.crack_tips(mesh, &book).unzip();
+        let tips = crack_tips(problem, mesh, &book.crossings, &book.fracture_events);
+        let (crack_csv, crack) = tips.unzip();
         let error = problem.exact.as_ref().map(|w| {
             let e = slice_errors(mesh, solution, basis, system, t_end, w);
             ErrorSummary {
@@ -145,7 +146,7 @@ impl Solve<'_> {
             energy,
             interface,
             loading: problem.loading,
-            lefm: self.lefm(crack_csv.as_deref(), &book.history),
+            lefm: lefm(problem, crack_csv.as_deref(), &book.history),
             crack: crack.map(|crack| CrackSummary {
                 network: fracture.as_ref().map(|f| CrackNetwork {
                     branches: f.branches,
@@ -187,7 +188,7 @@ impl Solve<'_> {
         }
         written.push(self.write_probes(dir, &mut book));
         if let Some(csv) = crack_csv {
-            written.push(self.write_crack_tips(dir, &csv));
+            written.push(write_crack_tips(problem, dir, &csv));
         }
         written.push(self.write_fracture(state, &book.fracture_events, dir));
         written.push(self.write_trace(options));

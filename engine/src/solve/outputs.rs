@@ -12,7 +12,7 @@ use crate::output::write_output;
 use crate::plot;
 use crate::problem::Problem;
 
-use super::book::Book;
+use super::book::{Book, TaggedCrossing};
 use super::context::Solve;
 use crate::fracture::picture;
 use crate::fracture::records;
@@ -50,8 +50,14 @@ impl Solve<'_> {
         if config.output.png {
             plot::write_history_png(dir, &book.history);
         }
-        if let Some((csv, _)) = self.crack_tips(&state.mesh, &book) {
-            warn("crack_tips.csv", self.write_crack_tips(dir, &csv));
+        let tips = crack_tips(
+            self.problem,
+            &state.mesh,
+            &book.crossings,
+            &book.fracture_events,
+        );
+        if let Some((csv, _)) = tips {
+            warn("crack_tips.csv", write_crack_tips(self.problem, dir, &csv));
         }
         warn(
             "the crack files",
@@ -100,108 +106,6 @@ impl Solve<'_> {
         Ok(())
     }
 
-    /// With `[loading]`: its interface's tip states in `crack_tips` (the text of
-    /// `crack_tips.csv`: time, extension, speed and process zone) and the work of the cohesive
-    /// tractions in `history` (of `history.csv`) against LEFM; `None` without `[loading]` or
-    /// either table.
-    pub(crate) fn lefm(&self, crack_tips: Option<&str>, history: &str) -> Option<LefmComparison> {
-        let loading = self.problem.loading?;
-        let config = &self.problem.loaded.config;
-        let from = config.loading.as_ref()?.compare_from;
-        let (t0, tau) = (config.time.clock(loading.arrival_time), loading.scales.tau);
-        let columns = |text: &str, names: &[&str]| -> Option<Vec<Vec<f64>>> {
-            let table = ReadTable::parse(text, "").ok()?;
-            let at: Vec<usize> = names
-                .iter()
-                .map(|n| table.column(n))
-                .collect::<Option<_>>()?;
-            let tag = table.column("interface");
-            let name = &config.loading.as_ref()?.interface;
-            let rows = table
-                .rows()
-                .filter(|r| tag.is_none_or(|c| r.get(c) == Some(name)));
-            let row = |r: &csv::StringRecord| at.iter().map(|&c| number(r.get(c))).collect();
-            Some(rows.map(row).collect())
-        };
-        let normalized = |t: f64| (t - t0) / tau;
-        let tips = columns(
-            crack_tips?,
-            &["t_s", "extension_m", "speed_m_s", "process_zone_length_m"],
-        )?;
-        let tips: Vec<lefm::TipPoint> = (tips.iter())
-            .map(|r| lefm::TipPoint {
-                time: normalized(r[0]),
-                extension: r[1],
-                speed: r[2],
-                process_zone: r[3],
-            })
-            .collect();
-        let work = columns(history, &["time_s", "fracture_energy_j"])?;
-        let work: Vec<(f64, f64)> = work.iter().map(|r| (normalized(r[0]), r[1])).collect();
-        let (scales, material) = (loading.scales, &self.problem.material);
-        let units = lefm::Units {
-            length: tau * scales.c_r,
-            phi: scales.work_of_separation,
-            c_r: scales.c_r,
-            zone: lefm::ZoneEstimate::new(
-                material.mu(),
-                material.c_d(),
-                material.c_s(),
-                scales.work_of_separation,
-                scales.sigma_bar / scales.load_ratio,
-            ),
-        };
-        Some(lefm::compare(&tips, &work, from, &units))
-    }
-
-    /// `crack_tips.csv` and its summary from the tip crossings recorded so far: per crack
-    /// branch with `[fracture]` (the crossings of one tag would mix the tips of its branches),
-    /// else per cohesive or damage interface tag; `None` when the run tracks no crack tips.
-    pub(crate) fn crack_tips(&self, mesh: &Mesh, book: &Book) -> Option<(String, CrackSummary)> {
-        let c_r = self.problem.material.c_r();
-        let time = &self.problem.loaded.config.time;
-        if let Some(fracture) = &self.problem.fracture {
-            let crossings: Vec<Crossing> = book.crossings.iter().map(|&(_, c)| c).collect();
-            let zone = c_r * fracture.delay;
-            let branches = records::branch_tips(&book.fracture_events, &crossings, zone);
-            Some(tips::tips_csv("branch", &branches, c_r, time))
-        } else if self.problem.interfaces.any_cohesive() {
-            let names = mesh.tag_names();
-            let crossings: Vec<_> = book
-                .crossings
-                .iter()
-                .map(|(tag, c)| {
-                    let name = tag.map_or("untagged", |t| names[t as usize].as_str());
-                    (name.to_string(), *c)
-                })
-                .collect();
-            Some(tips::write(&crossings, c_r, time))
-        } else {
-            None
-        }
-    }
-
-    /// Writes `crack_tips.csv` (its text `csv`) and, with `output.png`, its picture: the branch
-    /// tips' speeds with `[fracture]`, else the tips against LEFM in the normalized units of
-    /// `[loading]` up to the end time.
-    pub(crate) fn write_crack_tips(&self, dir: &Path, csv: &str) -> Result<(), EngineError> {
-        let problem = self.problem;
-        let time = &problem.loaded.config.time;
-        write_output(dir, "crack_tips.csv", csv.as_bytes())?;
-        if problem.loaded.config.output.png && problem.fracture.is_some() {
-            plot::write_tip_speed_png(dir, csv, problem.material.c_r());
-        } else if problem.loaded.config.output.png {
-            let normalization = problem.loading.map(|l| plot::Normalization {
-                tau: l.scales.tau,
-                c_r: l.scales.c_r,
-                arrival: time.clock(l.arrival_time),
-                end: time.end,
-            });
-            plot::write_crack_png(dir, csv, normalization);
-        }
-        Ok(())
-    }
-
     /// Writes the trace of `--trace`.
     pub(crate) fn write_trace(&self, options: &RunOptions) -> Result<(), EngineError> {
         match (&self.tracer, &options.trace) {
@@ -224,6 +128,120 @@ impl Solve<'_> {
         }
         Ok(())
     }
+}
+
+/// With `[loading]`: its interface's tip states in `crack_tips` (the text of
+/// `crack_tips.csv`: time, extension, speed and process zone) and the work of the cohesive
+/// tractions in `history` (of `history.csv`) against LEFM; `None` without `[loading]` or
+/// either table.
+pub(crate) fn lefm(
+    problem: &Problem,
+    crack_tips: Option<&str>,
+    history: &str,
+) -> Option<LefmComparison> {
+    let loading = problem.loading?;
+    let config = &problem.loaded.config;
+    let from = config.loading.as_ref()?.compare_from;
+    let (t0, tau) = (config.time.clock(loading.arrival_time), loading.scales.tau);
+    let columns = |text: &str, names: &[&str]| -> Option<Vec<Vec<f64>>> {
+        let table = ReadTable::parse(text, "").ok()?;
+        let at: Vec<usize> = names
+            .iter()
+            .map(|n| table.column(n))
+            .collect::<Option<_>>()?;
+        let tag = table.column("interface");
+        let name = &config.loading.as_ref()?.interface;
+        let rows = table
+            .rows()
+            .filter(|r| tag.is_none_or(|c| r.get(c) == Some(name)));
+        let row = |r: &csv::StringRecord| at.iter().map(|&c| number(r.get(c))).collect();
+        Some(rows.map(row).collect())
+    };
+    let normalized = |t: f64| (t - t0) / tau;
+    let tips = columns(
+        crack_tips?,
+        &["t_s", "extension_m", "speed_m_s", "process_zone_length_m"],
+    )?;
+    let tips: Vec<lefm::TipPoint> = (tips.iter())
+        .map(|r| lefm::TipPoint {
+            time: normalized(r[0]),
+            extension: r[1],
+            speed: r[2],
+            process_zone: r[3],
+        })
+        .collect();
+    let work = columns(history, &["time_s", "fracture_energy_j"])?;
+    let work: Vec<(f64, f64)> = work.iter().map(|r| (normalized(r[0]), r[1])).collect();
+    let (scales, material) = (loading.scales, &problem.material);
+    let units = lefm::Units {
+        length: tau * scales.c_r,
+        phi: scales.work_of_separation,
+        c_r: scales.c_r,
+        zone: lefm::ZoneEstimate::new(
+            material.mu(),
+            material.c_d(),
+            material.c_s(),
+            scales.work_of_separation,
+            scales.sigma_bar / scales.load_ratio,
+        ),
+    };
+    Some(lefm::compare(&tips, &work, from, &units))
+}
+
+/// `crack_tips.csv` and its summary from the tip `crossings` recorded so far (with their
+/// edges' tags on `mesh`) and the fracture `events`: per crack branch with `[fracture]` (the
+/// crossings of one tag would mix the tips of its branches), else per cohesive or damage
+/// interface tag; `None` when the run tracks no crack tips.
+pub(crate) fn crack_tips(
+    problem: &Problem,
+    mesh: &Mesh,
+    crossings: &[TaggedCrossing],
+    events: &[records::FractureEvent],
+) -> Option<(String, CrackSummary)> {
+    let c_r = problem.material.c_r();
+    let time = &problem.loaded.config.time;
+    if let Some(fracture) = &problem.fracture {
+        let crossings: Vec<Crossing> = crossings.iter().map(|&(_, c)| c).collect();
+        let zone = c_r * fracture.delay;
+        let branches = records::branch_tips(events, &crossings, zone);
+        Some(tips::tips_csv("branch", &branches, c_r, time))
+    } else if problem.interfaces.any_cohesive() {
+        let names = mesh.tag_names();
+        let crossings: Vec<_> = crossings
+            .iter()
+            .map(|(tag, c)| {
+                let name = tag.map_or("untagged", |t| names[t as usize].as_str());
+                (name.to_string(), *c)
+            })
+            .collect();
+        Some(tips::write(&crossings, c_r, time))
+    } else {
+        None
+    }
+}
+
+/// Writes `crack_tips.csv` (its text `csv`) and, with `output.png`, its picture: the branch
+/// tips' speeds with `[fracture]`, else the tips against LEFM in the normalized units of
+/// `[loading]` up to the end time.
+pub(crate) fn write_crack_tips(
+    problem: &Problem,
+    dir: &Path,
+    csv: &str,
+) -> Result<(), EngineError> {
+    let time = &problem.loaded.config.time;
+    write_output(dir, "crack_tips.csv", csv.as_bytes())?;
+    if problem.loaded.config.output.png && problem.fracture.is_some() {
+        plot::write_tip_speed_png(dir, csv, problem.material.c_r());
+    } else if problem.loaded.config.output.png {
+        let normalization = problem.loading.map(|l| plot::Normalization {
+            tau: l.scales.tau,
+            c_r: l.scales.c_r,
+            arrival: time.clock(l.arrival_time),
+            end: time.end,
+        });
+        plot::write_crack_png(dir, csv, normalization);
+    }
+    Ok(())
 }
 
 /// The crack edges of `state` with their damage on the front (initial cracks without a face
