@@ -75,6 +75,8 @@ fn check(name: &str, overrides: &[&str], cases: &[(usize, &str, usize)]) {
             std::fs::read_to_string(ranks_out.join("history.csv")).unwrap(),
             "history.csv of {ranks} MPI ranks ({partition}) and of 2 in-process ranks"
         );
+        let probes = |out: &Path| std::fs::read_to_string(out.join("interface.csv")).ok();
+        assert_eq!(probes(&out), probes(&threads_out), "interface.csv");
         let snapshots = mpi["snapshots"].as_array().unwrap().len();
         for index in 0..snapshots {
             let threaded = slices(&[threads_out.join(format!("snapshot_{index:04}.vtu"))]);
@@ -110,7 +112,6 @@ fn frictional_interface_over_mpi_is_the_run_on_one_thread() {
         "mesh.ny=8",
         "time.end=4e-6",
         "output.snapshot_times=[]",
-        "output.interface_probes=[]",
         "output.png=false",
     ];
     check("stick_slip.toml", &overrides, &[(3, "random", 2)]);

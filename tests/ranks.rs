@@ -50,6 +50,11 @@ fn assert_same_outputs_over_ranks(
             None => first_history = Some(history),
             Some(first) => assert_eq!(&history, first, "{ranks} ranks, {partition}"),
         }
+        assert_eq!(
+            probes(&out),
+            probes(&threads_out),
+            "interface.csv, {ranks} ranks, {partition}"
+        );
         let rows = history_rows(&out);
         assert!(
             rows.len() >= 4,
@@ -109,7 +114,6 @@ fn history_and_snapshots_of_a_frictional_interface_over_ranks_are_the_threaded_r
         "mesh.ny=8",
         "time.end=4e-6",
         "output.snapshot_times=[2e-6, 4e-6]",
-        "output.interface_probes=[]",
         "output.png=false",
         "output.vtu=\"ascii\"",
     ];
@@ -229,7 +233,6 @@ fn frictional_interface_over_ranks_is_the_run_on_one_thread() {
         "mesh.ny=8",
         "time.end=4e-6",
         "output.snapshot_times=[]",
-        "output.interface_probes=[]",
         "output.png=false",
     ];
     let threads = run(
@@ -256,7 +259,7 @@ fn what_ranks_cannot_do_yet_is_bad_input_naming_the_key() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().to_str().unwrap();
     let repo = |name: &str| format!("{}/configs/{name}", env!("CARGO_MANIFEST_DIR"));
-    let cases: [(Vec<String>, &str); 5] = [
+    let cases: [(Vec<String>, &str); 4] = [
         (
             vec![repo("adaptive_pulse.toml")],
             "adapt.enabled: mesh-changing events",
@@ -269,7 +272,6 @@ fn what_ranks_cannot_do_yet_is_bad_input_naming_the_key() {
             ],
             "[fracture]: mesh-changing events run over ranks in deterministic mode only",
         ),
-        (vec![repo("stick_slip.toml")], "output.interface_probes"),
         (
             vec![
                 repo("plane_wave.toml"),
@@ -308,7 +310,7 @@ fn what_ranks_cannot_do_yet_is_bad_input_naming_the_key() {
 }
 
 /// The state hash, patch count and snapshot slices (ASCII) of the run in `out`.
-fn state(out: &Path, snapshots: usize) -> (serde_json::Value, serde_json::Value, Vec<Vec<String>>) {
+fn state(out: &Path, snapshots: usize) -> State {
     let summary = summary_json(out);
     let files = summary["snapshots"].as_array().unwrap().clone();
     assert_eq!(files.len(), snapshots, "{files:?}");
@@ -337,8 +339,22 @@ fn state(out: &Path, snapshots: usize) -> (serde_json::Value, serde_json::Value,
         summary["state_hash"].clone(),
         summary["patches"].clone(),
         slices,
+        probes(out),
     )
 }
+
+/// The text of `interface.csv` in `out`, if the run wrote one.
+fn probes(out: &Path) -> Option<String> {
+    std::fs::read_to_string(out.join("interface.csv")).ok()
+}
+
+/// What a run ends with: its state hash, patches, snapshot slices and `interface.csv`.
+type State = (
+    serde_json::Value,
+    serde_json::Value,
+    Vec<Vec<String>>,
+    Option<String>,
+);
 
 /// Runs `name` with `overrides` (a checkpoint every `every` s) over 3 ranks, then from its
 /// first checkpoint on 2 and 4 ranks and on threads, and on 2 ranks from the first checkpoint
@@ -408,7 +424,6 @@ fn a_frictional_interface_checkpointed_over_ranks_restarts_on_any_rank_count_and
         "time.end=4e-6",
         "checkpoint.every_sim_s=1.5e-6",
         "output.snapshot_times=[2e-6, 4e-6]",
-        "output.interface_probes=[]",
         "output.png=false",
         "output.vtu=\"ascii\"",
     ];
@@ -473,7 +488,6 @@ fn crack_tips_of_a_debonding_interface_over_ranks_are_the_threaded_runs() {
         "solver.order=2",
         &every,
         "output.snapshot_times=[]",
-        "output.interface_probes=[]",
         "output.png=false",
     ];
     let name = "damage_interface.toml";
@@ -482,6 +496,7 @@ fn crack_tips_of_a_debonding_interface_over_ranks_are_the_threaded_runs() {
     let threads_out = dir.path().join("threads");
     let threads = run(name, &overrides, &["--threads", "2"], &threads_out);
     let expected = tips(&threads_out);
+    assert!(probes(&threads_out).is_some(), "the config's probe");
     // The checkpoint falls while the interface debonds: tip states on both sides of it.
     let times: Vec<f64> = (expected.lines().skip(1))
         .map(|line| line.split(',').next().unwrap().parse().unwrap())
@@ -493,6 +508,7 @@ fn crack_tips_of_a_debonding_interface_over_ranks_are_the_threaded_runs() {
     let same = |out: &Path, what: &str| {
         let summary = summary_json(out);
         assert_eq!(tips(out), expected, "{what}");
+        assert_eq!(probes(out), probes(&threads_out), "{what}");
         assert_eq!(summary["crack"], threads["crack"], "{what}");
         assert_eq!(summary["state_hash"], threads["state_hash"], "{what}");
     };

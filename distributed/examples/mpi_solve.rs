@@ -36,7 +36,7 @@ fn plane_wave(cells: u32) -> Result<Problem, String> {
 }
 
 fn setup(problem: &Problem) -> (Causality, Physics<'_>) {
-    (causality(problem), physics(problem))
+    (causality(problem), physics(problem, &[]))
 }
 
 /// Solves this rank's share; returns its view, report, elements and the wall time.

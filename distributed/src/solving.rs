@@ -40,7 +40,7 @@ use sdg_solver::face::{
     FACE_GEOMETRY_VALUES, FaceGeometry, FaceState, MAX_FACE_BASIS, STATE_COMPONENTS,
 };
 use sdg_solver::interface::Interfaces;
-use sdg_solver::patch::{Initial, Newton, PatchReport, PatchSolver};
+use sdg_solver::patch::{Initial, InterfaceSample, Newton, PatchReport, PatchSolver};
 use sdg_solver::system::System;
 
 use crate::partition::{Partition, Rank};
@@ -70,6 +70,8 @@ pub struct Physics<'a> {
     pub interfaces: &'a Interfaces,
     /// Newton settings of the patches with nonlinear faces.
     pub newton: Newton,
+    /// Points (m) where interface probes sample each patch ([`PatchSolver::probe_samples`]).
+    pub probes: &'a [[f64; 2]],
 }
 
 impl Physics<'_> {
@@ -154,6 +156,8 @@ pub struct Observed<'a> {
     /// Where its cohesive faces crossed the crack-tracking levels
     /// ([`PatchSolver::crack_crossings`], local edge ids).
     pub crossings: &'a [Crossing],
+    /// Its samples at [`Physics::probes`]: `(probe index, sample)`.
+    pub samples: &'a [(usize, InterfaceSample)],
 }
 
 /// Observes nothing.
@@ -161,12 +165,13 @@ impl Observer for () {
     fn solved(&mut self, _: &LocalView, _: &Front, _: Observed<'_>) {}
 }
 
-/// A solved patch: its report and its crack-tracking crossings (local edge ids; empty, and
-/// not allocated, for most patches).
+/// A solved patch: its report, its crack-tracking crossings (local edge ids) and its probes'
+/// samples (both empty, and not allocated, for most patches).
 #[derive(Debug)]
 struct Solved {
     report: PatchReport,
     crossings: Vec<Crossing>,
+    samples: Vec<(usize, InterfaceSample)>,
 }
 
 /// A rank's patch solves: the [`Work`] of [`solve_rank`].
@@ -229,9 +234,14 @@ fn solve_tent(
         });
     }
     solver.commit(solution);
+    let mut samples = Vec::new();
+    if !physics.probes.is_empty() {
+        solver.probe_samples(view.mesh(), physics.probes.iter().copied(), &mut samples);
+    }
     Ok(Solved {
         report,
         crossings: solver.crack_crossings().to_vec(),
+        samples,
     })
 }
 
@@ -283,7 +293,11 @@ impl<O: Observer> Patches<'_, O> {
     /// What follows a stored patch, in the order of the tents: generations, the slope, the
     /// report and the observer.
     fn solved(&mut self, view: &LocalView, front: &Front, tent: &Tent, solved: Solved) {
-        let Solved { report, crossings } = solved;
+        let Solved {
+            report,
+            crossings,
+            samples,
+        } = solved;
         let mut slope = 0.0_f64;
         for &t in view.mesh().vertex_triangles(tent.vertex) {
             self.generation[t as usize] += 1;
@@ -299,6 +313,7 @@ impl<O: Observer> Patches<'_, O> {
             tent,
             solution: self.solution,
             crossings: &crossings,
+            samples: &samples,
         };
         self.observer.solved(view, front, observed);
     }

@@ -25,7 +25,7 @@ fn stick_slip(dir: &std::path::Path) -> Problem {
 }
 
 fn setup(problem: &Problem) -> (Causality, Physics<'_>) {
-    (causality(problem), physics(problem))
+    (causality(problem), physics(problem, &[]))
 }
 
 /// Every element's and face's bits, by global id.

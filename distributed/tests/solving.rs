@@ -139,7 +139,7 @@ fn state_hash(front: &[f64], gathered: &Gathered, size: usize) -> String {
 /// against the engine's run on one thread; returns the gathered elements and faces, the tents
 /// and the values per element.
 fn serial(problem: &Problem) -> (Gathered, usize) {
-    let (mesh, causality, physics) = (&problem.mesh, causality(problem), physics(problem));
+    let (mesh, causality, physics) = (&problem.mesh, causality(problem), physics(problem, &[]));
     let engine = RunOptions {
         threads: Some(1),
         force: true,
@@ -188,7 +188,7 @@ fn check(
     reference: &Gathered,
     tents: usize,
 ) -> u64 {
-    let (mesh, causality, physics) = (&problem.mesh, causality(problem), physics(problem));
+    let (mesh, causality, physics) = (&problem.mesh, causality(problem), physics(problem, &[]));
     let delays = LoopbackOptions {
         seed,
         max_delay: Duration::from_micros(200),
@@ -308,7 +308,7 @@ fn friction_cohesion_and_damage_states_are_the_serial_runs_over_ranks() {
 fn a_front_solution_of_the_wrong_size_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
     let problem = plane_wave(4, 1e-7, dir.path());
-    let (mesh, causality, physics) = (&problem.mesh, causality(&problem), physics(&problem));
+    let (mesh, causality, physics) = (&problem.mesh, causality(&problem), physics(&problem, &[]));
     let partition = Partition::coordinate(mesh, 1).unwrap();
     let view = sdg_distributed::LocalView::new(mesh, &partition, 0).unwrap();
     let pitcher = sdg_mesh::Pitcher::new(
@@ -358,7 +358,7 @@ fn a_front_solution_of_the_wrong_size_is_an_error() {
 fn a_patch_with_a_non_finite_value_stops_the_rank() {
     let dir = tempfile::tempdir().unwrap();
     let problem = plane_wave(4, 1e-7, dir.path());
-    let (mesh, causality, physics) = (&problem.mesh, causality(&problem), physics(&problem));
+    let (mesh, causality, physics) = (&problem.mesh, causality(&problem), physics(&problem, &[]));
     let partition = Partition::coordinate(mesh, 1).unwrap();
     let view = sdg_distributed::LocalView::new(mesh, &partition, 0).unwrap();
     let pitcher = |t_end: f64| {

@@ -20,7 +20,7 @@
 //! deterministic rounds' vertices, those first in `(time, id)` among their neighbours), so a
 //! run over ranks is the threaded run of either mode. What cannot be honoured yet is refused
 //! as bad input (exit 2), naming the key and why: mesh-changing events (`[adapt]`,
-//! `[fracture]`) in asynchronous mode, `--trace`, interface probes and the spacetime mesh.
+//! `[fracture]`) in asynchronous mode, `--trace` and the spacetime mesh.
 //! Deterministic runs with events go to the module `rank_rounds` instead: rounds split over
 //! ranks that each hold the whole state.
 
@@ -338,12 +338,6 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
             .trace
             .is_some()
             .then(|| "--trace: a run over ranks records no trace yet".to_string()),
-        (!config.output.interface_probes.is_empty()).then(|| {
-            format!(
-                "{file}: output.interface_probes: a run over ranks records no probes yet; set \
-                 it to []"
-            )
-        }),
         config.output.spacetime_mesh.then(|| {
             format!("{file}: output.spacetime_mesh: a run over ranks does not write it yet")
         }),

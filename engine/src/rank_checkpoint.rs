@@ -43,7 +43,7 @@ use crate::problem::Problem;
 use crate::progress::Progress;
 use crate::rank_outputs::{PARTS, history_csv};
 use crate::rank_prior::Prior;
-use crate::solve::book::{Book, Milestones, TaggedCrossing};
+use crate::solve::book::{Book, Milestones, Records};
 use crate::solve::checkpoint::{Counts, Folder};
 
 /// What rank 0 writes a checkpoint from: the gathered state, the tents since the (re)start in
@@ -53,8 +53,8 @@ pub(crate) struct Pausing<'a> {
     pub(crate) serial: &'a [(Tent, SolvedPatch)],
     pub(crate) sums: &'a [[ExactSum; PARTS]],
     pub(crate) snapshots: Snapshots,
-    /// The crack-tracking crossings since the (re)start, with their edges' tags.
-    pub(crate) crossings: Vec<TaggedCrossing>,
+    /// The ranks' crack-tracking crossings and probe samples since the (re)start.
+    pub(crate) records: Records,
     /// Energy of the initial front, scaled units.
     pub(crate) energy0: &'a FrontEnergy,
     /// Wall time of the solve since the (re)start, s.
@@ -84,11 +84,18 @@ pub(crate) fn write(
     )?;
     let mut book = book(problem, prior, at.serial, at.energy0.total);
     book.history = history;
-    book.crossings = prior
+    let (before, since) = (&prior.records, at.records);
+    book.crossings = before
         .crossings
         .iter()
         .copied()
-        .chain(at.crossings)
+        .chain(since.crossings)
+        .collect();
+    book.samples = before
+        .samples
+        .iter()
+        .copied()
+        .chain(since.samples)
         .collect();
     book.snapshots = at.snapshots.with_png(config.output.png);
     let snapshot_times: Vec<f64> = (config.output.snapshot_times.iter())

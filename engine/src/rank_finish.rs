@@ -1,7 +1,8 @@
 //! The end of a run over ranks: rank 0 sums the gathered tents in serial order into
 //! `summary.json` (state hash, energies, Newton counts, the partition's traffic), writes
-//! `history.csv` from the ranks' merged history sums and `crack_tips.csv` from their
-//! crack-tracking crossings (the tip states do not depend on the crossings' order).
+//! `history.csv` from the ranks' merged history sums, and `crack_tips.csv` and
+//! `interface.csv` from their crack-tracking crossings and probe samples (neither file depends
+//! on the order they come in).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -19,7 +20,7 @@ use crate::rank_outputs::{self, history_csv, merged_sums};
 use crate::rank_prior::Prior;
 use crate::rank_setup::PartitionKind;
 use crate::solve::context::initial_state;
-use crate::solve::outputs::{crack_tips, lefm, write_crack_tips};
+use crate::solve::outputs::{crack_tips, lefm, write_crack_tips, write_probes};
 use crate::solve::summary::state_hash;
 use crate::solve::tent::momentum_residual;
 use crate::solve::{
@@ -94,9 +95,12 @@ pub(crate) fn finish(
     let outputs: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
     let times = crate::solve::book::history_times(config.time.span()).len();
     let (sums, rests) = merged_sums(&outputs, times)?;
-    let mut crossings = end.prior.crossings.clone();
+    let (mut crossings, mut samples) = (end.prior.records.crossings.clone(), Vec::new());
+    samples.extend_from_slice(&end.prior.records.samples);
     for rest in rests {
-        crossings.extend(rank_outputs::crossings(rest)?.0);
+        let records = rank_outputs::records(rest)?.0;
+        crossings.extend(records.crossings);
+        samples.extend(records.samples);
     }
     let history = history_csv(
         problem,
@@ -115,6 +119,7 @@ pub(crate) fn finish(
     if let Some(csv) = crack_csv {
         written.push(write_crack_tips(problem, dir, &csv));
     }
+    written.push(write_probes(problem, dir, &mut samples));
     crate::solve::finish::write_summary(dir, written, summary, finishing)
 }
 

@@ -37,9 +37,9 @@
 //! (a few values each) per history time; no element is kept beyond the run's own.
 
 use sdg_distributed::{LocalView, Observed, Observer, Partition, SolvedPatch};
-use sdg_mesh::{Front, TagId, Tent};
+use sdg_mesh::{Front, Tent};
 use sdg_solver::basis::Basis;
-use sdg_solver::crack::{Crossing, Level};
+use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::norms::FrontEnergy;
 use sdg_solver::patch::{PatchReport, PatchSolver};
@@ -49,7 +49,7 @@ use crate::exact_sum::ExactSum;
 use crate::output::snapshot::{Piece, Snapshots};
 use crate::problem::Problem;
 use crate::rank_prior::Prior;
-use crate::solve::book::{Milestone, Milestones, TaggedCrossing, history_times};
+use crate::solve::book::{Milestone, Milestones, Records, history_times};
 use crate::solve::history::{history_header, history_line, point_values, repeats_last_row};
 
 /// Snapshot files written: (time in s, file name).
@@ -77,9 +77,8 @@ pub(crate) struct RankOutputs<'p> {
     coefficients: Vec<f64>,
     phi: Vec<f64>,
     values: Vec<f64>,
-    /// The crack-tracking crossings of the rank's patches, with their edges' tags (global
-    /// edge ids).
-    crossings: Vec<TaggedCrossing>,
+    /// The crack-tracking crossings and probe samples of the rank's patches.
+    records: Records,
     /// The first failure (a snapshot not written, an element without its energy).
     error: Option<EngineError>,
 }
@@ -149,30 +148,23 @@ impl<'p> RankOutputs<'p> {
             phi: vec![0.0; basis.len()],
             values: vec![0.0; width],
             basis,
-            crossings: Vec::new(),
+            records: Records::default(),
             error: None,
         })
     }
 
     /// What a checkpoint gathers from this rank, once every file handed to the writer is on disk:
-    /// the history sums and crossings as [`Self::finish`] returns them, then the number of
-    /// snapshots it has written, the length in bytes of the slices of [`Snapshots::pending_cbor`]
-    /// and those bytes, 8 to a value's bits.
+    /// the values [`Self::finish`] returns, then the number of snapshots it has written and the
+    /// slices of [`Snapshots::pending_cbor`] as bytes ([`push_bytes`]).
     pub(crate) fn checkpoint_values(&mut self) -> Result<Vec<f64>, EngineError> {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
         self.snapshots.finish()?;
-        let mut values = self.sum_values();
-        crossing_values(&self.crossings, &mut values);
+        let mut values = self.values();
         let (next, bytes) = self.snapshots.pending_cbor();
         values.push(next as f64);
-        values.push(bytes.len() as f64);
-        values.extend(bytes.chunks(8).map(|chunk| {
-            let mut word = [0_u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            f64::from_bits(u64::from_le_bytes(word))
-        }));
+        push_bytes(&mut values, &bytes);
         Ok(values)
     }
 
@@ -188,22 +180,23 @@ impl<'p> RankOutputs<'p> {
         self.snapshots.forget_kept(next);
     }
 
-    /// The history sums as values: per history time and part, the number of partials, then the
-    /// partials.
-    fn sum_values(&self) -> Vec<f64> {
+    /// The history sums and the records as values: per history time and part, the number of
+    /// partials, then the partials; then the [`Records`] as CBOR bytes ([`push_bytes`]).
+    fn values(&self) -> Vec<f64> {
         let mut values = Vec::new();
         for sum in self.sums.iter().flatten() {
             values.push(sum.partials().len() as f64);
             values.extend_from_slice(sum.partials());
         }
+        let mut cbor = Vec::new();
+        ciborium::into_writer(&self.records, &mut cbor).expect("records encode in memory");
+        push_bytes(&mut values, &cbor);
         values
     }
 
     /// Writes the snapshots left (those at the end time), waits for every file, and returns
-    /// the history sums and the crossings as values for
-    /// [`sdg_distributed::RankReport::outputs`] (per history time and part, the number of
-    /// partials, then the partials; then [`crossing_values`]) with the snapshot files this rank
-    /// wrote (time in s, file name).
+    /// the history sums and the records as values for [`sdg_distributed::RankReport::outputs`]
+    /// ([`Self::values`]) with the snapshot files this rank wrote (time in s, file name).
     pub(crate) fn finish(mut self) -> Result<(Vec<f64>, Written), EngineError> {
         if let Some(e) = self.error.take() {
             return Err(e);
@@ -211,9 +204,7 @@ impl<'p> RankOutputs<'p> {
         let t_end = self.problem.loaded.config.time.span();
         self.snapshots.flush(t_end)?;
         self.snapshots.finish()?;
-        let mut values = self.sum_values();
-        crossing_values(&self.crossings, &mut values);
-        Ok((values, self.snapshots.written().to_vec()))
+        Ok((self.values(), self.snapshots.written().to_vec()))
     }
 
     /// Cuts the elements of `triangles` (local ids) by the pending snapshot planes.
@@ -244,10 +235,12 @@ impl Observer for RankOutputs<'_> {
     fn solved(&mut self, view: &LocalView, front: &Front, solved: Observed<'_>) {
         let (tent, solution) = (solved.tent, solved.solution);
         let edges = self.problem.mesh.edges();
-        self.crossings.extend(solved.crossings.iter().map(|c| {
+        let records = &mut self.records;
+        records.crossings.extend(solved.crossings.iter().map(|c| {
             let edge = view.global_edge(c.edge);
             (edges[edge as usize].tag, Crossing { edge, ..*c })
         }));
+        records.samples.extend_from_slice(solved.samples);
         let mesh = view.mesh();
         let v = tent.vertex;
         let star = mesh.vertex_triangles(v);
@@ -409,78 +402,47 @@ pub(crate) fn merged_sums<'a>(
     Ok((sums, rests))
 }
 
-/// Values per crossing in [`crossing_values`].
-const CROSSING_VALUES: usize = 7;
-
-/// Appends `crossings` to `values`: their number, then per crossing its edge, point, time,
-/// level (0 tip, 1 zone end), edge length and tag (-1: none), each exact in an `f64`.
-fn crossing_values(crossings: &[TaggedCrossing], values: &mut Vec<f64>) {
-    values.push(crossings.len() as f64);
-    for (tag, c) in crossings {
-        let level = match c.level {
-            Level::Tip => 0.0,
-            Level::ZoneEnd => 1.0,
-        };
-        let tag = tag.map_or(-1.0, f64::from);
-        values.extend([
-            f64::from(c.edge),
-            c.point[0],
-            c.point[1],
-            c.time,
-            level,
-            c.edge_length,
-            tag,
-        ]);
-    }
+/// Appends `bytes` to `values`: their length, then the bytes, 8 to a value's bits.
+fn push_bytes(values: &mut Vec<f64>, bytes: &[u8]) {
+    values.push(bytes.len() as f64);
+    values.extend(bytes.chunks(8).map(|chunk| {
+        let mut word = [0_u8; 8];
+        word[..chunk.len()].copy_from_slice(chunk);
+        f64::from_bits(u64::from_le_bytes(word))
+    }));
 }
 
-/// The crossings [`crossing_values`] put at the start of `rest`, and the values after them.
-/// Errors: values of the wrong form.
-pub(crate) fn crossings(rest: &[f64]) -> Result<(Vec<TaggedCrossing>, &[f64]), EngineError> {
-    let bad = || EngineError::Runtime("crack crossings of a rank of the wrong form".into());
-    let (&count, rest) = rest.split_first().ok_or_else(bad)?;
-    let count = count as usize;
-    let (values, rest) = rest
-        .split_at_checked(count * CROSSING_VALUES)
-        .ok_or_else(bad)?;
-    let crossings = values
-        .chunks_exact(CROSSING_VALUES)
-        .map(|v| {
-            let level = if v[4] == 0.0 {
-                Level::Tip
-            } else {
-                Level::ZoneEnd
-            };
-            let tag = (v[6] >= 0.0).then_some(v[6] as TagId);
-            let crossing = Crossing {
-                edge: v[0] as sdg_mesh::EdgeId,
-                point: [v[1], v[2]],
-                time: v[3],
-                level,
-                edge_length: v[5],
-            };
-            (tag, crossing)
-        })
-        .collect();
-    Ok((crossings, rest))
-}
-
-/// The number of snapshots a rank has written, and its snapshot slices as CBOR, from the values
-/// [`RankOutputs::checkpoint_values`] put after its sums and crossings (`rest`). Errors: values of
-/// the wrong form.
-pub(crate) fn pending(rest: &[f64]) -> Result<(usize, Vec<u8>), EngineError> {
-    let bad = |why: &str| EngineError::Runtime(format!("snapshot slices of a rank: {why}"));
-    let [next, len, words @ ..] = rest else {
-        return Err(bad("none"));
-    };
-    let len = *len as usize;
-    if words.len() != len.div_ceil(8) {
-        return Err(bad("of the wrong length"));
-    }
+/// The bytes [`push_bytes`] put at the start of `rest`, and the values after them; `None` for
+/// values of the wrong form.
+fn take_bytes(rest: &[f64]) -> Option<(Vec<u8>, &[f64])> {
+    let (&len, rest) = rest.split_first()?;
+    let len = len as usize;
+    let (words, rest) = rest.split_at_checked(len.div_ceil(8))?;
     let mut bytes: Vec<u8> = words
         .iter()
         .flat_map(|w| w.to_bits().to_le_bytes())
         .collect();
     bytes.truncate(len);
-    Ok((*next as usize, bytes))
+    Some((bytes, rest))
+}
+
+/// The [`Records`] a rank's values hold after its sums (`rest`), and the values after them.
+/// Errors: values of the wrong form.
+pub(crate) fn records(rest: &[f64]) -> Result<(Records, &[f64]), EngineError> {
+    let bad = |why: String| EngineError::Runtime(format!("the records of a rank: {why}"));
+    let (bytes, rest) = take_bytes(rest).ok_or_else(|| bad("of the wrong length".into()))?;
+    let records = ciborium::from_reader(&bytes[..]).map_err(|e| bad(e.to_string()))?;
+    Ok((records, rest))
+}
+
+/// The number of snapshots a rank has written, and its snapshot slices as CBOR, from the
+/// values [`RankOutputs::checkpoint_values`] put after its records (`rest`). Errors: values of
+/// the wrong form.
+pub(crate) fn pending(rest: &[f64]) -> Result<(usize, Vec<u8>), EngineError> {
+    let bad = |why: &str| EngineError::Runtime(format!("snapshot slices of a rank: {why}"));
+    let (next, rest) = rest.split_first().ok_or_else(|| bad("none"))?;
+    match take_bytes(rest) {
+        Some((bytes, [])) => Ok((*next as usize, bytes)),
+        _ => Err(bad("of the wrong length")),
+    }
 }

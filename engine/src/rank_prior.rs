@@ -12,7 +12,7 @@ use crate::error::EngineError;
 use crate::output::snapshot::Snapshots;
 use crate::problem::Problem;
 use crate::solve::CheckpointSummary;
-use crate::solve::book::TaggedCrossing;
+use crate::solve::book::Records;
 use crate::solve::checkpoint::{Folder, Restored};
 
 /// What a run over ranks did before it (re)started: nothing for a new run, the checkpoint's
@@ -41,8 +41,8 @@ pub(crate) struct Prior {
     pub(crate) restarted: Option<(PathBuf, f64)>,
     /// Its snapshots (schedule, files written, slices pending), for a restart.
     pub(crate) snapshots: Option<Snapshots>,
-    /// Crack-tracking crossings before, with their edges' tags.
-    pub(crate) crossings: Vec<TaggedCrossing>,
+    /// Crack-tracking crossings and probe samples before.
+    pub(crate) records: Records,
 }
 
 impl Prior {
@@ -63,7 +63,7 @@ impl Prior {
             written: 0,
             restarted: None,
             snapshots: None,
-            crossings: Vec::new(),
+            records: Records::default(),
         }
     }
 
@@ -112,7 +112,10 @@ impl Prior {
             written: folder.next_number(restored.counts.written),
             restarted: Some((file, config.time.clock(restored.header.time))),
             snapshots: Some(book.snapshots),
-            crossings: book.crossings,
+            records: Records {
+                crossings: book.crossings,
+                samples: book.samples,
+            },
         };
         Ok((prior, front, restored.frontier.solution))
     }

@@ -32,7 +32,7 @@ use crate::rank_finish::{End, finish, initial_energy};
 use crate::rank_outputs::{self, RankOutputs, merged_sums};
 use crate::rank_prior::Prior;
 use crate::rank_setup::{PartitionKind, causality, physics};
-use crate::solve::book::history_times;
+use crate::solve::book::{Records, history_times};
 use crate::solve::checkpoint::Folder;
 use crate::solve::work::deadline;
 use crate::solve::{Control, RunSummary};
@@ -152,7 +152,8 @@ pub(crate) fn run_rank<T: Transport>(
     let mesh = &problem.mesh;
     let (rank, ranks) = (transport.rank(), transport.ranks());
     let (partition, kind) = shared.partition;
-    let (physics, causality) = (physics(problem), causality(problem));
+    let probes: Vec<[f64; 2]> = problem.probes.iter().map(|p| p.at).collect();
+    let (physics, causality) = (physics(problem, &probes), causality(problem));
     let t_end = causality.t_end;
     let view = LocalView::new(mesh, partition, rank).map_err(|e| failed(ranks, e.into()))?;
     let (pitcher, front, solution) = match shared.restored {
@@ -291,7 +292,7 @@ pub(crate) fn run_rank<T: Transport>(
 
 /// Writes checkpoint number `number` on rank 0 from the `gathered` state after `elapsed` since the
 /// (re)start, with the snapshots of rank 0's `outputs`, the other ranks' pending slices, every
-/// rank's crack-tracking crossings and the initial front's energy `energy0`. Returns the path, the
+/// rank's records and the initial front's energy `energy0`. Returns the path, the
 /// seconds it took, the front's least time (s) and the number of snapshots every rank has written.
 fn write_checkpoint(
     shared: &Shared<'_>,
@@ -307,10 +308,11 @@ fn write_checkpoint(
     let values: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
     let times = history_times(problem.loaded.config.time.span()).len();
     let (sums, rests) = merged_sums(&values, times)?;
-    let (mut crossings, mut pending) = (Vec::new(), Vec::new());
+    let (mut records, mut pending) = (Records::default(), Vec::new());
     for rest in rests {
-        let (theirs, rest) = rank_outputs::crossings(rest)?;
-        crossings.extend(theirs);
+        let (theirs, rest) = rank_outputs::records(rest)?;
+        records.crossings.extend(theirs.crossings);
+        records.samples.extend(theirs.samples);
         pending.push(rank_outputs::pending(rest)?);
     }
     let next_all = pending.iter().map(|p| p.0).min().unwrap_or(0);
@@ -326,7 +328,7 @@ fn write_checkpoint(
         serial: &serial,
         sums: &sums,
         snapshots,
-        crossings,
+        records,
         energy0,
         wall_time_s: elapsed.as_secs_f64(),
     };

@@ -92,8 +92,9 @@ fn work_weights(problem: &Problem) -> Result<Vec<u64>, sdg_mesh::PitchError> {
         .collect())
 }
 
-/// What every rank solves the patches of `problem` with.
-pub fn physics(problem: &Problem) -> Physics<'_> {
+/// What every rank solves the patches of `problem` with, sampling the interface at the
+/// points `probes` (m).
+pub fn physics<'a>(problem: &'a Problem, probes: &'a [[f64; 2]]) -> Physics<'a> {
     let config = &problem.loaded.config;
     Physics {
         system: &problem.system,
@@ -105,6 +106,7 @@ pub fn physics(problem: &Problem) -> Physics<'_> {
             tol: config.solver.newton_tol,
             max_iter: config.solver.newton_max_iter,
         },
+        probes,
     }
 }
 

@@ -6,7 +6,6 @@
 //! end is sampled by the tent on the other side). Rows are sorted by probe and time, so the file
 //! does not depend on the order in which tents were solved.
 
-use sdg_mesh::Mesh;
 use sdg_solver::interface::Mode;
 use sdg_solver::patch::{InterfaceSample, PatchSolver};
 
@@ -60,40 +59,6 @@ pub(crate) fn snapshot_cuts(times: &[f64], c_ref: f64, solver: &mut PatchSolver)
     cuts
 }
 
-/// Samples the last patch of `solver` at each of `probes` that lies on one of its contact
-/// faces' edges: `(probe index, sample)`.
-pub(crate) fn sample(
-    probes: &[Probe],
-    mesh: &Mesh,
-    solver: &mut PatchSolver,
-) -> Vec<(usize, InterfaceSample)> {
-    let mut samples = Vec::new();
-    for (i, probe) in probes.iter().enumerate() {
-        for k in 0..solver.interface_faces().len() {
-            let e = solver.interface_faces()[k].0;
-            let [a, b] = mesh.edges()[e as usize].vertices.map(|v| mesh.vertex(v));
-            if !on_segment(probe.at, a, b) {
-                continue;
-            }
-            if let Some(s) = solver.interface_sample(e, probe.at) {
-                samples.push((i, s));
-                break;
-            }
-        }
-    }
-    samples
-}
-
-/// True when `x` lies on the segment `ab` (to a relative tolerance of 1e-9).
-fn on_segment(x: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let length2 = d[0] * d[0] + d[1] * d[1];
-    let r = [x[0] - a[0], x[1] - a[1]];
-    let along = (r[0] * d[0] + r[1] * d[1]) / length2;
-    let across = (r[0] * d[1] - r[1] * d[0]).abs() / length2.sqrt();
-    (-1e-9..=1.0 + 1e-9).contains(&along) && across <= 1e-9 * length2.sqrt()
-}
-
 /// `interface.csv`: one row per sample, sorted by probe and time, at its time on the clock of
 /// `time`.
 pub(crate) fn csv(
@@ -143,18 +108,4 @@ pub(crate) fn csv(
         ]);
     }
     out.into_text()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn points_on_segments() {
-        let (a, b) = ([0.0, 0.0], [2.0, 0.0]);
-        assert!(on_segment([1.0, 0.0], a, b));
-        assert!(on_segment([0.0, 0.0], a, b) && on_segment([2.0, 0.0], a, b));
-        assert!(!on_segment([2.1, 0.0], a, b));
-        assert!(!on_segment([1.0, 1e-6], a, b));
-    }
 }

@@ -12,6 +12,16 @@ use crate::progress::Progress;
 /// A crack-tracking crossing with the tag of its edge.
 pub(crate) type TaggedCrossing = (Option<TagId>, Crossing);
 
+/// What a rank of a run over ranks records of its patches besides the history sums, for rank 0
+/// to gather (module `rank_outputs`), and a checkpoint of it had recorded before (`rank_prior`).
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
+pub(crate) struct Records {
+    /// The crack-tracking crossings with their edges' tags (global edge ids).
+    pub(crate) crossings: Vec<TaggedCrossing>,
+    /// The interface probes' samples: `(probe index, sample)`.
+    pub(crate) samples: Vec<(usize, InterfaceSample)>,
+}
+
 /// History rows are written when the whole front has passed each of this many equal fractions
 /// of the end time (and at the end).
 const HISTORY_ROWS: usize = 100;

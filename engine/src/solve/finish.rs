@@ -15,7 +15,9 @@ use crate::plot;
 
 use super::checkpoint::Counts;
 use super::context::{Solve, initial_state};
-use super::outputs::{crack_tips, front_cracks, initial_tip_points, lefm, write_crack_tips};
+use super::outputs::{
+    crack_tips, front_cracks, initial_tip_points, lefm, write_crack_tips, write_probes,
+};
 use super::split::Split;
 use super::summary::{
     CheckpointSummary, EnergySummary, ErrorSummary, InterfaceSummary, RunSummary, Timings,
@@ -186,7 +188,7 @@ impl Solve<'_> {
         if config.output.png {
             plot::write_history_png(dir, &book.history);
         }
-        written.push(self.write_probes(dir, &mut book));
+        written.push(write_probes(problem, dir, &mut book.samples));
         if let Some(csv) = crack_csv {
             written.push(write_crack_tips(problem, dir, &csv));
         }

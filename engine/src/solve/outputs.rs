@@ -4,6 +4,7 @@ use std::path::Path;
 
 use sdg_mesh::Mesh;
 use sdg_solver::crack::Crossing;
+use sdg_solver::patch::InterfaceSample;
 
 use crate::error::EngineError;
 use crate::frontier::Frontier;
@@ -12,7 +13,7 @@ use crate::output::write_output;
 use crate::plot;
 use crate::problem::Problem;
 
-use super::book::{Book, TaggedCrossing};
+use super::book::TaggedCrossing;
 use super::context::Solve;
 use crate::fracture::picture;
 use crate::fracture::records;
@@ -63,7 +64,10 @@ impl Solve<'_> {
             "the crack files",
             self.write_fracture(state, &book.fracture_events, dir),
         );
-        warn("interface.csv", self.write_probes(dir, &mut book));
+        warn(
+            "interface.csv",
+            write_probes(self.problem, dir, &mut book.samples),
+        );
     }
 
     /// With `[fracture]`: `events.csv` (`events`), `cracks.csv` and, with `output.png`,
@@ -112,21 +116,6 @@ impl Solve<'_> {
             (Some(tracer), Some(path)) => tracer.write(path),
             _ => Ok(()),
         }
-    }
-
-    /// Writes `interface.csv` when probes are configured.
-    pub(crate) fn write_probes(
-        &self,
-        dir: &std::path::Path,
-        book: &mut Book,
-    ) -> Result<(), EngineError> {
-        let probes = &self.problem.probes;
-        if !probes.is_empty() {
-            let time = &self.problem.loaded.config.time;
-            let text = interface::csv(probes, &mut book.samples, time);
-            write_output(dir, "interface.csv", text.as_bytes())?;
-        }
-        Ok(())
     }
 }
 
@@ -240,6 +229,22 @@ pub(crate) fn write_crack_tips(
             end: time.end,
         });
         plot::write_crack_png(dir, csv, normalization);
+    }
+    Ok(())
+}
+
+/// Writes `interface.csv` of `problem`'s probes from their `samples` when probes are
+/// configured.
+pub(crate) fn write_probes(
+    problem: &Problem,
+    dir: &Path,
+    samples: &mut [(usize, InterfaceSample)],
+) -> Result<(), EngineError> {
+    let probes = &problem.probes;
+    if !probes.is_empty() {
+        let time = &problem.loaded.config.time;
+        let text = interface::csv(probes, samples, time);
+        write_output(dir, "interface.csv", text.as_bytes())?;
     }
     Ok(())
 }

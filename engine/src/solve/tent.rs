@@ -255,7 +255,12 @@ impl Solve<'_> {
         solver: &mut PatchSolver,
     ) -> InterfaceRecords {
         InterfaceRecords {
-            samples: interface::sample(&self.problem.probes, mesh, solver),
+            samples: {
+                let mut samples = Vec::new();
+                let probes = self.problem.probes.iter().map(|p| p.at);
+                solver.probe_samples(mesh, probes, &mut samples);
+                samples
+            },
             cuts: interface::snapshot_cuts(
                 &self.snapshot_times,
                 self.problem.system.c_ref(),

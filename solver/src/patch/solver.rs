@@ -456,6 +456,30 @@ impl PatchSolver {
         self.interface_sample_at(edge, [x[0], x[1], 0.5 * (bottom + top)])
     }
 
+    /// Adds to `out` a sample of the last patch at each of the `probes` (points, m, in order)
+    /// that lies on the edge of one of its contact faces on `mesh` ([`Self::interface_sample`]):
+    /// `(probe index, sample)`.
+    pub fn probe_samples(
+        &mut self,
+        mesh: &Mesh,
+        probes: impl IntoIterator<Item = [f64; 2]>,
+        out: &mut Vec<(usize, InterfaceSample)>,
+    ) {
+        for (i, at) in probes.into_iter().enumerate() {
+            for k in 0..self.faces.len() {
+                let e = self.faces[k].0;
+                let [a, b] = mesh.edges()[e as usize].vertices.map(|v| mesh.vertex(v));
+                if !on_segment(at, a, b) {
+                    continue;
+                }
+                if let Some(sample) = self.interface_sample(e, at) {
+                    out.push((i, sample));
+                    break;
+                }
+            }
+        }
+    }
+
     /// The interface of the last patch at the point `point` (scaled spacetime) of the contact
     /// face over edge `edge`; `None` when the patch has no contact face over `edge`.
     pub fn interface_sample_at(
@@ -513,5 +537,29 @@ impl PatchSolver {
             .iter()
             .zip(self.output.chunks_exact(size))
             .map(|(slot, c)| (slot.triangle, &slot.geometry, c))
+    }
+}
+
+/// True when `x` lies on the segment `ab` (to a relative tolerance of 1e-9).
+fn on_segment(x: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let length2 = d[0] * d[0] + d[1] * d[1];
+    let r = [x[0] - a[0], x[1] - a[1]];
+    let along = (r[0] * d[0] + r[1] * d[1]) / length2;
+    let across = (r[0] * d[1] - r[1] * d[0]).abs() / length2.sqrt();
+    (-1e-9..=1.0 + 1e-9).contains(&along) && across <= 1e-9 * length2.sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::on_segment;
+
+    #[test]
+    fn points_on_segments() {
+        let (a, b) = ([0.0, 0.0], [2.0, 0.0]);
+        assert!(on_segment([1.0, 0.0], a, b));
+        assert!(on_segment([0.0, 0.0], a, b) && on_segment([2.0, 0.0], a, b));
+        assert!(!on_segment([2.1, 0.0], a, b));
+        assert!(!on_segment([1.0, 1e-6], a, b));
     }
 }
