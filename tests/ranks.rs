@@ -45,6 +45,25 @@ fn assert_same_outputs_over_ranks(
         );
         assert_eq!(summary["state_hash"], threads["state_hash"]);
         assert_eq!(summary["threads"], ranks * per_rank);
+        // Per rank: every tent pitched once; the boundary vertices and messages add up.
+        let distributed = &summary["distributed"];
+        let per_rank = distributed["per_rank"].as_array().unwrap();
+        assert_eq!(per_rank.len(), ranks);
+        let total = |key: &str| {
+            per_rank
+                .iter()
+                .map(|r| r[key].as_u64().unwrap())
+                .sum::<u64>()
+        };
+        assert_eq!(total("tents"), summary["patches"].as_u64().unwrap());
+        assert!(per_rank.iter().all(|r| r["tents"].as_u64() > Some(0)));
+        assert_eq!(
+            total("boundary_vertices"),
+            distributed["boundary_vertices"].as_u64().unwrap()
+        );
+        let per_tent = total("updates_sent") as f64 / total("tents") as f64;
+        let reported = distributed["updates_per_tent"].as_f64().unwrap();
+        assert!((per_tent - reported).abs() <= 1e-12 * reported.max(1.0));
         let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
         match &first_history {
             None => first_history = Some(history),

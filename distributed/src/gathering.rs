@@ -52,6 +52,8 @@ pub struct Gathered {
     pub tents: Vec<(Tent, SolvedPatch)>,
     /// Per rank, its report without tents or patches (those are in `tents`).
     pub reports: Vec<RankReport>,
+    /// Per rank, how many of `tents` it pitched.
+    pub tents_by_rank: Vec<u64>,
 }
 
 impl Gathered {
@@ -63,6 +65,7 @@ impl Gathered {
                 .with_edges(mesh.edges().len()),
             tents: Vec::new(),
             reports: vec![RankReport::default(); ranks],
+            tents_by_rank: vec![0; ranks],
         }
     }
 
@@ -120,9 +123,12 @@ impl Gathered {
             }
             v if v == Part::Tents as u32 => {
                 let tents = &update.elements;
+                let count = self.tents_by_rank.get_mut(from as usize);
+                let count = count.ok_or_else(|| bad("tents of a rank the run has not"))?;
                 if tents.values.len() != tents.len() * (3 + REPORT_VALUES) {
                     return Err(bad("tents of the wrong size"));
                 }
+                *count += tents.len() as u64;
                 for i in 0..tents.len() {
                     let (vertex, _, values) = tents.get(i);
                     let tent = Tent {

@@ -25,7 +25,7 @@ use crate::solve::summary::state_hash;
 use crate::solve::tent::momentum_residual;
 use crate::solve::{
     CheckpointSummary, DistributedSummary, EnergySummary, ErrorSummary, InterfaceSummary,
-    RunSummary, Timings,
+    RankSummary, RunSummary, Timings,
 };
 
 /// How a run over ranks ended, for [`finish`]: on the `partition` with the `gathered`
@@ -261,5 +261,14 @@ fn distributed_summary(partition: PartitionKind, gathered: &Gathered) -> Distrib
         updates_per_tent: per_tent(reports.iter().map(|r| r.updates_sent).sum()),
         bytes_per_tent: per_tent(reports.iter().map(|r| r.update_bytes).sum()),
         waited_s: reports.iter().map(|r| r.waited.as_secs_f64()).sum(),
+        per_rank: (reports.iter().zip(&gathered.tents_by_rank))
+            .map(|(r, &tents)| RankSummary {
+                tents,
+                boundary_vertices: r.boundary_vertices,
+                updates_sent: r.updates_sent,
+                update_bytes: r.update_bytes,
+                waited_s: r.waited.as_secs_f64(),
+            })
+            .collect(),
     }
 }

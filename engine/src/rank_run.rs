@@ -121,13 +121,16 @@ struct Collected {
 }
 
 impl Collected {
-    /// Adds a phase's `gathered` results: its tents to those before, its counts to each
-    /// rank's, its front and elements for the earlier ones'.
+    /// Adds a phase's `gathered` results: its tents to those before, its counts (tents and
+    /// messages) to each rank's, its front and elements for the earlier ones'.
     fn add(&mut self, mut gathered: Gathered) -> &Gathered {
         if let Some(before) = self.gathered.take() {
             let mut tents = before.tents;
             tents.append(&mut gathered.tents);
             gathered.tents = tents;
+            for (now, then) in (gathered.tents_by_rank.iter_mut()).zip(before.tents_by_rank) {
+                *now += then;
+            }
             for (now, then) in gathered.reports.iter_mut().zip(before.reports) {
                 now.updates_sent += then.updates_sent;
                 now.update_bytes += then.update_bytes;

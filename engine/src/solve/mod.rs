@@ -31,5 +31,5 @@ pub use run::{solve_job, solve_job_with};
 pub use start::estimate_job;
 pub use summary::{
     CheckpointSummary, DistributedSummary, EnergySummary, ErrorSummary, InterfaceSummary,
-    RunSummary, Timings,
+    RankSummary, RunSummary, Timings,
 };

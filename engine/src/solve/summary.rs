@@ -198,6 +198,22 @@ pub struct DistributedSummary {
     pub bytes_per_tent: f64,
     /// Time the ranks waited for updates with nothing to pitch, summed over ranks, s.
     pub waited_s: f64,
+    /// The same per rank, in rank order, since the run (re)started.
+    pub per_rank: Vec<RankSummary>,
+}
+
+/// `distributed.per_rank[]` in `summary.json`: what one rank did since the run (re)started.
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
+pub struct RankSummary {
+    /// Tents it pitched and solved.
+    pub tents: u64,
+    /// Its owned vertices that another rank holds as a ghost.
+    pub boundary_vertices: usize,
+    /// Update messages it sent, and their bytes.
+    pub updates_sent: u64,
+    pub update_bytes: u64,
+    /// Time it waited for updates with nothing to pitch, s.
+    pub waited_s: f64,
 }
 
 /// `timings` in `summary.json`: where the wall time went, s, summed over the worker threads
