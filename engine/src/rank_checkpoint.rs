@@ -84,19 +84,9 @@ pub(crate) fn write(
     )?;
     let mut book = book(problem, prior, at.serial, at.energy0.total);
     book.history = history;
-    let (before, since) = (&prior.records, at.records);
-    book.crossings = before
-        .crossings
-        .iter()
-        .copied()
-        .chain(since.crossings)
-        .collect();
-    book.samples = before
-        .samples
-        .iter()
-        .copied()
-        .chain(since.samples)
-        .collect();
+    let mut records = prior.records.clone();
+    records.append(at.records);
+    (book.crossings, book.samples) = (records.crossings, records.samples);
     book.snapshots = at.snapshots.with_png(config.output.png);
     let snapshot_times: Vec<f64> = (config.output.snapshot_times.iter())
         .map(|&t| config.time.elapsed(t))

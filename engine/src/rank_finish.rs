@@ -95,12 +95,9 @@ pub(crate) fn finish(
     let outputs: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
     let times = crate::solve::book::history_times(config.time.span()).len();
     let (sums, rests) = merged_sums(&outputs, times)?;
-    let (mut crossings, mut samples) = (end.prior.records.crossings.clone(), Vec::new());
-    samples.extend_from_slice(&end.prior.records.samples);
+    let mut records = end.prior.records.clone();
     for rest in rests {
-        let records = rank_outputs::records(rest)?.0;
-        crossings.extend(records.crossings);
-        samples.extend(records.samples);
+        records.append(rank_outputs::records(rest)?.0);
     }
     let history = history_csv(
         problem,
@@ -109,7 +106,7 @@ pub(crate) fn finish(
         &sums,
         (&initial_energy, front, Some(&energy)),
     )?;
-    let (crack_csv, crack) = crack_tips(problem, &problem.mesh, &crossings, &[]).unzip();
+    let (crack_csv, crack) = crack_tips(problem, &problem.mesh, &records.crossings, &[]).unzip();
     summary.lefm = lefm(problem, crack_csv.as_deref(), &history);
     summary.crack = crack;
     let mut written = vec![write_output(dir, "history.csv", history.as_bytes()).map(drop)];
@@ -119,7 +116,7 @@ pub(crate) fn finish(
     if let Some(csv) = crack_csv {
         written.push(write_crack_tips(problem, dir, &csv));
     }
-    written.push(write_probes(problem, dir, &mut samples));
+    written.push(write_probes(problem, dir, &mut records.samples));
     crate::solve::finish::write_summary(dir, written, summary, finishing)
 }
 

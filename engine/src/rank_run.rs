@@ -314,8 +314,7 @@ fn write_checkpoint(
     let (mut records, mut pending) = (Records::default(), Vec::new());
     for rest in rests {
         let (theirs, rest) = rank_outputs::records(rest)?;
-        records.crossings.extend(theirs.crossings);
-        records.samples.extend(theirs.samples);
+        records.append(theirs);
         pending.push(rank_outputs::pending(rest)?);
     }
     let next_all = pending.iter().map(|p| p.0).min().unwrap_or(0);

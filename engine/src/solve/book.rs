@@ -14,12 +14,20 @@ pub(crate) type TaggedCrossing = (Option<TagId>, Crossing);
 
 /// What a rank of a run over ranks records of its patches besides the history sums, for rank 0
 /// to gather (module `rank_outputs`), and a checkpoint of it had recorded before (`rank_prior`).
-#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Records {
     /// The crack-tracking crossings with their edges' tags (global edge ids).
     pub(crate) crossings: Vec<TaggedCrossing>,
     /// The interface probes' samples: `(probe index, sample)`.
     pub(crate) samples: Vec<(usize, InterfaceSample)>,
+}
+
+impl Records {
+    /// Adds `other`'s crossings and samples after these.
+    pub(crate) fn append(&mut self, other: Records) {
+        self.crossings.extend(other.crossings);
+        self.samples.extend(other.samples);
+    }
 }
 
 /// History rows are written when the whole front has passed each of this many equal fractions
