@@ -296,6 +296,7 @@ fn parts(
             generation: view.rank(),
             elements,
             faces,
+            work: Vec::new(),
         })
     };
     [

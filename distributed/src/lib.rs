@@ -19,7 +19,8 @@
 //!   solver, the updates carrying the elements and interface faces the receiver reads as
 //!   inflow, each with its generation, whose elements and faces are bitwise the serial run's
 //!   (with interface laws, without mesh-changing events or fracture), telling an [`Observer`] of
-//!   each tent solved (the engine writes its outputs from it);
+//!   each tent solved (the engine writes its outputs from it), and with [`Held`] the threaded
+//!   run's energy blow-up guard over what each rank knows of the boundary work;
 //! - [`gathering`]: the ranks' results gathered on rank 0, each element and face once (from
 //!   the owner of its triangle's first corner or its edge's first end), with every tent's
 //!   patch report and the values the caller reports, through messages of the same transport.
@@ -30,6 +31,7 @@
 //! --ranks` uses [`Loopback`], `sdg run --mpi` the MPI transport. See `distributed/README.md`.
 
 pub mod gathering;
+pub mod held;
 pub mod partition;
 pub mod pitching;
 mod rng;
@@ -40,6 +42,7 @@ pub mod transport;
 pub mod view;
 
 pub use gathering::{Gathered, gather, gather_threads};
+pub use held::Held;
 pub use partition::{Partition, PartitionError, Rank, star_weights};
 pub use pitching::{
     Causality, CellKind, Options, Pause, PauseRequest, PitchingError, RankReport, SolvedPatch,

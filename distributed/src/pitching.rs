@@ -48,8 +48,9 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use sdg_mesh::{Front, Mesh, PitchError, Pitcher, Tent, VertexId};
-use sdg_solver::patch::{NewtonFailure, PatchReport};
+use sdg_solver::patch::{BLOW_UP, NewtonFailure, PatchReport};
 
+use crate::held::Held;
 use crate::partition::{Partition, Rank};
 use crate::rng::SplitMix64;
 use crate::transport::loopback::{Loopback, LoopbackOptions};
@@ -71,6 +72,9 @@ pub struct Options {
     /// flight, and solves one of them itself when it has nothing else to do; the tents are
     /// the same for any count.
     pub threads: usize,
+    /// With patches solved ([`crate::solve_rank`]): what this rank knows of the energy the
+    /// body has held, for the blow-up guard ([`PitchingError::BlowUp`]); none: no guard.
+    pub held: Option<Held>,
 }
 
 /// Tents a rank keeps in flight per solving thread ([`Options::threads`]): enough that a thread
@@ -89,6 +93,7 @@ impl Options {
             idle_limit,
             pause: Pause::default(),
             threads: 1,
+            held: None,
         }
     }
 }
@@ -173,6 +178,18 @@ pub enum PitchingError {
         time: f64,
         name: &'static str,
         value: f64,
+    },
+    #[error(
+        "rank {rank}: the patch of vertex {vertex} at t = {time} s: energy blow-up: it carries \
+         {out:e} J/m out, more than {BLOW_UP} times the {held:e} J/m the body has held as far as \
+         this rank knows; nothing of it was stored"
+    )]
+    BlowUp {
+        rank: Rank,
+        vertex: VertexId,
+        time: f64,
+        out: f64,
+        held: f64,
     },
     #[error("rank {rank}: the patch of vertex {vertex} at t = {time} s: {source}")]
     Patch {
@@ -267,7 +284,7 @@ pub(crate) trait Work {
 
     /// Writes into `update`'s (empty) cells what rank `to` reads of the last tent at owned
     /// local vertex `v`.
-    fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update);
+    fn cells_for(&mut self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update);
 
     /// Stores the cells of `update` from rank `from` that are newer than this rank's copies.
     fn apply(&mut self, view: &LocalView, from: Rank, update: &Update)
@@ -286,7 +303,7 @@ impl Work for () {
         Ok(())
     }
 
-    fn cells_for(&self, _: &LocalView, _: VertexId, _: Rank, _: &mut Update) {}
+    fn cells_for(&mut self, _: &LocalView, _: VertexId, _: Rank, _: &mut Update) {}
 
     fn apply(&mut self, _: &LocalView, _: Rank, _: &Update) -> Result<(), PitchingError> {
         Ok(())
@@ -322,6 +339,8 @@ pub struct RankReport {
     pub below_end: usize,
     /// The rank stopped on a [`Pause::requested`] request or a neighbour's [`Message::Pause`].
     pub paused: bool,
+    /// [`Options::held`] at the end, with what the rank learned and did.
+    pub held: Option<Held>,
 }
 
 /// What a solved patch adds to a run's totals.

@@ -43,6 +43,7 @@ use sdg_solver::interface::Interfaces;
 use sdg_solver::patch::{Initial, InterfaceSample, Newton, PatchReport, PatchSolver};
 use sdg_solver::system::System;
 
+use crate::held::Held;
 use crate::partition::{Partition, Rank};
 use crate::pitching::{
     Causality, CellKind, Options, PitchingError, RankReport, SolvedPatch, Work, on_threads,
@@ -189,7 +190,15 @@ struct Patches<'a, O> {
     stride: usize,
     /// Per tent so far, its patch's report and slope.
     patches: Vec<SolvedPatch>,
+    /// What the rank knows of the energy held ([`Options::held`]), and per rank the entries of
+    /// its `known` last sent there (empty without the guard).
+    held: Option<Held>,
+    sent_work: Vec<Vec<f64>>,
 }
+
+/// The blow-up guard of a tent: the energy the body can have held before it and the energy
+/// scale of the messages ([`Held::bound`], [`Held::scale`]); none without the guard.
+type Guard = Option<(f64, f64)>;
 
 /// Values per interface face: its geometry's, then the coefficients of each component.
 const FACE_VALUES: usize = FACE_GEOMETRY_VALUES + STATE_COMPONENTS * MAX_FACE_BASIS;
@@ -202,12 +211,12 @@ fn spokes(mesh: &Mesh, v: VertexId) -> impl Iterator<Item = EdgeId> + '_ {
 }
 
 /// Solves the patch of `tent` with `solver` and stores it in `solution`; a patch with a
-/// non-finite value is not stored (the engine's guard).
+/// non-finite value, or that blows up by `guard`, is not stored (the engine's guards).
 fn solve_tent(
     solver: &mut PatchSolver,
     physics: &Physics<'_>,
     (view, front, solution): (&LocalView, &Front, &FrontSolution),
-    tent: &Tent,
+    (tent, guard): (&Tent, Guard),
 ) -> Result<Solved, PitchingError> {
     let report = solver
         .solve(
@@ -233,6 +242,15 @@ fn solve_tent(
             value,
         });
     }
+    if let Some((held, scale)) = guard.filter(|&(held, _)| report.blows_up(held)) {
+        return Err(PitchingError::BlowUp {
+            rank: view.rank(),
+            vertex: view.global(tent.vertex),
+            time: tent.t_old,
+            out: scale * report.energy_out,
+            held: scale * (held + report.boundary_work.max(0.0)),
+        });
+    }
     solver.commit(solution);
     let mut samples = Vec::new();
     if !physics.probes.is_empty() {
@@ -256,8 +274,8 @@ struct Solving<'c> {
 /// `taken` (by the rank's thread too, when it has nothing else to do); what [`solve_tent`]
 /// returned comes back on `solved`.
 struct Crew<'c> {
-    tents: Sender<Tent>,
-    taken: &'c Mutex<Receiver<Tent>>,
+    tents: Sender<(Tent, Guard)>,
+    taken: &'c Mutex<Receiver<(Tent, Guard)>>,
     solved: Receiver<(Tent, Result<Solved, PitchingError>)>,
 }
 
@@ -267,15 +285,15 @@ fn solving_thread(
     mut solver: PatchSolver,
     physics: &Physics<'_>,
     rank: (&LocalView, &Front, &FrontSolution),
-    tents: &Mutex<Receiver<Tent>>,
+    tents: &Mutex<Receiver<(Tent, Guard)>>,
     solved: &Sender<(Tent, Result<Solved, PitchingError>)>,
 ) {
     loop {
         // One thread at a time waits on the channel; the lock is let go before solving.
         let next = tents.lock().unwrap_or_else(|e| e.into_inner()).recv();
-        let Ok(tent) = next else { return };
+        let Ok((tent, guard)) = next else { return };
         let result = catch_unwind(AssertUnwindSafe(|| {
-            solve_tent(&mut solver, physics, rank, &tent)
+            solve_tent(&mut solver, physics, rank, (&tent, guard))
         }))
         .unwrap_or_else(|payload| {
             Err(PitchingError::Panic {
@@ -290,6 +308,19 @@ fn solving_thread(
 }
 
 impl<O: Observer> Patches<'_, O> {
+    /// Solves `tent` on the rank's thread with `guard`, and what follows ([`Patches::solved`]).
+    fn solve(
+        &mut self,
+        view: &LocalView,
+        front: &Front,
+        tent: (&Tent, Guard),
+    ) -> Result<(), PitchingError> {
+        let solver = &mut self.solving.solver;
+        let solved = solve_tent(solver, &self.physics, (view, front, self.solution), tent)?;
+        self.solved(view, front, tent.0, solved);
+        Ok(())
+    }
+
     /// What follows a stored patch, in the order of the tents: generations, the slope, the
     /// report and the observer.
     fn solved(&mut self, view: &LocalView, front: &Front, tent: &Tent, solved: Solved) {
@@ -298,6 +329,9 @@ impl<O: Observer> Patches<'_, O> {
             crossings,
             samples,
         } = solved;
+        if let Some(held) = &mut self.held {
+            held.add(view.rank(), &report);
+        }
         let mut slope = 0.0_f64;
         for &t in view.mesh().vertex_triangles(tent.vertex) {
             self.generation[t as usize] += 1;
@@ -319,18 +353,23 @@ impl<O: Observer> Patches<'_, O> {
     }
 }
 
+impl<O> Patches<'_, O> {
+    /// The guard of a tent pitched now.
+    fn guard(&self) -> Guard {
+        self.held.as_ref().map(|h| (h.bound(), h.scale))
+    }
+}
+
 impl<O: Observer> Work for Patches<'_, O> {
     fn tent(&mut self, view: &LocalView, front: &Front, tent: &Tent) -> Result<(), PitchingError> {
-        let solver = &mut self.solving.solver;
-        let solved = solve_tent(solver, &self.physics, (view, front, self.solution), tent)?;
-        self.solved(view, front, tent, solved);
-        Ok(())
+        self.solve(view, front, (tent, self.guard()))
     }
 
     fn start(&mut self, tent: &Tent) -> bool {
+        let guard = self.guard();
         // Solving threads gone show as a disconnected channel in `finish`.
         (self.solving.crew.as_ref()).is_some_and(|crew| {
-            let _ = crew.tents.send(*tent);
+            let _ = crew.tents.send((*tent, guard));
             true
         })
     }
@@ -345,10 +384,10 @@ impl<O: Observer> Work for Patches<'_, O> {
             Err(TryLockError::Poisoned(taken)) => taken.into_inner().try_recv().ok(),
             Err(TryLockError::WouldBlock) => None,
         };
-        let Some(tent) = next else {
+        let Some((tent, guard)) = next else {
             return Ok(None);
         };
-        self.tent(view, front, &tent)?;
+        self.solve(view, front, (&tent, guard))?;
         Ok(Some(tent))
     }
 
@@ -375,7 +414,10 @@ impl<O: Observer> Work for Patches<'_, O> {
         Ok(Some(tent))
     }
 
-    fn cells_for(&self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update) {
+    fn cells_for(&mut self, view: &LocalView, v: VertexId, to: Rank, update: &mut Update) {
+        if let Some(held) = &self.held {
+            held.changes(&mut self.sent_work[to as usize], &mut update.work);
+        }
         let elements = &mut update.elements;
         for &t in view.mesh().vertex_triangles(v) {
             if !view.held_by(t, to) {
@@ -434,6 +476,9 @@ impl<O: Observer> Work for Patches<'_, O> {
                 });
             }
         }
+        if let Some(held) = &mut self.held {
+            held.merge(update.work.iter().copied());
+        }
         let stray = |kind, id| PitchingError::StrayCell {
             rank,
             from,
@@ -487,6 +532,7 @@ impl<O: Observer> Work for Patches<'_, O> {
 
     fn into_report(self, report: &mut RankReport) {
         report.patches = self.patches;
+        report.held = self.held;
     }
 }
 
@@ -549,7 +595,16 @@ pub fn solve_rank_observed<T: Transport, O: Observer>(
         }
     }
     let threads = options.threads.max(1);
-    let (tents, taken) = channel::<Tent>();
+    let ranks = transport.ranks();
+    let held = options.held.clone().map(|mut held| {
+        held.known.resize(ranks, 0.0);
+        held
+    });
+    let sent_work = match held {
+        Some(_) => vec![vec![0.0; ranks]; ranks],
+        None => Vec::new(),
+    };
+    let (tents, taken) = channel::<(Tent, Guard)>();
     let (solved, done) = channel();
     let taken = Mutex::new(taken);
     let crew = (threads > 1).then(|| Crew {
@@ -566,6 +621,8 @@ pub fn solve_rank_observed<T: Transport, O: Observer>(
         edge_generation: if faces { vec![0; edges] } else { Vec::new() },
         stride: GEOMETRY_VALUES + ENERGY_VALUES + size,
         patches: Vec::new(),
+        held,
+        sent_work,
     };
     if threads == 1 {
         return run_rank(view, pitcher, front, transport, work, options);

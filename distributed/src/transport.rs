@@ -7,10 +7,10 @@
 //! count of messages sent before it ([`Message::Done`], so that termination needs no ordering
 //! between messages), "stop, I failed" ([`Message::Abort`]) and "pause for a checkpoint"
 //! ([`Message::Pause`]). A [`Transport`] sends them without blocking, receives them with a
-//! timeout, and sums values over the ranks at a barrier ([`Transport::sum`]). [`loopback::Loopback`] carries them
-//! between threads of one process, with seeded random delays; `mpi::MpiTransport` (with the
-//! cargo feature `mpi`) carries them between MPI processes as [`Message::encode`]'s bytes,
-//! through one communication thread per process.
+//! timeout, and sums values over the ranks at a barrier ([`Transport::sum`]).
+//! [`loopback::Loopback`] carries them between threads of one process, with seeded random
+//! delays; `mpi::MpiTransport` (with the cargo feature `mpi`) carries them between MPI
+//! processes as [`Message::encode`]'s bytes, through one communication thread per process.
 
 pub mod loopback;
 #[cfg(feature = "mpi")]
@@ -40,6 +40,9 @@ pub struct Update {
     /// The interface faces the tent left over the receiver's edges among the spokes, keyed by
     /// global edge (none without interface laws).
     pub faces: Cells,
+    /// When patches are solved, the entries of the sender's [`crate::held::Held::known`] that
+    /// changed since its last update to the receiver: `(rank, value)`.
+    pub work: Vec<(Rank, f64)>,
 }
 
 /// Elements under front triangles, or interface faces over front edges, as plain values
@@ -128,9 +131,9 @@ pub enum Message {
     Pause,
 }
 
-/// Bytes of an encoded [`Message::Update`] without cells; each cell adds 8 bytes and 8 per
-/// value.
-pub const UPDATE_BYTES: usize = 33;
+/// Bytes of an encoded [`Message::Update`] without cells or work entries; each cell adds 8
+/// bytes and 8 per value, each work entry 12.
+pub const UPDATE_BYTES: usize = 37;
 
 /// Why a transport failed.
 #[derive(Clone, Debug, thiserror::Error, PartialEq, Eq)]
@@ -178,16 +181,17 @@ pub trait Transport: Send {
 impl Update {
     /// Bytes of the update as [`Message::encode`] writes it.
     pub fn encoded_len(&self) -> usize {
-        UPDATE_BYTES + self.elements.encoded_len() + self.faces.encoded_len()
+        UPDATE_BYTES + self.elements.encoded_len() + self.faces.encoded_len() + 12 * self.work.len()
     }
 }
 
 impl Message {
     /// Appends the message's bytes (little endian) to `out`: for an update kind 0, vertex,
-    /// generation, time bits, then count and values per cell of the elements and of the faces
-    /// ([`UPDATE_BYTES`]), then per element its triangle and generation and the elements'
-    /// values' bits, then the same for the faces; kind 1 and the count for done; kind 2 for
-    /// abort; kind 3 for pause.
+    /// generation, time bits, then count and values per cell of the elements and of the faces,
+    /// and the count of work entries ([`UPDATE_BYTES`]), then per element its triangle and
+    /// generation and the elements' values' bits, then the same for the faces, then per work
+    /// entry its rank and value bits; kind 1 and the count for done; kind 2 for abort; kind 3
+    /// for pause.
     pub fn encode(&self, out: &mut Vec<u8>) {
         match self {
             Message::Update(u) => {
@@ -200,8 +204,13 @@ impl Message {
                     out.extend((cells.len() as u32).to_le_bytes());
                     out.extend((cells.stride() as u32).to_le_bytes());
                 }
+                out.extend((u.work.len() as u32).to_le_bytes());
                 u.elements.encode(out);
                 u.faces.encode(out);
+                for &(rank, value) in &u.work {
+                    out.extend(rank.to_le_bytes());
+                    out.extend(value.to_bits().to_le_bytes());
+                }
             }
             Message::Done { sent } => {
                 out.push(1);
@@ -229,15 +238,24 @@ impl Message {
                     Cells::decode(rest, size(17), size(21)).ok_or(malformed.clone())?;
                 let (faces, rest) =
                     Cells::decode(rest, size(25), size(29)).ok_or(malformed.clone())?;
-                if !rest.is_empty() {
+                if size(33).checked_mul(12) != Some(rest.len()) {
                     return Err(malformed);
                 }
+                let work = rest
+                    .chunks_exact(12)
+                    .map(|b| {
+                        let rank = Rank::from_le_bytes(b[..4].try_into().expect("4 bytes"));
+                        let bits = u64::from_le_bytes(b[4..].try_into().expect("8 bytes"));
+                        (rank, f64::from_bits(bits))
+                    })
+                    .collect();
                 Ok(Message::Update(Update {
                     vertex: word(1),
                     generation: word(5),
                     time: f64::from_bits(long(9)),
                     elements,
                     faces,
+                    work,
                 }))
             }
             (1, 9) => Ok(Message::Done { sent: long(1) }),
@@ -273,6 +291,7 @@ mod tests {
                     ids: vec![(9, 4)],
                     values: vec![-1.5, 0.25],
                 },
+                work: vec![(2, 0.125), (0, -0.0)],
             }),
             Message::Done { sent: 1 << 40 },
             Message::Abort,
@@ -306,7 +325,10 @@ mod tests {
         );
         let mut cells = Vec::new();
         messages[1].encode(&mut cells);
-        assert_eq!(cells.len(), UPDATE_BYTES + 8 * (2 + 6) + 8 * (1 + 2));
+        assert_eq!(
+            cells.len(),
+            UPDATE_BYTES + 8 * (2 + 6) + 8 * (1 + 2) + 12 * 2
+        );
         let len = cells.len() - 8;
         assert_eq!(
             Message::decode(&cells[..len]),

@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use sdg_distributed::{
-    LoopbackOptions, Options, Partition, PitchingError, RankSolution, solve_threads,
+    Held, LoopbackOptions, Options, Partition, PitchingError, RankSolution, solve_threads,
 };
 use sdg_engine::{LoadedConfig, Problem, RunOptions, causality, physics};
 use sdg_mesh::{Front, Mesh, VertexId};
@@ -400,4 +400,98 @@ fn a_patch_with_a_non_finite_value_stops_the_rank() {
         "{err}"
     );
     assert!(err.to_string().contains("a non-finite value"), "{err}");
+}
+
+/// The energy blow-up guard over ranks. `cohesive_wave`'s waves enter through the top and the
+/// bottom only, here owned by ranks 0 and 2 of three horizontal bands: the middle rank's
+/// patches carry energy it knows of only from the work entries of the updates, and no patch
+/// trips the guard (the elements are the unguarded run's, bitwise). A bad element between two
+/// runs of one rank then makes the next patch on it blow up: nothing of it is stored, and the
+/// rank stops naming the vertex and the time.
+#[test]
+fn the_energy_guard_knows_the_work_of_other_ranks_and_stops_a_blow_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let problem = shipped("cohesive_wave.toml", &["mesh.ny=24"], 2e-6, dir.path());
+    let (mesh, causality, physics) = (&problem.mesh, causality(&problem), physics(&problem, &[]));
+    let rho = problem.material.density();
+    let ys = mesh.vertices().iter().map(|v| v[1]);
+    let (low, high) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
+        (a.min(y), b.max(y))
+    });
+    let bands = mesh
+        .vertices()
+        .iter()
+        .map(|v| (3.0 * (v[1] - low) / (high - low)).min(2.0) as u32)
+        .collect();
+    let partition = Partition::from_owners(mesh, bands, 3).unwrap();
+    let delays = LoopbackOptions {
+        seed: 3,
+        max_delay: Duration::from_micros(50),
+        fifo: false,
+    };
+    let run = |held: Option<Held>| {
+        let options = Options { held, ..options(1) };
+        let run = (causality, physics, delays);
+        let mut observers = vec![(); 3];
+        sdg_distributed::solve_threads_observed(mesh, &partition, run, &mut observers, &options)
+            .unwrap()
+    };
+    let free = run(None);
+    let guarded = run(Some(Held::new(0.0, rho, 3)));
+    for (a, b) in free.iter().zip(&guarded) {
+        for t in 0..a.solution.len() {
+            assert_eq!(element_bits(&a.solution, t), element_bits(&b.solution, t));
+        }
+    }
+    let middle = guarded[1].report.held.as_ref().unwrap();
+    let loaded = |r: usize| guarded[r].report.held.as_ref().unwrap().known[r];
+    assert!(loaded(0) > 0.0 && loaded(2) > 0.0, "{middle:?}");
+    assert!(
+        middle.known[0] > 0.5 * loaded(0) && middle.known[2] > 0.5 * loaded(2),
+        "the middle rank heard of the loaded ranks' work: {middle:?}"
+    );
+    assert!(middle.bound() > 0.0 && guarded[1].report.patches.len() > 100);
+
+    let one = Partition::coordinate(mesh, 1).unwrap();
+    let view = sdg_distributed::LocalView::new(mesh, &one, 0).unwrap();
+    let pitcher = |t_end: f64| {
+        sdg_mesh::Pitcher::new(view.mesh(), causality.c_max, causality.safety, t_end).unwrap()
+    };
+    let front = Front::flat(view.mesh().vertices().len(), 0.0);
+    let solution = physics.initial_solution(&view);
+    let mut ends = sdg_distributed::Loopback::connect(1, delays);
+    let half = 0.5 * causality.t_end;
+    let mut solve = |t_end: f64, held: Held| {
+        let options = Options {
+            held: Some(held),
+            ..options(0)
+        };
+        sdg_distributed::solve_rank(
+            &view,
+            &pitcher(t_end),
+            &front,
+            &solution,
+            physics,
+            &mut ends[0],
+            &options,
+        )
+    };
+    let report = solve(half, Held::new(0.0, rho, 1)).unwrap();
+    let held = report.held.unwrap();
+    assert!(held.bound() > 0.0, "{held:?}");
+    let mut geometry = Geometry::default();
+    let mut coefficients = vec![0.0; solution.basis_len() * solution.width()];
+    assert!(solution.load(0, &mut geometry, &mut coefficients));
+    coefficients[0] = 1e6;
+    solution.store(0, &geometry, &coefficients, None);
+    let err = solve(causality.t_end, held).unwrap_err();
+    assert!(
+        matches!(err, PitchingError::BlowUp { rank: 0, time, out, held, .. }
+            if time >= half && out > 10.0 * held),
+        "{err}"
+    );
+    assert!(err.to_string().contains("energy blow-up"), "{err}");
+    let mut now = vec![0.0; coefficients.len()];
+    assert!(solution.load(0, &mut geometry, &mut now));
+    assert_eq!(now, coefficients, "nothing of the patch stored");
 }

@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use sdg_distributed::{
-    Gathered, LocalView, Options, Partition, Pause, PauseRequest, PitchingError, Transport,
+    Gathered, Held, LocalView, Options, Partition, Pause, PauseRequest, PitchingError, Transport,
     TransportError, gather, rank_state, solve_rank_observed,
 };
 use sdg_mesh::{Front, Pitcher};
@@ -188,6 +188,10 @@ pub(crate) fn run_rank<T: Transport>(
     let mut number = shared.prior.written;
     let mut written = (0_u64, 0.0_f64);
     let energy0 = initial_energy(problem, ranks);
+    // The blow-up guard's bound, carried from phase to phase: the energy held at the start (the
+    // initial front's, with the net boundary work before a restart) and what the rank learns.
+    let before = energy0.total + shared.prior.totals.boundary_work.max(0.0);
+    let mut held = Some(Held::new(before, problem.material.density(), ranks));
     // The checkpoint at the end (`checkpoint.at_end`) is written.
     let mut ended = false;
     loop {
@@ -201,11 +205,13 @@ pub(crate) fn run_rank<T: Transport>(
                 requested: Some(shared.request.clone()),
             },
             threads: shared.threads,
+            held: held.take(),
             ..Options::new(u64::from(rank), IDLE_LIMIT)
         };
         let state = (&view, &pitcher, &front, &solution);
         let mut report = solve_rank_observed(state, physics, transport, &mut outputs, &options)
             .map_err(|e| failed(ranks, e))?;
+        held = report.held.take();
         let stop = shared.control.take().stop;
         let below_at = at.map_or(0, |t| view.owned().filter(|&v| front.time(v) < t).count());
         let met = [report.below_end, below_at, usize::from(stop.is_some())].map(|x| x as u64);

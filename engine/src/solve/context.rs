@@ -12,7 +12,7 @@ use sdg_solver::basis::Basis;
 use sdg_solver::element::FrontSolution;
 use sdg_solver::norms::initial_energy;
 use sdg_solver::norms::{FrontEnergy, front_energy};
-use sdg_solver::patch::{Initial, PatchReport};
+use sdg_solver::patch::{BLOW_UP, Initial, PatchReport};
 use sdg_solver::system::{MAX_FIELDS, State};
 
 use crate::adaptivity::indicator::Adapt;
@@ -70,11 +70,6 @@ pub(crate) fn initial_state(problem: &Problem, initial: Initial, x: [f64; 2]) ->
     }
 }
 
-/// A patch whose outflow energy exceeds this multiple of the most energy the body has held
-/// (initial energy plus boundary work, the patch's own included) has blown up: the scheme's
-/// upwind fluxes only ever dissipate.
-pub(crate) const BLOW_UP: f64 = 10.0;
-
 impl Solve<'_> {
     /// What is wrong with a solved patch's `report`, if anything: a non-finite value or an
     /// energy blow-up ([`BLOW_UP`]).
@@ -82,10 +77,10 @@ impl Solve<'_> {
         if let Some((name, value)) = report.first_non_finite() {
             return Some(format!("{name} is {value} (a non-finite value)"));
         }
-        let held = f64::from_bits(self.energy_reference.load(Ordering::Relaxed))
-            + report.boundary_work.max(0.0);
+        let held = f64::from_bits(self.energy_reference.load(Ordering::Relaxed));
         let rho = self.problem.material.density();
-        (report.energy_out > BLOW_UP * held).then(|| {
+        report.blows_up(held).then(|| {
+            let held = held + report.boundary_work.max(0.0);
             format!(
                 "energy blow-up: the patch carries {:e} J/m out, more than {BLOW_UP} times the \
                  {:e} J/m the body has held",

@@ -86,7 +86,19 @@ pub struct PatchReport {
     pub evaluation_s: f64,
 }
 
+/// A patch whose outflow energy exceeds this multiple of the most energy the body has held
+/// (initial energy plus boundary work, the patch's own included) has blown up: the scheme's
+/// upwind fluxes only ever dissipate ([`PatchReport::blows_up`]).
+pub const BLOW_UP: f64 = 10.0;
+
 impl PatchReport {
+    /// True when the patch carries more than [`BLOW_UP`] times `held` out, `held` being what the
+    /// body has held before it (scaled units, as the report's) plus the patch's own boundary
+    /// work when positive.
+    pub fn blows_up(&self, held: f64) -> bool {
+        self.energy_out > BLOW_UP * (held + self.boundary_work.max(0.0))
+    }
+
     /// The first of the report's energy terms, momentum residual and cohesive mismatch that is
     /// not finite, with its field's name: a patch that has one must not be stored.
     pub fn first_non_finite(&self) -> Option<(&'static str, f64)> {
