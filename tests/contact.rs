@@ -113,8 +113,24 @@ fn closing_shock(reference: &Reference, t0: f64) -> f64 {
         .0
 }
 
+/// The seed's first regularization set (3.4.1): `r_c` = -1 um, `s_s` = 600 kPa.
 #[test]
 fn contact_separation_follows_the_1d_reference() {
+    follows_the_1d_reference(-1e-6, 6e5);
+}
+
+/// The seed's second set, ten times stiffer: the same assertions (about 40 s on 2 cores, out of
+/// CI for its time; `cargo test --release --test contact -- --ignored`).
+#[test]
+#[ignore = "40 s on 2 cores: run on demand"]
+fn contact_separation_with_the_stiffer_regularization_follows_the_1d_reference() {
+    follows_the_1d_reference(-1e-7, 6e4);
+}
+
+/// `contact_separation.toml` with the regularization `r_c` (m) and `s_s` (Pa) against the 1D
+/// reference: separation and traction within 1% of their peaks, the mode changes at the seed's
+/// times, momentum and energy balanced.
+fn follows_the_1d_reference(r_c: f64, s_s: f64) {
     let (c, _) = p_wave();
     let t0 = 0.002 / c;
     let t_end = 4.5e-6;
@@ -124,86 +140,83 @@ fn contact_separation_follows_the_1d_reference() {
     // The closing shock is a jump of the exact traction: a sample within one element's transit
     // time of it compares the jump's two sides, whatever the resolution.
     let near_shock = 0.004 / ny as f64 / c;
-    // The seed's two regularization sets (3.4.1): r_c (m) and s_s (Pa).
-    for (r_c, s_s) in [(-1e-6, 6e5), (-1e-7, 6e4)] {
-        let problem = common::shipped(
-            "contact_separation.toml",
-            &[
-                &format!("time.end={t_end}"),
-                &format!("interface.0.r_c={r_c}"),
-                &format!("interface.0.s_s={s_s}"),
-                &format!("mesh.ny={ny}"),
-            ],
-        );
-        let (summary, dir) = common::solve(&problem, 2, true);
-        // Every element balances momentum, those still at rest included (each of their
-        // fluxes is round-off: against their own they read up to 1, until 2026-11-28).
-        assert!(
-            summary.max_momentum_residual < 1e-10,
-            "{}",
-            summary.max_momentum_residual
-        );
-        let rows = interface_rows(dir.path());
-        let reference = reference(2e8, [r_c, 0.0], [0.0, s_s], t_end);
-        let at = |t: f64| {
-            let i = reference
-                .partition_point(|p| p.0 < t)
-                .min(reference.len() - 1);
-            reference[i]
-        };
-        let peak = |get: fn(&(f64, f64, f64)) -> f64| {
-            reference.iter().map(|p| get(p).abs()).fold(0.0, f64::max)
-        };
-        let (delta_peak, s_peak) = (peak(|p| p.1), peak(|p| p.2));
-        let shock = closing_shock(&reference, t0);
-        let (mut delta_err, mut s_err, mut s_err_shock) = (0.0f64, 0.0f64, 0.0f64);
-        for &(t, s, delta, _) in &rows {
-            let (_, d_ref, s_ref) = at(t);
-            delta_err = delta_err.max((delta - d_ref).abs() / delta_peak);
-            let e = (s - s_ref).abs() / s_peak;
-            if (t - shock).abs() < near_shock {
-                s_err_shock = s_err_shock.max(e);
-            } else {
-                s_err = s_err.max(e);
-            }
+    let problem = common::shipped(
+        "contact_separation.toml",
+        &[
+            &format!("time.end={t_end}"),
+            &format!("interface.0.r_c={r_c}"),
+            &format!("interface.0.s_s={s_s}"),
+            &format!("mesh.ny={ny}"),
+        ],
+    );
+    let (summary, dir) = common::solve(&problem, 2, true);
+    // Every element balances momentum, those still at rest included (each of their
+    // fluxes is round-off: against their own they read up to 1, until 2026-11-28).
+    assert!(
+        summary.max_momentum_residual < 1e-10,
+        "{}",
+        summary.max_momentum_residual
+    );
+    let rows = interface_rows(dir.path());
+    let reference = reference(2e8, [r_c, 0.0], [0.0, s_s], t_end);
+    let at = |t: f64| {
+        let i = reference
+            .partition_point(|p| p.0 < t)
+            .min(reference.len() - 1);
+        reference[i]
+    };
+    let peak = |get: fn(&(f64, f64, f64)) -> f64| {
+        reference.iter().map(|p| get(p).abs()).fold(0.0, f64::max)
+    };
+    let (delta_peak, s_peak) = (peak(|p| p.1), peak(|p| p.2));
+    let shock = closing_shock(&reference, t0);
+    let (mut delta_err, mut s_err, mut s_err_shock) = (0.0f64, 0.0f64, 0.0f64);
+    for &(t, s, delta, _) in &rows {
+        let (_, d_ref, s_ref) = at(t);
+        delta_err = delta_err.max((delta - d_ref).abs() / delta_peak);
+        let e = (s - s_ref).abs() / s_peak;
+        if (t - shock).abs() < near_shock {
+            s_err_shock = s_err_shock.max(e);
+        } else {
+            s_err = s_err.max(e);
         }
-        // Mode changes: separation starts when the tensile load arrives (t0 + 1.5 us, the
-        // seed's 2.46 us), ends when the faces meet again (the seed's t0 + 5T/4 = 3.46 us) and
-        // starts again a period after the first (the seed's 4.46 us).
-        let changes: Vec<(f64, bool)> = rows
-            .windows(2)
-            .filter(|w| (w[0].3 == "separation") != (w[1].3 == "separation"))
-            .map(|w| (0.5 * (w[0].0 + w[1].0), w[1].3 == "separation"))
-            .filter(|&(t, _)| t > t0 + 0.5e-6)
-            .collect();
-        eprintln!(
-            "r_c {r_c} m, s_s {s_s} Pa: {} rows, {} patches ({} nonlinear, {:.2} solves each, at \
-             most {}); largest errors over the peaks: delta {delta_err:.2e} (peak {delta_peak:.3e} \
-             m), s_n {s_err:.2e} ({s_err_shock:.2e} within {near_shock:.1e} s of the closing \
-             shock at {shock:.4e} s; peak {s_peak:.3e} Pa); separation from/to at {changes:?}; \
-             energy balance {:.1e}",
-            rows.len(),
-            summary.patches,
-            summary.interface.nonlinear_patches,
-            summary.interface.newton_iterations_mean,
-            summary.interface.newton_iterations_max,
-            summary.energy.balance_residual_rel
-        );
-        assert!(rows.len() > 100);
-        assert!(delta_err < 0.01, "{delta_err}");
-        assert!(s_err < 0.01, "{s_err}");
-        let opened = [
-            (t0 + 1.5e-6, true),
-            (t0 + 2.5e-6, false),
-            (t0 + 3.5e-6, true),
-        ];
-        assert_eq!(changes.len(), opened.len(), "{changes:?}");
-        for ((t, open), (expected, want)) in changes.iter().zip(opened) {
-            assert_eq!(*open, want);
-            assert!((t - expected).abs() < 0.05e-6, "{t} against {expected}");
-        }
-        assert!(summary.energy.balance_residual_rel.abs() < 1e-10);
     }
+    // Mode changes: separation starts when the tensile load arrives (t0 + 1.5 us, the
+    // seed's 2.46 us), ends when the faces meet again (the seed's t0 + 5T/4 = 3.46 us) and
+    // starts again a period after the first (the seed's 4.46 us).
+    let changes: Vec<(f64, bool)> = rows
+        .windows(2)
+        .filter(|w| (w[0].3 == "separation") != (w[1].3 == "separation"))
+        .map(|w| (0.5 * (w[0].0 + w[1].0), w[1].3 == "separation"))
+        .filter(|&(t, _)| t > t0 + 0.5e-6)
+        .collect();
+    eprintln!(
+        "r_c {r_c} m, s_s {s_s} Pa: {} rows, {} patches ({} nonlinear, {:.2} solves each, at \
+         most {}); largest errors over the peaks: delta {delta_err:.2e} (peak {delta_peak:.3e} \
+         m), s_n {s_err:.2e} ({s_err_shock:.2e} within {near_shock:.1e} s of the closing \
+         shock at {shock:.4e} s; peak {s_peak:.3e} Pa); separation from/to at {changes:?}; \
+         energy balance {:.1e}",
+        rows.len(),
+        summary.patches,
+        summary.interface.nonlinear_patches,
+        summary.interface.newton_iterations_mean,
+        summary.interface.newton_iterations_max,
+        summary.energy.balance_residual_rel
+    );
+    assert!(rows.len() > 100);
+    assert!(delta_err < 0.01, "{delta_err}");
+    assert!(s_err < 0.01, "{s_err}");
+    let opened = [
+        (t0 + 1.5e-6, true),
+        (t0 + 2.5e-6, false),
+        (t0 + 3.5e-6, true),
+    ];
+    assert_eq!(changes.len(), opened.len(), "{changes:?}");
+    for ((t, open), (expected, want)) in changes.iter().zip(opened) {
+        assert_eq!(*open, want);
+        assert!((t - expected).abs() < 0.05e-6, "{t} against {expected}");
+    }
+    assert!(summary.energy.balance_residual_rel.abs() < 1e-10);
 }
 
 /// The slip (m) of the interface probe at `x` (m) of `interface.csv` in `dir`, at the row
