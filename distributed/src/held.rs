@@ -3,15 +3,18 @@
 //!
 //! On threads a patch that carries more than [`BLOW_UP`] times the most energy the body has
 //! held (initial energy plus boundary work so far) out has blown up. A rank cannot know the
-//! boundary work other ranks did, only what reached it: each rank adds its patches' boundary
-//! work to its own running sum, keeps per rank the largest that rank's sum has been as far as
-//! it has heard, and sends the entries that changed with its updates; a receiver keeps the
-//! larger of each entry (each only grows, so order and duplicates do not matter). The energy a
-//! patch reads came with its inflow, left by tents in its causal past; every one of them was
-//! counted by its rank before that rank sent the update that carried the inflow on (or before
-//! the tent, on the same rank), so a rank's bound at a tent covers the work of its causal past
-//! and the guard fires only where the threaded one would, or later. Not a value of the run's
-//! results: only the guard reads it.
+//! boundary work other ranks did, only what reached it: each rank sums the energy its patches
+//! brought in through the boundary (their boundary work where positive), keeps per rank the
+//! largest such sum it has heard of, and sends the entries that changed with its updates; a
+//! receiver keeps the larger of each entry (each only grows, so order and duplicates do not
+//! matter). The energy a patch reads came with its inflow, left by tents in its causal past;
+//! every one of them was counted by its rank before that rank sent the update that carried the
+//! inflow on (or before the tent, on the same rank), so a rank's bound at a tent covers the
+//! initial energy and all that came in through the boundary in its causal past, whatever left
+//! elsewhere: all a sound patch can carry out, and the guard never stops one. (The running
+//! maximum of the net work, which the threaded run takes over the whole body, would not do: a
+//! rank's net sum counts energy that left through its boundary outside a tent's causal past.)
+//! Not a value of the run's results: only the guard reads it.
 //!
 //! [`BLOW_UP`]: sdg_solver::patch::BLOW_UP
 
@@ -27,11 +30,9 @@ pub struct Held {
     pub base: f64,
     /// Physical energy (J/m) per scaled unit, for messages: the density, kg/m^3.
     pub scale: f64,
-    /// Per rank, the largest its net boundary work has been (at least 0) as far as this rank
-    /// has heard.
+    /// Per rank, the energy its patches brought in through the boundary (the sum of their
+    /// positive boundary work), as far as this rank has heard.
     pub known: Vec<f64>,
-    /// This rank's own net boundary work.
-    own: f64,
 }
 
 impl Held {
@@ -41,7 +42,6 @@ impl Held {
             base,
             scale,
             known: vec![0.0; ranks],
-            own: 0.0,
         }
     }
 
@@ -52,9 +52,7 @@ impl Held {
 
     /// Counts `report`, a patch solved on `rank` (this rank).
     pub fn add(&mut self, rank: Rank, report: &PatchReport) {
-        self.own += report.boundary_work;
-        let entry = &mut self.known[rank as usize];
-        *entry = entry.max(self.own);
+        self.known[rank as usize] += report.boundary_work.max(0.0);
     }
 
     /// Keeps the larger of each entry of `known` and of `entries`, `(rank, value)`.
@@ -89,15 +87,15 @@ mod tests {
         }
     }
 
-    /// A rank's entry is the largest its running sum has been; merged entries keep the larger,
-    /// in any order; changes carry each entry once.
+    /// A rank's entry sums the energy brought in (work that takes energy out does not lower
+    /// it); merged entries keep the larger, in any order; changes carry each entry once.
     #[test]
     fn entries_only_grow_and_travel_once() {
         let mut held = Held::new(2.0, 1.0, 3);
         held.add(1, &work(3.0));
         held.add(1, &work(-2.0));
         assert_eq!(held.known, [0.0, 3.0, 0.0]);
-        held.add(1, &work(4.0));
+        held.add(1, &work(2.0));
         assert_eq!(held.known, [0.0, 5.0, 0.0]);
         held.merge([(0, 1.5), (1, 4.0), (2, 0.5), (7, 9.0)]);
         held.merge([(0, 1.0)]);
