@@ -3,7 +3,7 @@
 
     configs/studies/lefm_sweep_low.toml    sigma' = 10^-3/2 ... 10^-1/2, from mode1_lefm.toml
     configs/studies/lefm_sweep_high.toml   sigma' = 10^-1/4 ... 10^-1/128, from mode1_lefm_high.toml
-    configs/studies/lefm_sweep_ci.toml     two low loads and one high, shortened (CI runs it)
+    configs/studies/lefm_sweep_ci.toml     two low loads and one high, shortened (CI runs one)
 
     python3 scripts/lefm_sweep.py          # from the repository root
 
@@ -209,13 +209,13 @@ write_ci(
         (-1 / 128, HIGH_BASE, 10.0 ** (-1.0 / 128.0), 3e-6, HIGH_GRID, HIGH_HALF_HEIGHT, 6.0, 40.0),
     ],
     """
-CI's reduced LEFM sweep (issue 70; tests/lefm_sweep.rs runs it and says what it checks): two
-low loads, 10^-3/4 and 10^-1/2, and the highest, 10^-1/128, each as in lefm_sweep_low.toml /
-lefm_sweep_high.toml but shortened. The low loads run to t' = 3: their cracks start near
-t' = 1 and pass 0.5 c_R at t' = 2.4, where the seed finds G ~ phi (Fig. 2.9a, t' >= 2-4, speeds
-above 0.4-0.8 c_R), so G is compared from t' = 2.5. The high load runs to t' = 6, five tau'
-past its onset at the end of the ramp (t' = 1): most of its cost is the waves' 35 tau' to the
-crack plane; its G is compared from t' = 40, as the full sweep's (none here).
-Deterministic, so that CI checks the same run on every machine.
+The reduced LEFM sweep (issue 70; tests/lefm_sweep.rs runs it, CI its case 1, and says what
+each checks): two low loads, 10^-3/4 and 10^-1/2, and the highest, 10^-1/128, each as in
+lefm_sweep_low.toml / lefm_sweep_high.toml but shortened. The low loads run to t' = 3: their
+cracks start near t' = 1 and pass 0.5 c_R at t' = 2.4, where the seed finds G ~ phi (Fig. 2.9a,
+t' >= 2-4, speeds above 0.4-0.8 c_R), so G is compared from t' = 2.5. The high load runs to
+t' = 6, five tau' past its onset at the end of the ramp (t' = 1): most of its cost is the waves'
+35 tau' to the crack plane; its G is compared from t' = 40, as the full sweep's (none here).
+Deterministic, so that the tests check the same run on every machine.
 """,
 )

@@ -123,7 +123,7 @@ fn frictional_interface_over_mpi_is_the_run_on_one_thread() {
 #[test]
 fn a_cracking_run_over_mpi_is_the_threaded_deterministic_run() {
     let dir = tempfile::tempdir().unwrap();
-    let overrides = ["output.png=false"];
+    let overrides = ["time.end=1.1e-6", "output.png=false"];
     let threads_out = dir.path().join("threads");
     let args = run_args(
         "crack_growth.toml",
@@ -351,7 +351,11 @@ fn sigkill_of_one_rank_ends_the_others_and_the_last_checkpoint_goes_on() {
 fn sigkill_of_one_rank_of_a_cracking_run_ends_the_other_and_its_checkpoint_goes_on() {
     let dir = tempfile::tempdir().unwrap();
     // Rounds split over the ranks, each holding the whole state; rank 0 checkpoints.
-    let overrides = ["output.png=false", "checkpoint.every_sim_s=1e-7"];
+    let overrides = [
+        "time.end=1.1e-6",
+        "output.png=false",
+        "checkpoint.every_sim_s=1e-7",
+    ];
     let deterministic = ["--deterministic"];
     let reference = dir.path().join("reference");
     let args = run_args("crack_growth.toml", &overrides, &deterministic, &reference);

@@ -27,12 +27,15 @@ fn adaptive_and_cracking_runs_over_ranks_are_the_threaded_deterministic_runs() {
         (
             "adaptive_pulse.toml",
             &[
-                "time.end=4e-6",
+                "time.end=2e-6",
                 "output.snapshot_times=[]",
                 "output.png=false",
             ],
         ),
-        ("crack_growth.toml", &["output.png=false"]),
+        (
+            "crack_growth.toml",
+            &["time.end=1.1e-6", "output.png=false"],
+        ),
     ];
     for (name, overrides) in cases {
         let reference = dir.path().join(format!("{name}-threads"));
@@ -70,7 +73,7 @@ fn adaptive_and_cracking_runs_over_ranks_are_the_threaded_deterministic_runs() {
 #[test]
 fn a_cracking_run_over_ranks_stopped_mid_run_goes_on_over_other_ranks_and_on_threads() {
     let dir = tempfile::tempdir().unwrap();
-    let overrides = ["output.png=false"];
+    let overrides = ["time.end=1.1e-6", "output.png=false"];
     let name = "crack_growth.toml";
     let reference = dir.path().join("reference");
     let expected = run(
