@@ -4,7 +4,8 @@
 use std::time::Duration;
 
 use sdg_distributed::{
-    Held, LoopbackOptions, Options, Partition, PitchingError, RankSolution, solve_threads,
+    Held, LoopbackOptions, Options, Partition, PitchingError, RankReport, RankSolution,
+    solve_threads,
 };
 use sdg_engine::{LoadedConfig, Problem, RunOptions, causality, physics};
 use sdg_mesh::{Front, Mesh, VertexId};
@@ -354,46 +355,85 @@ fn a_front_solution_of_the_wrong_size_is_an_error() {
 /// The engine's guard over ranks: a patch with a non-finite value (here from a bad element
 /// written between two runs of the rank) is not stored, and the rank stops naming the vertex,
 /// the time and the value.
+/// One rank holding the whole mesh of `problem`, solved from the initial front to a time and
+/// then on to a later one (its solution kept between), so that a test can spoil an element
+/// between the two runs ([`WholeRank::spoil`]).
+struct WholeRank<'p> {
+    view: sdg_distributed::LocalView,
+    causality: sdg_distributed::Causality,
+    physics: sdg_distributed::Physics<'p>,
+    front: Front,
+    solution: FrontSolution,
+    ends: Vec<sdg_distributed::Loopback>,
+}
+
+impl<'p> WholeRank<'p> {
+    fn new(problem: &'p Problem, delays: LoopbackOptions) -> Self {
+        let mesh = &problem.mesh;
+        let partition = Partition::coordinate(mesh, 1).unwrap();
+        let view = sdg_distributed::LocalView::new(mesh, &partition, 0).unwrap();
+        let physics = physics(problem, &[]);
+        Self {
+            front: Front::flat(view.mesh().vertices().len(), 0.0),
+            solution: physics.initial_solution(&view),
+            causality: causality(problem),
+            physics,
+            view,
+            ends: sdg_distributed::Loopback::connect(1, delays),
+        }
+    }
+
+    /// Solves the rank's tents to `t_end` s, on from where the last call stopped.
+    fn solve(&mut self, t_end: f64, options: &Options) -> Result<RankReport, PitchingError> {
+        let c = &self.causality;
+        let pitcher = sdg_mesh::Pitcher::new(self.view.mesh(), c.c_max, c.safety, t_end).unwrap();
+        sdg_distributed::solve_rank(
+            &self.view,
+            &pitcher,
+            &self.front,
+            &self.solution,
+            self.physics,
+            &mut self.ends[0],
+            options,
+        )
+    }
+
+    /// Element 0's coefficients now.
+    fn coefficients(&self) -> Vec<f64> {
+        let solution = &self.solution;
+        let mut geometry = Geometry::default();
+        let mut coefficients = vec![0.0; solution.basis_len() * solution.width()];
+        assert!(solution.load(0, &mut geometry, &mut coefficients));
+        coefficients
+    }
+
+    /// Sets the first coefficient of element 0 to `value`; returns the element's coefficients.
+    fn spoil(&self, value: f64) -> Vec<f64> {
+        let solution = &self.solution;
+        let mut geometry = Geometry::default();
+        let mut coefficients = vec![0.0; solution.basis_len() * solution.width()];
+        assert!(solution.load(0, &mut geometry, &mut coefficients));
+        coefficients[0] = value;
+        solution.store(0, &geometry, &coefficients, None);
+        coefficients
+    }
+}
+
 #[test]
 fn a_patch_with_a_non_finite_value_stops_the_rank() {
     let dir = tempfile::tempdir().unwrap();
     let problem = plane_wave(4, 1e-7, dir.path());
-    let (mesh, causality, physics) = (&problem.mesh, causality(&problem), physics(&problem, &[]));
-    let partition = Partition::coordinate(mesh, 1).unwrap();
-    let view = sdg_distributed::LocalView::new(mesh, &partition, 0).unwrap();
-    let pitcher = |t_end: f64| {
-        sdg_mesh::Pitcher::new(view.mesh(), causality.c_max, causality.safety, t_end).unwrap()
+    let fifo = LoopbackOptions {
+        seed: 0,
+        max_delay: Duration::ZERO,
+        fifo: true,
     };
-    let front = Front::flat(view.mesh().vertices().len(), 0.0);
-    let solution = physics.initial_solution(&view);
-    let mut ends = sdg_distributed::Loopback::connect(
-        1,
-        LoopbackOptions {
-            seed: 0,
-            max_delay: Duration::ZERO,
-            fifo: true,
-        },
-    );
-    let half = 0.5 * causality.t_end;
-    let rank = (&view, &front, &solution);
-    let mut run = |t_end: f64| {
-        sdg_distributed::solve_rank(
-            rank.0,
-            &pitcher(t_end),
-            rank.1,
-            rank.2,
-            physics,
-            &mut ends[0],
-            &options(0),
-        )
-    };
-    run(half).unwrap();
-    let mut geometry = Geometry::default();
-    let mut coefficients = vec![0.0; solution.basis_len() * solution.width()];
-    assert!(solution.load(0, &mut geometry, &mut coefficients));
-    coefficients[0] = f64::NAN;
-    solution.store(0, &geometry, &coefficients, None);
-    let err = run(causality.t_end).unwrap_err();
+    let mut rank = WholeRank::new(&problem, fifo);
+    let t_end = rank.causality.t_end;
+    let half = 0.5 * t_end;
+    rank.solve(half, &options(0)).unwrap();
+    rank.spoil(f64::NAN);
+    let err = rank.solve(t_end, &options(0)).unwrap_err();
     assert!(
         matches!(err, PitchingError::NonFinite { rank: 0, time, value, .. }
             if value.is_nan() && time >= half),
@@ -452,46 +492,26 @@ fn the_energy_guard_knows_the_work_of_other_ranks_and_stops_a_blow_up() {
     );
     assert!(middle.bound() > 0.0 && guarded[1].report.patches.len() > 100);
 
-    let one = Partition::coordinate(mesh, 1).unwrap();
-    let view = sdg_distributed::LocalView::new(mesh, &one, 0).unwrap();
-    let pitcher = |t_end: f64| {
-        sdg_mesh::Pitcher::new(view.mesh(), causality.c_max, causality.safety, t_end).unwrap()
+    let mut rank = WholeRank::new(&problem, delays);
+    let held = |held| Options {
+        held: Some(held),
+        ..options(0)
     };
-    let front = Front::flat(view.mesh().vertices().len(), 0.0);
-    let solution = physics.initial_solution(&view);
-    let mut ends = sdg_distributed::Loopback::connect(1, delays);
     let half = 0.5 * causality.t_end;
-    let mut solve = |t_end: f64, held: Held| {
-        let options = Options {
-            held: Some(held),
-            ..options(0)
-        };
-        sdg_distributed::solve_rank(
-            &view,
-            &pitcher(t_end),
-            &front,
-            &solution,
-            physics,
-            &mut ends[0],
-            &options,
-        )
-    };
-    let report = solve(half, Held::new(0.0, rho, 1)).unwrap();
-    let held = report.held.unwrap();
-    assert!(held.bound() > 0.0, "{held:?}");
-    let mut geometry = Geometry::default();
-    let mut coefficients = vec![0.0; solution.basis_len() * solution.width()];
-    assert!(solution.load(0, &mut geometry, &mut coefficients));
-    coefficients[0] = 1e6;
-    solution.store(0, &geometry, &coefficients, None);
-    let err = solve(causality.t_end, held).unwrap_err();
+    let report = rank.solve(half, &held(Held::new(0.0, rho, 1))).unwrap();
+    let known = report.held.unwrap();
+    assert!(known.bound() > 0.0, "{known:?}");
+    let coefficients = rank.spoil(1e6);
+    let err = rank.solve(causality.t_end, &held(known)).unwrap_err();
     assert!(
         matches!(err, PitchingError::BlowUp { rank: 0, time, out, held, .. }
             if time >= half && out > 10.0 * held),
         "{err}"
     );
     assert!(err.to_string().contains("energy blow-up"), "{err}");
-    let mut now = vec![0.0; coefficients.len()];
-    assert!(solution.load(0, &mut geometry, &mut now));
-    assert_eq!(now, coefficients, "nothing of the patch stored");
+    assert_eq!(
+        rank.coefficients(),
+        coefficients,
+        "nothing of the patch stored"
+    );
 }
