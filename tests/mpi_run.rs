@@ -80,7 +80,11 @@ fn check(name: &str, overrides: &[&str], cases: &[(usize, &str, usize)]) {
         let snapshots = mpi["snapshots"].as_array().unwrap().len();
         for index in 0..snapshots {
             let threaded = slices(&[threads_out.join(format!("snapshot_{index:04}.vtu"))]);
-            assert_eq!(pieces(&out, index, ranks), threaded, "snapshot {index}");
+            assert_eq!(
+                pieces(&out, "snapshot", index, ranks),
+                threaded,
+                "snapshot {index}"
+            );
         }
     }
 }

@@ -15,14 +15,17 @@ use common::{history_rows, pieces, run_args, sdg, slices, stderr, summary_json};
 /// checks that every run over
 /// ranks writes the same `history.csv`, byte for byte, whose rows balance the energy, start
 /// with the threaded run's first row and end with its last front (time, patches, energy), and
-/// that each snapshot's pieces hold the threaded run's slices.
+/// that each snapshot's pieces hold the threaded run's slices and, where the threaded run has
+/// `cracks_NNNN.vtu`, its crack pieces that file's segments. Returns how many crack files it
+/// compared.
 fn assert_same_outputs_over_ranks(
     name: &str,
     overrides: &[&str],
     snapshots: usize,
     cases: &[(usize, &str, usize)],
-) {
+) -> usize {
     let dir = tempfile::tempdir().unwrap();
+    let mut compared = 0;
     let threads_out = dir.path().join("threads");
     let threads = run(name, overrides, &["--threads", "2"], &threads_out);
     let threads_rows = history_rows(&threads_out);
@@ -97,12 +100,23 @@ fn assert_same_outputs_over_ranks(
             let threaded = slices(&[threads_out.join(format!("snapshot_{index:04}.vtu"))]);
             assert!(!threaded.is_empty());
             assert_eq!(
-                pieces(&out, index, ranks),
+                pieces(&out, "snapshot", index, ranks),
                 threaded,
                 "snapshot {index}, {ranks} ranks, {partition}"
             );
+            // The interface faces' cuts, where the threaded run has them.
+            let cracks = threads_out.join(format!("cracks_{index:04}.vtu"));
+            if cracks.exists() {
+                assert_eq!(
+                    pieces(&out, "cracks", index, ranks),
+                    slices(&[cracks]),
+                    "cracks {index}, {ranks} ranks, {partition}"
+                );
+                compared += 1;
+            }
         }
     }
+    compared
 }
 
 #[test]
@@ -123,7 +137,8 @@ fn history_and_snapshots_over_ranks_are_the_threaded_runs_for_every_partition() 
         (3, "metis", 1),
         (4, "stripes", 2),
     ];
-    assert_same_outputs_over_ranks("plane_wave.toml", &overrides, 4, &cases);
+    let cracks = assert_same_outputs_over_ranks("plane_wave.toml", &overrides, 4, &cases);
+    assert_eq!(cracks, 0, "no interface, no crack pieces");
 }
 
 #[test]
@@ -137,7 +152,12 @@ fn history_and_snapshots_of_a_frictional_interface_over_ranks_are_the_threaded_r
         "output.vtu=\"ascii\"",
     ];
     let cases = [(2, "coordinate", 1), (3, "random", 2), (4, "metis", 1)];
-    assert_same_outputs_over_ranks("stick_slip.toml", &overrides, 2, &cases);
+    let cracks = assert_same_outputs_over_ranks("stick_slip.toml", &overrides, 2, &cases);
+    assert_eq!(
+        cracks,
+        2 * cases.len(),
+        "the interface's cuts at both snapshots"
+    );
 }
 
 /// Asserts that `ranks` is the run `threads` over ranks: the same state hash, patches, final
@@ -209,7 +229,10 @@ fn plane_wave_over_ranks_is_the_run_on_one_thread() {
         assert_eq!(summary["snapshots"][0][1], "snapshot_0000.pvtu");
         let threads_slices = slices(&[dir.path().join("threads/snapshot_0000.vtu")]);
         assert_eq!(threads_slices.len() as u64, summary["triangles"]);
-        assert_eq!(pieces(&out, 0, ranks.parse().unwrap()), threads_slices);
+        assert_eq!(
+            pieces(&out, "snapshot", 0, ranks.parse().unwrap()),
+            threads_slices
+        );
     }
 }
 
@@ -328,30 +351,35 @@ fn what_ranks_cannot_do_yet_is_bad_input_naming_the_key() {
     }
 }
 
-/// The state hash, patch count and snapshot slices (ASCII) of the run in `out`.
+/// The state hash, patch count, and snapshot slices and crack segments (ASCII) of the run in
+/// `out`.
 fn state(out: &Path, snapshots: usize) -> State {
     let summary = summary_json(out);
     let files = summary["snapshots"].as_array().unwrap().clone();
     assert_eq!(files.len(), snapshots, "{files:?}");
-    let slices = files
-        .iter()
-        .enumerate()
-        .map(|(index, file)| {
-            let name = file[1].as_str().unwrap();
-            match name.strip_suffix(".pvtu") {
-                Some(_) => {
-                    let pieces: Vec<_> = std::fs::read_dir(out)
-                        .unwrap()
-                        .map(|e| e.unwrap().path())
-                        .filter(|p| {
-                            let n = p.file_name().unwrap().to_str().unwrap();
-                            n.starts_with(&format!("snapshot_{index:04}_")) && n.ends_with(".vtu")
-                        })
-                        .collect();
-                    slices(&pieces)
-                }
-                None => slices(&[out.join(name)]),
-            }
+    // The cells of `STEM_NNNN.vtu` of a threaded run, or of its pieces over ranks.
+    let cells = |stem: &str, index: usize, pieces: bool| {
+        let whole = out.join(format!("{stem}_{index:04}.vtu"));
+        let paths: Vec<_> = if pieces {
+            (std::fs::read_dir(out).unwrap())
+                .map(|e| e.unwrap().path())
+                .filter(|p| {
+                    let n = p.file_name().unwrap().to_str().unwrap();
+                    n.starts_with(&format!("{stem}_{index:04}_")) && n.ends_with(".vtu")
+                })
+                .collect()
+        } else {
+            [whole].into_iter().filter(|p| p.exists()).collect()
+        };
+        slices(&paths)
+    };
+    let slices = (files.iter().enumerate())
+        .flat_map(|(index, file)| {
+            let pieces = file[1].as_str().unwrap().ends_with(".pvtu");
+            [
+                cells("snapshot", index, pieces),
+                cells("cracks", index, pieces),
+            ]
         })
         .collect();
     (
@@ -367,7 +395,8 @@ fn probes(out: &Path) -> Option<String> {
     std::fs::read_to_string(out.join("interface.csv")).ok()
 }
 
-/// What a run ends with: its state hash, patches, snapshot slices and `interface.csv`.
+/// What a run ends with: its state hash, patches, snapshot slices and crack segments (by
+/// snapshot) and `interface.csv`.
 type State = (
     serde_json::Value,
     serde_json::Value,

@@ -40,7 +40,7 @@ use sdg_solver::face::{
     FACE_GEOMETRY_VALUES, FaceGeometry, FaceState, MAX_FACE_BASIS, STATE_COMPONENTS,
 };
 use sdg_solver::interface::Interfaces;
-use sdg_solver::patch::{Initial, InterfaceSample, Newton, PatchReport, PatchSolver};
+use sdg_solver::patch::{FaceCut, Initial, InterfaceSample, Newton, PatchReport, PatchSolver};
 use sdg_solver::system::System;
 
 use crate::held::Held;
@@ -73,6 +73,9 @@ pub struct Physics<'a> {
     pub newton: Newton,
     /// Points (m) where interface probes sample each patch ([`PatchSolver::probe_samples`]).
     pub probes: &'a [[f64; 2]],
+    /// Times (s, on the run's clock from 0) of the planes that cut each patch's contact faces
+    /// ([`PatchSolver::snapshot_cuts`]): the snapshots'.
+    pub cut_times: &'a [f64],
 }
 
 impl Physics<'_> {
@@ -159,6 +162,8 @@ pub struct Observed<'a> {
     pub crossings: &'a [Crossing],
     /// Its samples at [`Physics::probes`]: `(probe index, sample)`.
     pub samples: &'a [(usize, InterfaceSample)],
+    /// Its contact faces' cuts by the planes of [`Physics::cut_times`].
+    pub cuts: &'a [FaceCut],
 }
 
 /// Observes nothing.
@@ -166,13 +171,15 @@ impl Observer for () {
     fn solved(&mut self, _: &LocalView, _: &Front, _: Observed<'_>) {}
 }
 
-/// A solved patch: its report, its crack-tracking crossings (local edge ids) and its probes'
-/// samples (both empty, and not allocated, for most patches).
+/// A solved patch: its report, its crack-tracking crossings (local edge ids), its probes'
+/// samples and its contact faces' snapshot cuts (all empty, and not allocated, for most
+/// patches).
 #[derive(Debug)]
 struct Solved {
     report: PatchReport,
     crossings: Vec<Crossing>,
     samples: Vec<(usize, InterfaceSample)>,
+    cuts: Vec<FaceCut>,
 }
 
 /// A rank's patch solves: the [`Work`] of [`solve_rank`].
@@ -256,10 +263,13 @@ fn solve_tent(
     if !physics.probes.is_empty() {
         solver.probe_samples(view.mesh(), physics.probes.iter().copied(), &mut samples);
     }
+    let mut cuts = Vec::new();
+    solver.snapshot_cuts(physics.cut_times, &mut cuts);
     Ok(Solved {
         report,
         crossings: solver.crack_crossings().to_vec(),
         samples,
+        cuts,
     })
 }
 
@@ -328,6 +338,7 @@ impl<O: Observer> Patches<'_, O> {
             report,
             crossings,
             samples,
+            cuts,
         } = solved;
         if let Some(held) = &mut self.held {
             held.add(view.rank(), &report);
@@ -348,6 +359,7 @@ impl<O: Observer> Patches<'_, O> {
             solution: self.solution,
             crossings: &crossings,
             samples: &samples,
+            cuts: &cuts,
         };
         self.observer.solved(view, front, observed);
     }

@@ -346,11 +346,6 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
         return Err(EngineError::Input(reason));
     }
     // What is not done, without being asked for by a key of its own.
-    if !split && problem.interfaces.any_cohesive() && !config.output.snapshot_times.is_empty() {
-        tracing::warn!(
-            "the snapshots' crack cuts (cracks_NNNN.vtu) are not written by a run over ranks yet"
-        );
-    }
     if config.output.png && !config.output.snapshot_times.is_empty() {
         tracing::warn!(
             "snapshots over ranks are written as pieces (snapshot_NNNN_R.vtu) and not drawn: no \

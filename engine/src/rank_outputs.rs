@@ -10,7 +10,9 @@
 //! `snapshot_NNNN.pvtu` that joins the pieces and `snapshots.pvd`. Pieces rather than one file
 //! from rank 0: no slice travels, memory stays per rank, and the threaded run's own file is not
 //! the same from run to run (its cells come in the order the threads solved them), so one file
-//! would be no closer to it. Snapshots are not drawn (`output.png`) and have no crack cuts.
+//! would be no closer to it. The cuts of interface faces go the same way, as `cracks_NNNN_R.vtu`
+//! and `cracks_NNNN.pvtu` (every rank writes its piece, empty where its patches cut no face).
+//! Snapshots are not drawn (`output.png`).
 //!
 //! # History rows: those of the serial reference order
 //! On threads a row is taken when the front's earliest time has passed `t_k = k t_end / 100`,
@@ -107,6 +109,7 @@ impl<'p> RankOutputs<'p> {
         let piece = Piece {
             rank,
             ranks: partition.ranks() as u32,
+            cuts: problem.interfaces.any_nonlinear(),
         };
         let times = history_times(t_end);
         let snapshots = match resumed {
@@ -241,6 +244,10 @@ impl Observer for RankOutputs<'_> {
             (edges[edge as usize].tag, Crossing { edge, ..*c })
         }));
         records.samples.extend_from_slice(solved.samples);
+        for cut in solved.cuts {
+            let (time, xy, values) = crate::output::interface::cut(cut);
+            self.snapshots.add_interface_segment(time, xy, values);
+        }
         let mesh = view.mesh();
         let v = tent.vertex;
         let star = mesh.vertex_triangles(v);

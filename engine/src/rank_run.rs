@@ -18,8 +18,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use sdg_distributed::{
-    Gathered, Held, LocalView, Options, Partition, Pause, PauseRequest, PitchingError, Transport,
-    TransportError, gather, rank_state, solve_rank_observed,
+    Gathered, Held, LocalView, Options, Partition, Pause, PauseRequest, Physics, PitchingError,
+    Transport, TransportError, gather, rank_state, solve_rank_observed,
 };
 use sdg_mesh::{Front, Pitcher};
 use sdg_solver::element::FrontSolution;
@@ -156,7 +156,14 @@ pub(crate) fn run_rank<T: Transport>(
     let (rank, ranks) = (transport.rank(), transport.ranks());
     let (partition, kind) = shared.partition;
     let probes: Vec<[f64; 2]> = problem.probes.iter().map(|p| p.at).collect();
-    let (physics, causality) = (physics(problem, &probes), causality(problem));
+    let cut_times: Vec<f64> = (config.output.snapshot_times.iter())
+        .map(|&t| config.time.elapsed(t))
+        .collect();
+    let physics = Physics {
+        cut_times: &cut_times,
+        ..physics(problem, &probes)
+    };
+    let causality = causality(problem);
     let t_end = causality.t_end;
     let view = LocalView::new(mesh, partition, rank).map_err(|e| failed(ranks, e.into()))?;
     let (pitcher, front, solution) = match shared.restored {

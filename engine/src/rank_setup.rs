@@ -68,9 +68,9 @@ const MEAN_WEIGHT: f64 = 100.0;
 /// Every vertex's work to the end time: its tents ([`crate::estimate::tents_per_vertex`] on
 /// the initial mesh, least time first, at most [`WEIGHT_TENTS_PER_VERTEX`] tents a vertex on
 /// average and [`crate::estimate::SAMPLE_TENTS`] in all, then extrapolated) times its star
-/// size (a tent's patch elements), scaled to a mean of [`MEAN_WEIGHT`], at least 1. Tents per vertex differ over a mesh (the left half of the
-/// 48 x 48 `plane_wave` pitches 9% more than the right), so star sizes alone leave a rank with
-/// more work than the others. A function of the mesh and the pitcher only (no wall-time
+/// size (a tent's patch elements), scaled to a mean of [`MEAN_WEIGHT`], at least 1. Tents per
+/// vertex differ over a mesh (the left half of the 48 x 48 `plane_wave` pitches 9% more than
+/// the right), so star sizes alone leave a rank with more work than the others. A function of the mesh and the pitcher only (no wall-time
 /// limit), so that every rank computes the same partition.
 fn work_weights(problem: &Problem) -> Result<Vec<u64>, sdg_mesh::PitchError> {
     let mesh = &problem.mesh;
@@ -93,7 +93,7 @@ fn work_weights(problem: &Problem) -> Result<Vec<u64>, sdg_mesh::PitchError> {
 }
 
 /// What every rank solves the patches of `problem` with, sampling the interface at the
-/// points `probes` (m).
+/// points `probes` (m) and cutting no face by snapshot planes (`cut_times` empty).
 pub fn physics<'a>(problem: &'a Problem, probes: &'a [[f64; 2]]) -> Physics<'a> {
     let config = &problem.loaded.config;
     Physics {
@@ -107,6 +107,7 @@ pub fn physics<'a>(problem: &'a Problem, probes: &'a [[f64; 2]]) -> Physics<'a> 
             max_iter: config.solver.newton_max_iter,
         },
         probes,
+        cut_times: &[],
     }
 }
 

@@ -390,20 +390,21 @@ pub fn slices(paths: &[std::path::PathBuf]) -> Vec<String> {
     all
 }
 
-/// The slices of snapshot `index` in the pieces of `ranks` ranks in `out`, after checking that
-/// its `.pvtu` lists those pieces and the collection lists the `.pvtu`.
-pub fn pieces(out: &Path, index: usize, ranks: usize) -> Vec<String> {
+/// The cells of snapshot `index`'s pieces `STEM_NNNN_R.vtu` of a run over `ranks` ranks in
+/// `out` (STEM `snapshot` or `cracks`), as [`slices`] reads them; checks that `STEM_NNNN.pvtu`
+/// lists the pieces in rank order and that `snapshots.pvd` lists it.
+pub fn pieces(out: &Path, stem: &str, index: usize, ranks: usize) -> Vec<String> {
     let names: Vec<String> = (0..ranks)
-        .map(|r| format!("snapshot_{index:04}_{r}.vtu"))
+        .map(|r| format!("{stem}_{index:04}_{r}.vtu"))
         .collect();
-    let pvtu = std::fs::read_to_string(out.join(format!("snapshot_{index:04}.pvtu"))).unwrap();
+    let pvtu = std::fs::read_to_string(out.join(format!("{stem}_{index:04}.pvtu"))).unwrap();
     let listed: Vec<&str> = (pvtu.split("<Piece Source=\"").skip(1))
         .map(|rest| rest.split('"').next().unwrap())
         .collect();
     assert_eq!(listed, names, "the pieces of {}", out.display());
     let pvd = std::fs::read_to_string(out.join("snapshots.pvd")).unwrap();
     assert!(
-        pvd.contains(&format!("file=\"snapshot_{index:04}.pvtu\"")),
+        pvd.contains(&format!("file=\"{stem}_{index:04}.pvtu\"")),
         "{pvd}"
     );
     slices(&names.iter().map(|n| out.join(n)).collect::<Vec<_>>())

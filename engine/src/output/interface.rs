@@ -7,10 +7,10 @@
 //! does not depend on the order in which tents were solved.
 
 use sdg_solver::interface::Mode;
-use sdg_solver::patch::{InterfaceSample, PatchSolver};
+use sdg_solver::patch::{FaceCut, InterfaceSample, PatchSolver};
 
 use crate::config::TimeConfig;
-use crate::output::snapshot::{InterfaceValues, cut_face};
+use crate::output::snapshot::InterfaceValues;
 use crate::output::table::Table;
 use crate::problem::Probe;
 
@@ -18,45 +18,31 @@ use crate::problem::Probe;
 pub(crate) type Cut = (f64, [[f64; 2]; 2], [InterfaceValues; 2]);
 
 /// Cuts the last patch's contact faces by the planes of the snapshot `times` (s) they cross.
-pub(crate) fn snapshot_cuts(times: &[f64], c_ref: f64, solver: &mut PatchSolver) -> Vec<Cut> {
+pub(crate) fn snapshot_cuts(times: &[f64], solver: &mut PatchSolver) -> Vec<Cut> {
     let mut cuts = Vec::new();
-    for k in 0..solver.interface_faces().len() {
-        let (edge, face) = solver.interface_faces()[k];
-        let corners = face.geometry.corners();
-        let lo = corners.iter().map(|c| c[2]).fold(f64::INFINITY, f64::min);
-        let hi = corners
-            .iter()
-            .map(|c| c[2])
-            .fold(f64::NEG_INFINITY, f64::max);
-        for &time in times {
-            let tau = c_ref * time;
-            if !(lo < tau && tau <= hi) {
-                continue;
-            }
-            let Some(ends) = cut_face(corners, tau) else {
-                continue;
-            };
-            let values = ends.map(|x| {
-                solver
-                    .interface_sample_at(edge, x)
-                    .map_or_else(InterfaceValues::default, |s| InterfaceValues {
-                        delta: s.delta,
-                        slip: s.slip,
-                        damage: s.damage,
-                        traction: s.traction,
-                        eta: s.eta,
-                        mode: match s.mode {
-                            Mode::Stick => 0.0,
-                            Mode::Slip => 1.0,
-                            Mode::Separation => 2.0,
-                            Mode::Bonded => 3.0,
-                        },
-                    })
-            });
-            cuts.push((time, ends.map(|x| [x[0], x[1]]), values));
-        }
-    }
-    cuts
+    solver.snapshot_cuts(times, &mut cuts);
+    cuts.iter().map(cut).collect()
+}
+
+/// A face's cut as the snapshots record it: time (s), ends (m) and values there (zero where
+/// the face could not be sampled).
+pub(crate) fn cut(cut: &FaceCut) -> Cut {
+    let values = cut.samples.map(|s| {
+        s.map_or_else(InterfaceValues::default, |s| InterfaceValues {
+            delta: s.delta,
+            slip: s.slip,
+            damage: s.damage,
+            traction: s.traction,
+            eta: s.eta,
+            mode: match s.mode {
+                Mode::Stick => 0.0,
+                Mode::Slip => 1.0,
+                Mode::Separation => 2.0,
+                Mode::Bonded => 3.0,
+            },
+        })
+    });
+    (cut.time, cut.ends, values)
 }
 
 /// `interface.csv`: one row per sample, sorted by probe and time, at its time on the clock of

@@ -261,11 +261,7 @@ impl Solve<'_> {
                 solver.probe_samples(mesh, probes, &mut samples);
                 samples
             },
-            cuts: interface::snapshot_cuts(
-                &self.snapshot_times,
-                self.problem.system.c_ref(),
-                solver,
-            ),
+            cuts: interface::snapshot_cuts(&self.snapshot_times, solver),
             crossings: solver
                 .crack_crossings()
                 .iter()

@@ -16,5 +16,5 @@ pub(crate) mod tables;
 
 pub use inflow::Initial;
 pub use newton::{Newton, NewtonFailure};
-pub use report::{BLOW_UP, ElementReport, InterfaceSample, PatchReport};
+pub use report::{BLOW_UP, ElementReport, FaceCut, InterfaceSample, PatchReport};
 pub use solver::PatchSolver;

@@ -177,3 +177,16 @@ pub struct InterfaceSample {
     /// The mode with the largest area fraction.
     pub mode: Mode,
 }
+
+/// A contact face's cut by the plane of a snapshot ([`PatchSolver::snapshot_cuts`]).
+///
+/// [`PatchSolver::snapshot_cuts`]: super::PatchSolver::snapshot_cuts
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FaceCut {
+    /// The plane's time, s (on the run's clock from 0).
+    pub time: f64,
+    /// The segment's ends, m.
+    pub ends: [[f64; 2]; 2],
+    /// The interface at each end; `None` where the patch cannot sample it.
+    pub samples: [Option<InterfaceSample>; 2],
+}

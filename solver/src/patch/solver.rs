@@ -9,7 +9,7 @@ use sdg_mesh::{EdgeId, Front, Mesh, Tent, TriangleId, VertexId};
 use super::contact::{ContactFaces, FaceShape};
 use super::inflow::{Inflow, Initial};
 use super::newton::{Newton, NewtonFailure};
-use super::report::{ElementReport, InterfaceSample, PatchReport};
+use super::report::{ElementReport, FaceCut, InterfaceSample, PatchReport};
 use super::slot::{FaceQuadrature, Slot, TOP, Vertical, face_points, tent_bottom, vertical_faces};
 use super::tables::FaceTables;
 use crate::basis::Basis;
@@ -20,7 +20,7 @@ use crate::face::FaceState;
 use crate::interface::{Contact, Interfaces, Law};
 use crate::quadrature;
 use crate::ring::BlockSystem;
-use crate::spacetime::SpacePoint;
+use crate::spacetime::{SpacePoint, cut_face};
 use crate::system::{MAX_FIELDS, State, System};
 
 /// Solves tent patches of one physical problem; holds all scratch memory, so solving a patch
@@ -476,6 +476,32 @@ impl PatchSolver {
                     out.push((i, sample));
                     break;
                 }
+            }
+        }
+    }
+
+    /// Adds to `out` the cuts of the last patch's contact faces by the planes of the `times`
+    /// (s, on the run's clock from 0) they cross, with the interface at both ends of each
+    /// segment ([`Self::interface_sample_at`]). Allocates nothing when no plane crosses a face.
+    pub fn snapshot_cuts(&mut self, times: &[f64], out: &mut Vec<FaceCut>) {
+        let c_ref = self.system.c_ref();
+        for k in 0..self.faces.len() {
+            let (edge, corners) = (self.faces[k].0, self.faces[k].1.geometry.corners());
+            let lo = corners.iter().map(|c| c[2]).fold(f64::INFINITY, f64::min);
+            let hi = (corners.iter().map(|c| c[2])).fold(f64::NEG_INFINITY, f64::max);
+            for &time in times {
+                let tau = c_ref * time;
+                if !(lo < tau && tau <= hi) {
+                    continue;
+                }
+                let Some(ends) = cut_face(corners, tau) else {
+                    continue;
+                };
+                out.push(FaceCut {
+                    time,
+                    ends: ends.map(|x| [x[0], x[1]]),
+                    samples: ends.map(|x| self.interface_sample_at(edge, x)),
+                });
             }
         }
     }

@@ -10,9 +10,10 @@ use std::path::Path;
 /// The slice of the element `v` by the plane `tau = tau_s` (vertices within `tol` of it are on
 /// it), or `None` when neither rule applies or the slice has fewer than three corners.
 /// Removes from `dir` the snapshot files a run writes (`snapshot_NNNN.vtu` and `.png`,
-/// `cracks_NNNN.vtu`, `snapshots.pvd`, and over ranks `snapshot_NNNN.pvtu` and
-/// `snapshot_NNNN_R.vtu`), so that a new run's folder holds no snapshot of an
-/// earlier run that its collection does not list. Returns how many files were removed.
+/// `cracks_NNNN.vtu`, `snapshots.pvd`, and over ranks their `.pvtu` files and pieces
+/// `snapshot_NNNN_R.vtu` and `cracks_NNNN_R.vtu`), so that a new run's folder holds no
+/// snapshot of an earlier run that its collection does not list. Returns how many files were
+/// removed.
 pub(crate) fn remove_earlier(dir: &Path) -> Result<usize, EngineError> {
     let numbered = |name: &str, prefix: &str, extensions: &[&str]| {
         name.strip_prefix(prefix)
@@ -31,15 +32,18 @@ pub(crate) fn remove_earlier(dir: &Path) -> Result<usize, EngineError> {
         if !entry.file_type().is_ok_and(|t| t.is_file()) {
             continue;
         }
-        // A piece of a run over ranks, `snapshot_NNNN_R.vtu`.
-        let piece = name.strip_prefix("snapshot_").and_then(|rest| {
-            let (index, rank) = rest.split_once('_')?;
-            Some(numbered(&format!("{index}.vtu"), "", &["vtu"]) && numbered(rank, "", &["vtu"]))
+        // A piece of a run over ranks, `snapshot_NNNN_R.vtu` or `cracks_NNNN_R.vtu`.
+        let piece = ["snapshot_", "cracks_"].iter().any(|prefix| {
+            name.strip_prefix(prefix)
+                .and_then(|rest| rest.split_once('_'))
+                .is_some_and(|(index, rank)| {
+                    numbered(&format!("{index}.vtu"), "", &["vtu"]) && numbered(rank, "", &["vtu"])
+                })
         });
         if name == "snapshots.pvd"
-            || piece == Some(true)
+            || piece
             || numbered(name, "snapshot_", &["vtu", "png", "pvtu"])
-            || numbered(name, "cracks_", &["vtu"])
+            || numbered(name, "cracks_", &["vtu", "pvtu"])
         {
             let path = entry.path();
             std::fs::remove_file(&path).map_err(|e| EngineError::io(&path, e))?;

@@ -34,6 +34,5 @@ mod slicing;
 mod snapshots;
 
 pub(crate) use files::remove_earlier;
-pub(crate) use slicing::cut_face;
 pub use slicing::{InterfaceValues, PointValues};
 pub use snapshots::{Piece, Snapshots};

@@ -1,5 +1,7 @@
 //! Where a spacetime element meets a plane of constant time: the polygon it cuts (the slicing
-//! rule of the snapshot module) and a face's segment on the plane.
+//! rule of the snapshot module); the values on slices and on interface segments.
+
+use sdg_solver::spacetime::cut;
 
 /// Field values at a point of a slice, physical SI units.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -136,42 +138,7 @@ pub(super) fn slice(v: &[[f64; 3]; 4], tau_s: f64, tol: f64) -> Option<Corners> 
     Some(Corners { points, len, rule })
 }
 
-/// The point of the edge from `below` to `above` at `tau = tau_s`. Always interpolated from the
-/// lower end, so the elements sharing an edge get the same point to the last bit.
-pub(super) fn cut(below: [f64; 3], above: [f64; 3], tau_s: f64) -> [f64; 3] {
-    let w = (tau_s - below[2]) / (above[2] - below[2]);
-    [
-        below[0] + w * (above[0] - below[0]),
-        below[1] + w * (above[1] - below[1]),
-        tau_s,
-    ]
-}
-
 /// Signed area of the triangle `a, b, c`: positive when counter-clockwise.
 pub(super) fn signed_area(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
-}
-
-/// The cut of the triangle `corners` (scaled spacetime, a vertical interface face) by the plane
-/// `tau = tau_s`: its two ends, or `None` when the plane misses the triangle or touches it in a
-/// point.
-pub(crate) fn cut_face(corners: [[f64; 3]; 3], tau_s: f64) -> Option<[[f64; 3]; 2]> {
-    let mut ends = [[0.0; 3]; 2];
-    let mut count = 0;
-    for i in 0..3 {
-        let (p, q) = (corners[i], corners[(i + 1) % 3]);
-        let on = p[2] == tau_s;
-        let crosses = (p[2] - tau_s) * (q[2] - tau_s) < 0.0;
-        for point in [on.then_some(p), crosses.then(|| cut(p, q, tau_s))]
-            .into_iter()
-            .flatten()
-        {
-            if count < 2 {
-                ends[count] = point;
-                count += 1;
-            }
-        }
-    }
-    let length = (ends[1][0] - ends[0][0]).hypot(ends[1][1] - ends[0][1]);
-    (count == 2 && length > 0.0).then_some(ends)
 }

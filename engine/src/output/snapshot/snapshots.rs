@@ -89,8 +89,12 @@ pub struct Snapshots {
     /// snapshot index: other ranks may not have written theirs yet, and a checkpoint keeps
     /// such a snapshot whole ([`Self::rewound`]).
     #[serde(skip)]
-    kept: Vec<(usize, Vec<Triangle>)>,
+    kept: Vec<Kept>,
 }
+
+/// A piece written since the last checkpoint: the snapshot's index, the slices and the
+/// interface segments.
+type Kept = (usize, Vec<Triangle>, Vec<Segment>);
 
 /// The piece files `STEM_R.vtu` of the snapshot `STEM.pvtu` in `dir`.
 fn pieces_of(dir: &Path, stem: &str) -> Vec<String> {
@@ -106,15 +110,18 @@ fn pieces_of(dir: &Path, stem: &str) -> Vec<String> {
 }
 
 /// One rank's part of the snapshots of a run over `ranks` ranks: it writes the slices of the
-/// elements it solved as `snapshot_NNNN_R.vtu` (`R` its rank), without pictures or crack cuts;
-/// rank 0 also writes `snapshot_NNNN.pvtu`, which lists every rank's piece, and the collection
-/// `snapshots.pvd` of those.
+/// elements it solved as `snapshot_NNNN_R.vtu` (`R` its rank), without pictures, and with
+/// `cuts` the cuts of the interface faces of its patches as `cracks_NNNN_R.vtu` (empty where
+/// none); rank 0 also writes `snapshot_NNNN.pvtu` and `cracks_NNNN.pvtu`, which list every
+/// rank's pieces, and the collection `snapshots.pvd` of those.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Piece {
     /// This rank.
     pub rank: u32,
     /// Ranks of the run, at least 1.
     pub ranks: u32,
+    /// The run has interface faces (nonlinear laws), so every snapshot has crack pieces.
+    pub cuts: bool,
 }
 
 impl std::fmt::Debug for Snapshots {
@@ -437,7 +444,7 @@ impl Snapshots {
             let segments = std::mem::take(&mut snap.segments);
             let (index, time) = (snap.index, snap.label.unwrap_or(snap.time));
             if let Some(piece) = self.piece {
-                self.write_piece(piece, index, time, triangles);
+                self.write_piece(piece, index, time, (triangles, segments));
                 self.next += 1;
                 count += 1;
                 continue;
@@ -482,20 +489,42 @@ impl Snapshots {
 
     /// Hands the writer `piece`'s part of snapshot number `index` at `time` (s): its
     /// `triangles`, and on rank 0 the `.pvtu` of every rank's part.
-    fn write_piece(&mut self, piece: Piece, index: usize, time: f64, triangles: Vec<Triangle>) {
-        let name = |rank: u32| format!("snapshot_{index:04}_{rank}.vtu");
-        let own = name(piece.rank);
-        let pvtu = (piece.rank == 0).then(|| format!("snapshot_{index:04}.pvtu"));
+    fn write_piece(
+        &mut self,
+        piece: Piece,
+        index: usize,
+        time: f64,
+        (triangles, segments): (Vec<Triangle>, Vec<Segment>),
+    ) {
+        let name = |stem: &str, rank: u32| format!("{stem}_{index:04}_{rank}.vtu");
+        let pvtu = |stem: &str| format!("{stem}_{index:04}.pvtu");
+        let rank0 = piece.rank == 0;
+        let own = name("snapshot", piece.rank);
         self.written
-            .push((time, pvtu.clone().unwrap_or_else(|| own.clone())));
+            .push((time, if rank0 { pvtu("snapshot") } else { own.clone() }));
+        if piece.cuts && rank0 {
+            self.crack_files.push((time, pvtu("cracks")));
+        }
         let (dir, vtu) = (self.dir.clone(), self.vtu);
-        self.kept.push((index, triangles.clone()));
-        let pieces: Vec<String> = (0..piece.ranks).map(name).collect();
+        self.kept.push((index, triangles.clone(), segments.clone()));
+        let pieces = |stem: &str| (0..piece.ranks).map(|r| name(stem, r)).collect::<Vec<_>>();
+        let (snapshot_pieces, crack_pieces) = (pieces("snapshot"), pieces("cracks"));
+        let (cracks, cracks_pvtu) = (name("cracks", piece.rank), pvtu("cracks"));
+        let snapshot_pvtu = pvtu("snapshot");
         self.submit(Box::new(move || {
             let grid = triangles_grid(&triangles);
             write_output(&dir, &own, grid.to_vtu(vtu).as_bytes())?;
-            if let Some(pvtu) = pvtu {
-                write_output(&dir, &pvtu, grid.to_pvtu(&pieces).as_bytes())?;
+            if rank0 {
+                let text = grid.to_pvtu(&snapshot_pieces);
+                write_output(&dir, &snapshot_pvtu, text.as_bytes())?;
+            }
+            if piece.cuts {
+                let grid = segments_grid(&segments);
+                write_output(&dir, &cracks, grid.to_vtu(vtu).as_bytes())?;
+                if rank0 {
+                    let text = grid.to_pvtu(&crack_pieces);
+                    write_output(&dir, &cracks_pvtu, text.as_bytes())?;
+                }
             }
             Ok(())
         }));
@@ -505,12 +534,15 @@ impl Snapshots {
     /// the number of snapshots it has written, and as CBOR the slices of those it has not
     /// written and of the pieces it wrote since the last checkpoint.
     pub(crate) fn pending_cbor(&self) -> (usize, Vec<u8>) {
-        let kept = self.kept.iter().map(|(index, triangles)| Pending {
-            triangles: triangles.clone(),
-            fallback: Vec::new(),
-            segments: Vec::new(),
-            ..self.snapshots[*index].clone()
-        });
+        let kept = self
+            .kept
+            .iter()
+            .map(|(index, triangles, segments)| Pending {
+                triangles: triangles.clone(),
+                fallback: Vec::new(),
+                segments: segments.clone(),
+                ..self.snapshots[*index].clone()
+            });
         let pending: Vec<Pending> = kept
             .chain(self.snapshots[self.next..].iter().cloned())
             .collect();
@@ -546,12 +578,15 @@ impl Snapshots {
     pub(crate) fn rewound(&self, next: usize) -> Self {
         let mut copy = self.to_stored();
         let next = next.min(self.next);
-        for (index, triangles) in self.kept.iter().filter(|k| k.0 >= next) {
+        for (index, triangles, segments) in self.kept.iter().filter(|k| k.0 >= next) {
             let p = &mut copy.snapshots[*index];
             p.triangles = triangles.clone();
             p.fallback.clear();
+            p.segments = segments.clone();
         }
         copy.written.truncate(next.min(copy.written.len()));
+        let written = &copy.written;
+        (copy.crack_files).retain(|(time, _)| written.iter().any(|(t, _)| t == time));
         copy.next = next;
         copy
     }

@@ -361,3 +361,42 @@ fn meshio_reads_a_snapshot() {
     assert_eq!(lines[3], "displacement 24 3");
     assert_eq!(lines[4], "strain_energy_density 24");
 }
+
+/// A rank's piece with the interface's cut: written as `snapshot_0000_1.vtu` and
+/// `cracks_0000_1.vtu`; a checkpoint taken before the other rank wrote its piece puts both the
+/// slices and the segment back (`rewound`), through the bytes a checkpoint gathers
+/// (`pending_cbor`, `add_pending`), and forgets the crack file with the snapshot.
+#[test]
+fn a_piece_s_slices_and_crack_segments_are_written_and_rewound_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let piece = Piece {
+        rank: 1,
+        ranks: 2,
+        cuts: true,
+    };
+    let mut snaps = Snapshots::new(&[0.3], 1.0, dir.path().to_path_buf()).with_piece(piece);
+    for e in tets(&[[0.0; 4], [1.2; 4]]) {
+        snaps.add_element(&e, linear);
+    }
+    let values = [InterfaceValues {
+        delta: 1e-6,
+        ..InterfaceValues::default()
+    }; 2];
+    snaps.add_interface_segment(0.3, [[0.0, 0.5], [1.0, 0.5]], values);
+    assert_eq!(snaps.flush(0.5).unwrap(), 1);
+    snaps.finish().unwrap();
+    for name in ["snapshot_0000_1.vtu", "cracks_0000_1.vtu"] {
+        assert!(dir.path().join(name).exists(), "{name}");
+    }
+    assert!(!dir.path().join("cracks_0000.pvtu").exists(), "rank 0's");
+    let rewound = snaps.rewound(0);
+    let pending = &rewound.snapshots[0];
+    assert_eq!((pending.triangles.len(), pending.segments.len()), (8, 1));
+    assert!(rewound.crack_files.is_empty() && rewound.written.is_empty());
+    let (next, bytes) = snaps.pending_cbor();
+    let mut gathered = Snapshots::new(&[0.3], 1.0, dir.path().to_path_buf());
+    gathered.add_pending(&bytes).unwrap();
+    assert_eq!(next, 1);
+    assert_eq!(gathered.snapshots[0].segments.len(), 1);
+    assert_eq!(gathered.snapshots[0].segments[0].values, values);
+}
