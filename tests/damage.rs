@@ -28,6 +28,7 @@ fn problem(text: &str, overrides: &[&str]) -> Problem {
     Problem::setup(LoadedConfig {
         config,
         file: "damage_interface.toml".into(),
+        overrides,
     })
     .expect("valid problem")
 }
@@ -308,8 +309,8 @@ fn damage_mode1_crack_runs_slower_than_c_r() {
 /// The seed's two delays (set 1: 1e-8 s, set 2: 1e-9 s) on `configs/damage_mode1.toml`'s
 /// straight path at its load, to 1.5 us: the shorter delay debonds first, runs faster and
 /// dissipates far less per metre of crack; a damage law without a length of its own takes its
-/// toughness from the delay (docs/verification.md, "Delayed damage"; at the plate's lower load the shorter delay does
-/// not debond).
+/// toughness from the delay (docs/verification.md, "Delayed damage"; at the plate's lower load
+/// the shorter delay does not debond).
 /// Long (two runs of about 1M patches): `cargo test --release --test damage -- --ignored`.
 #[test]
 #[ignore = "long: run on demand"]

@@ -610,6 +610,7 @@ fn check_config(file: &Path, text: &str, overrides: &[String]) -> Outcome {
     let loaded = LoadedConfig {
         config,
         file: file.to_path_buf(),
+        overrides: Vec::new(),
     };
     let mesh_file = loaded.config.mesh.path.as_ref().map(|p| loaded.resolve(p));
     match Problem::setup(loaded) {

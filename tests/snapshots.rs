@@ -37,6 +37,7 @@ fn snapshots_agree_with_the_exact_solution() {
     let loaded = sdg_engine::LoadedConfig {
         config,
         file: "plane_wave.toml".into(),
+        overrides: Vec::new(),
     };
     let problem = sdg_engine::Problem::setup(loaded).unwrap();
     let wave = problem.exact.as_ref().unwrap();

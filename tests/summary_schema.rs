@@ -107,18 +107,19 @@ fn check(config: &str, sets: &[&str], sections: &[&str]) -> Value {
     summary
 }
 
+/// `overrides` holds the `--set` overrides in the order given.
 #[test]
 fn plane_wave_summary_is_documented() {
-    check(
-        "plane_wave.toml",
-        &[
-            "mesh.nx=4",
-            "mesh.ny=4",
-            "time.end=2e-7",
-            "output.snapshot_times=[0.0]",
-        ],
-        &["error", "snapshots[]"],
-    );
+    let sets = [
+        "mesh.nx=4",
+        "mesh.ny=4",
+        "time.end=2e-7",
+        "output.snapshot_times=[0.0]",
+    ];
+    let summary = check("plane_wave.toml", &sets, &["error", "snapshots[]"]);
+    let mut given = vec!["output.png=false"];
+    given.extend(sets);
+    assert_eq!(summary["overrides"], serde_json::json!(given));
 }
 
 /// With `[fracture]`, `crack` repeats the network's totals of `fracture` under the names of

@@ -462,6 +462,7 @@ law = "bonded"
         Problem::setup(LoadedConfig {
             config,
             file: "case.toml".into(),
+            overrides,
         })
     }
 

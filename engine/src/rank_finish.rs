@@ -204,6 +204,7 @@ fn summarize(
     Ok(RunSummary {
         command: "run",
         config_file: problem.loaded.file.clone(),
+        overrides: problem.loaded.overrides.clone(),
         vertices: mesh.vertices().len(),
         triangles: mesh.triangles().len(),
         order: config.solver.order,

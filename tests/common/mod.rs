@@ -20,6 +20,7 @@ pub fn run(text: &str, overrides: &[String]) -> (RunSummary, tempfile::TempDir) 
     let loaded = LoadedConfig {
         config,
         file: "test.toml".into(),
+        overrides: overrides.to_vec(),
     };
     let problem = Problem::setup(loaded).expect("valid problem");
     let dir = tempfile::tempdir().expect("temporary folder");

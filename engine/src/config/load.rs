@@ -21,6 +21,8 @@ pub struct LoadedConfig {
     pub config: Config,
     /// The config file.
     pub file: PathBuf,
+    /// The overrides applied, in order (`key.path=value`, as `--set` gives them).
+    pub overrides: Vec<String>,
 }
 
 impl LoadedConfig {
@@ -33,6 +35,7 @@ impl LoadedConfig {
         Ok(Self {
             config,
             file: file.to_path_buf(),
+            overrides: overrides.to_vec(),
         })
     }
 

@@ -119,6 +119,8 @@ pub struct MeshSummary {
     pub command: &'static str,
     /// The config file.
     pub config_file: PathBuf,
+    /// The `--set` overrides applied to it, in order.
+    pub overrides: Vec<String>,
     /// Space mesh vertices.
     pub vertices: usize,
     /// Space mesh triangles.
@@ -203,6 +205,7 @@ pub fn mesh_job(
     let summary = MeshSummary {
         command: "mesh",
         config_file: problem.loaded.file.clone(),
+        overrides: problem.loaded.overrides.clone(),
         vertices: mesh.vertices().len(),
         triangles: mesh.triangles().len(),
         min_edge,

@@ -123,6 +123,7 @@ impl Solve<'_> {
         let summary = RunSummary {
             command: "run",
             config_file: problem.loaded.file.clone(),
+            overrides: problem.loaded.overrides.clone(),
             vertices: mesh.vertices().len(),
             triangles: mesh.triangles().len(),
             order: config.solver.order,

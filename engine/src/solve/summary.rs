@@ -90,6 +90,8 @@ pub struct RunSummary {
     pub command: &'static str,
     /// The config file.
     pub config_file: PathBuf,
+    /// The `--set` overrides applied to it, in order.
+    pub overrides: Vec<String>,
     /// Space mesh vertices.
     pub vertices: usize,
     /// Space mesh triangles.
