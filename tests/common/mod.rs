@@ -56,8 +56,8 @@ pub fn solve(
 }
 
 /// Every output file (not the checkpoint folder), with the fields measured on the machine
-/// (`wall_time_s`, `patches_per_second`, `threads`, `peak_memory_bytes`, `estimate`) and the
-/// process's checkpoints removed from `summary.json`.
+/// (`wall_time_s`, `patches_per_second`, `threads`, `peak_memory_bytes`, `estimate`), the
+/// process's checkpoints and its command line's `overrides` removed from `summary.json`.
 pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
         .unwrap()
@@ -76,6 +76,7 @@ pub fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
                     "estimate",
                     "checkpoint",
                     "timings",
+                    "overrides",
                 ] {
                     json.as_object_mut().unwrap().remove(key);
                 }
