@@ -14,7 +14,7 @@ use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use common::mpirun::MPIRUN_ENV;
-use common::{pieces, run_args, sdg, slices, stderr, summary_json as summary};
+use common::{SMALL_CRACK, pieces, run_args, sdg, slices, stderr, summary_json as summary};
 
 /// `mpirun -n ranks sdg args`, as root, oversubscribed and over loopback (as in CI).
 fn mpirun(ranks: usize, args: &[&str]) -> Output {
@@ -127,7 +127,7 @@ fn frictional_interface_over_mpi_is_the_run_on_one_thread() {
 #[test]
 fn a_cracking_run_over_mpi_is_the_threaded_deterministic_run() {
     let dir = tempfile::tempdir().unwrap();
-    let overrides = ["time.end=1.1e-6", "output.png=false"];
+    let overrides = SMALL_CRACK;
     let threads_out = dir.path().join("threads");
     let args = run_args(
         "crack_growth.toml",
@@ -355,11 +355,9 @@ fn sigkill_of_one_rank_ends_the_others_and_the_last_checkpoint_goes_on() {
 fn sigkill_of_one_rank_of_a_cracking_run_ends_the_other_and_its_checkpoint_goes_on() {
     let dir = tempfile::tempdir().unwrap();
     // Rounds split over the ranks, each holding the whole state; rank 0 checkpoints.
-    let overrides = [
-        "time.end=1.1e-6",
-        "output.png=false",
-        "checkpoint.every_sim_s=1e-7",
-    ];
+    let overrides: Vec<&str> = (SMALL_CRACK.iter().copied())
+        .chain(["checkpoint.every_sim_s=1e-7"])
+        .collect();
     let deterministic = ["--deterministic"];
     let reference = dir.path().join("reference");
     let args = run_args("crack_growth.toml", &overrides, &deterministic, &reference);

@@ -7,7 +7,7 @@
 mod common;
 
 use common::run_shipped as run;
-use common::{run_args, stderr, summary_json};
+use common::{SMALL_CRACK, run_args, stderr, summary_json};
 
 /// Asserts that `ranks` is the run `threads`: the same state, patches, rounds' outcomes and
 /// bookkeeping (rank 0 keeps the threaded run's books).
@@ -32,10 +32,7 @@ fn adaptive_and_cracking_runs_over_ranks_are_the_threaded_deterministic_runs() {
                 "output.png=false",
             ],
         ),
-        (
-            "crack_growth.toml",
-            &["time.end=1.1e-6", "output.png=false"],
-        ),
+        ("crack_growth.toml", &SMALL_CRACK),
     ];
     for (name, overrides) in cases {
         let reference = dir.path().join(format!("{name}-threads"));
@@ -73,7 +70,7 @@ fn adaptive_and_cracking_runs_over_ranks_are_the_threaded_deterministic_runs() {
 #[test]
 fn a_cracking_run_over_ranks_stopped_mid_run_goes_on_over_other_ranks_and_on_threads() {
     let dir = tempfile::tempdir().unwrap();
-    let overrides = ["time.end=1.1e-6", "output.png=false"];
+    let overrides = SMALL_CRACK;
     let name = "crack_growth.toml";
     let reference = dir.path().join("reference");
     let expected = run(
@@ -86,7 +83,7 @@ fn a_cracking_run_over_ranks_stopped_mid_run_goes_on_over_other_ranks_and_on_thr
     let args = run_args(
         name,
         &overrides,
-        &["--ranks", "2", "--deterministic", "--max-wall-time", "1"],
+        &["--ranks", "2", "--deterministic", "--max-wall-time", "0.5"],
         &out,
     );
     // The ranks but 0 write no file, not even into a temporary folder: one that cannot be
