@@ -1,7 +1,8 @@
-//! Crack propagation (`[fracture]`, seed 4.3.2) on `configs/crack_growth.toml`: a notch under
-//! symmetric mode-I waves grows straight ahead on new damage edges that debond behind it and
-//! branches, the energy balance holds, and the crack pattern is bitwise the same for any thread count; and
-//! the load of the seed's branching plate, `configs/crack_branching.toml`.
+//! Crack propagation (`[fracture]`, seed 4.3.2) on `configs/crack_growth.toml` (and on a
+//! quarter of its plate, `common::SMALL_CRACK`): a notch under symmetric mode-I waves grows
+//! straight ahead on new damage edges that debond behind it and branches, the energy balance
+//! holds, and the crack pattern is bitwise the same for any thread count; and the load of the
+//! seed's branching plate, `configs/crack_branching.toml`.
 
 mod common;
 
@@ -195,16 +196,15 @@ fn a_notch_under_mode_one_grows_straight_ahead_debonds_behind_its_tip_and_branch
     );
 }
 
-/// With adaptivity, calm regions are coarsened again; on the crack only where both halves of
-/// a bisected crack edge are fully debonded (seed Fig. 4.6): here the notch's edges, refined
-/// when the tip started to run and merged once calm. Each merge is an event in `events.csv`.
 /// With `fracture.criterion_length` the tip reads the stress averaged over 9.4 um ahead of it
-/// (the damage law's process zone c_R tau) instead of at the tip: the notch still grows
-/// straight ahead, and not earlier than by the point rule (the mean of a field that falls away
-/// from the tip is below its value at the tip; both may pass their test at the same tent).
+/// (the damage law's process zone c_R tau) instead of at the tip: the notch of the plate's
+/// quarter ([`SMALL_CRACK`]) still grows straight ahead, and not earlier than by the point
+/// rule (the mean of a field that falls away from the tip is below its value at the tip; both
+/// may pass their test at the same tent).
 #[test]
 fn over_a_criterion_length_the_notch_still_grows_straight_ahead() {
-    let set = ["time.end=1.1e-6", "output.snapshot_times=[]"];
+    let mut set = SMALL_CRACK.to_vec();
+    set.push("output.snapshot_times=[]");
     let first_extension = |criterion: &[&str]| {
         let sets: Vec<&str> = set.iter().chain(criterion).copied().collect();
         let (summary, dir) = solve(&shipped("crack_growth.toml", &sets), 2, true);
@@ -217,11 +217,11 @@ fn over_a_criterion_length_the_notch_still_grows_straight_ahead() {
     };
     let (fracture, extensions) = first_extension(&["fracture.criterion_length=9.4e-6"]);
     assert!(fracture.total_length > 2e-4, "{fracture:?}");
-    // The first five edges run from the notch's tip along y = 1 mm, each from where the last
+    // The first five edges run from the notch's tip along y = 0.5 mm, each from where the last
     // one ended.
     let mut x = 1e-3;
     for row in &extensions[..5] {
-        assert_eq!([row[1], row[2]], [x, 1e-3], "{extensions:?}");
+        assert_eq!([row[1], row[2]], [x, 5e-4], "{extensions:?}");
         let angle = (row[4] - row[2]).atan2(row[3] - row[1]).to_degrees();
         assert!(angle.abs() < 1.0, "{extensions:?}");
         x = row[3];
@@ -231,7 +231,7 @@ fn over_a_criterion_length_the_notch_still_grows_straight_ahead() {
     let last = (extensions.iter())
         .max_by(|p, q| p[3].total_cmp(&q[3]))
         .expect("extensions");
-    let overall = (last[4] - 1e-3).atan2(last[3] - 1e-3).to_degrees();
+    let overall = (last[4] - 5e-4).atan2(last[3] - 1e-3).to_degrees();
     assert!(overall.abs() < 5.0, "{extensions:?}");
     let (_, point) = first_extension(&[]);
     assert!(extensions[0][0] >= point[0][0], "{extensions:?} {point:?}");
@@ -246,18 +246,19 @@ fn over_a_criterion_length_the_notch_still_grows_straight_ahead() {
     );
 }
 
+/// With adaptivity, calm regions are coarsened again; on the crack only where both halves of
+/// a bisected crack edge are fully debonded (seed Fig. 4.6): here the notch's edges, refined
+/// when the tip started to run and merged once calm. Each merge is an event in `events.csv`.
 #[test]
 fn the_crack_wake_is_merged_where_fully_debonded() {
-    let problem = shipped(
-        "crack_growth.toml",
-        &[
-            "adapt.enabled=true",
-            "adapt.tol=1.0",
-            "adapt.min_edge=30e-6",
-            "time.end=1.0e-6",
-        ],
-    );
-    let (summary, dir) = solve(&problem, 2, true);
+    let mut set = SMALL_CRACK.to_vec();
+    set.extend([
+        "adapt.enabled=true",
+        "adapt.tol=1.0",
+        "adapt.min_edge=30e-6",
+        "time.end=0.8e-6",
+    ]);
+    let (summary, dir) = solve(&shipped("crack_growth.toml", &set), 2, true);
     let (rows, kinds) = events(dir.path());
     let merges: Vec<&Vec<f64>> = rows
         .iter()
@@ -266,12 +267,13 @@ fn the_crack_wake_is_merged_where_fully_debonded() {
         .map(|(r, _)| r)
         .collect();
     let fracture = summary.fracture.expect("fracture summary");
-    // Measured: one merge, of the notch's last two 31.25 um edges at 0.86 us.
+    // Measured on the plate's quarter: one merge, of the notch's last two 31.25 um edges at
+    // 0.59 us (on the whole plate at 0.86 us).
     assert!(fracture.wake_coarsenings >= 1, "{fracture:?}");
     assert_eq!(merges.len() as u64, fracture.wake_coarsenings);
     for m in merges {
         // The restored edge lies on the crack line, behind the tip that ran at x = 1 mm.
-        assert_eq!([m[2], m[4]], [1e-3, 1e-3], "{m:?}");
+        assert_eq!([m[2], m[4]], [5e-4, 5e-4], "{m:?}");
         assert!(m[1].max(m[3]) <= 1e-3 && (m[1] - m[3]).abs() > 0.0, "{m:?}");
     }
 }
@@ -414,20 +416,19 @@ fn cracks_nucleate_across_the_tension_the_same_way_for_any_thread_count() {
 /// `min_edge`, `floor_angle` 90: the crack takes an end of the crossed edge), the edge the
 /// mesh makes may be longer than the crossing the tip's test bounded by `max_tip_speed`: such
 /// an edge is refused (`speed`) and the tip waits for its next tent, so every edge keeps to
-/// c_R. Before the edge itself was checked, 25 of 66 successive edges here were made faster,
-/// up to 1.29 c_R.
+/// c_R. Before the edge itself was checked, 25 of 66 successive edges on the whole plate were
+/// made faster, up to 1.29 c_R; here, on its quarter, 25 are refused out of 66 made.
 #[test]
 fn edges_taken_to_an_end_of_the_crossed_edge_keep_to_the_speed_bound() {
-    let set = [
-        "time.end=1.1e-6",
+    let mut set = SMALL_CRACK.to_vec();
+    set.extend([
         "output.snapshot_times=[]",
-        "output.png=false",
         "adapt.enabled=true",
         "adapt.tol=1e9",
         "adapt.min_edge=1e-5",
         "adapt.tip_edge=2e-5",
         "fracture.floor_angle=90",
-    ];
+    ]);
     let problem = shipped("crack_growth.toml", &set);
     let (summary, dir) = solve(&problem, 2, true);
     let fracture = summary.fracture.expect("fracture summary");
@@ -655,8 +656,9 @@ fn leaf_keys(table: &toml::Table) -> Vec<String> {
 
 /// `configs/crack_branching_full.toml` is the main job one refinement level finer and run
 /// longer: it extends the main job and sets only the finest edge (`adapt.min_edge`, smaller, and
-/// the tips' `adapt.tip_edge` with it), the end time (the seed's last figure, 4.96 us after the waves meet), the snapshot times (the
-/// seed's 1, 2, 3, 4 and 4.96 us), the output folder and the checkpoints.
+/// the tips' `adapt.tip_edge` with it), the end time (the seed's last figure, 4.96 us after the
+/// waves meet), the snapshot times (the seed's 1, 2, 3, 4 and 4.96 us), the output folder and
+/// the checkpoints.
 #[test]
 fn the_full_branching_run_is_the_main_job_finer_over_the_seed_s_time_span() {
     let (main, full) = (

@@ -390,7 +390,7 @@ fn a_killed_study_resumes_to_the_same_table() {
 fn a_stopped_study_goes_on_from_its_cases_checkpoints() {
     let (dir, file) = study_folder(
         "base = \"base.toml\"\nmetrics = [\"patches\", \"vertices\", \"energy.final\"]\n\
-         [axes]\n\"mesh.ny\" = { draws = 2, first = 24 }\n[set]\n\"mesh.nx\" = 48\n\
+         [axes]\n\"mesh.ny\" = { draws = 2, first = 16 }\n[set]\n\"mesh.nx\" = 32\n\
          \"time.end\" = 5e-7\n\"scheduler.deterministic\" = true\n",
     );
     let whole = dir.path().join("whole");
@@ -415,7 +415,7 @@ fn a_stopped_study_goes_on_from_its_cases_checkpoints() {
         assert!(start.elapsed() < Duration::from_secs(60), "no case started");
         std::thread::sleep(Duration::from_millis(10));
     }
-    // A case takes about 2 s (4 s on a loaded machine); its first checkpoint is on request.
+    // A case takes about 3 s (6 s on a loaded machine); its first checkpoint is on request.
     let checkpoints = out.join("cases/000/checkpoints");
     kill("USR1");
     while common::checkpoints(&checkpoints).is_empty() {
