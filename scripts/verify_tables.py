@@ -699,7 +699,8 @@ def status(runs):
         )
     except Missing:
         pass
-    return table(["case", "reference", "sdg", "checked by `cargo test --release --test`"], rows)
+    header = ["case", "reference", "sdg", "checked by `cargo test --release --test suite NAME::`"]
+    return table(header, rows)
 
 
 def secs(x):

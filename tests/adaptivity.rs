@@ -3,7 +3,7 @@
 //! more accurate than the unrefined mesh, and give bitwise identical results for any thread
 //! count in deterministic mode.
 
-mod common;
+use crate::common;
 
 use common::{assert_same_outputs, outputs, shipped, solve};
 

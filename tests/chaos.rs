@@ -7,7 +7,7 @@
 //!
 //! `SDG_CHAOS_SEED=N` replays another draw of kill times, signals and thread counts.
 
-mod common;
+use crate::common;
 
 use common::checkpoints;
 
@@ -276,9 +276,10 @@ fn killed_and_restarted_runs_end_as_uninterrupted_ones() {
     );
 }
 
-/// The long variant: eight configs (adaptivity and friction too), four kills each.
+/// The long variant: eight configs (adaptivity and friction too), four kills each:
+/// `cargo test --release --test suite chaos:: -- --ignored`.
 #[test]
-#[ignore = "minutes: cargo test --release --test chaos -- --ignored"]
+#[ignore = "minutes: run on demand"]
 fn killed_and_restarted_runs_end_as_uninterrupted_ones_many_times() {
     let configs = [
         "plane_wave.toml",

@@ -3,7 +3,7 @@
 //! uninterrupted deterministic run; SIGTERM checkpoints and exits 3; SIGUSR1 checkpoints and
 //! goes on; damaged checkpoints and checkpoints of another configuration are refused (exit 2).
 
-mod common;
+use crate::common;
 
 use common::checkpoints;
 

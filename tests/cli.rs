@@ -1,6 +1,6 @@
 //! The `sdg` command line: outputs, overrides, and exit codes with clear messages on bad input.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -4,8 +4,8 @@
 //! counts; the mode-I crack of `mode1_lefm.toml` against LEFM, whose reference (seed 2.5.1)
 //! lives in `lefm/`.
 
-mod common;
-mod lefm;
+use crate::common;
+use crate::lefm;
 
 use std::path::Path;
 
@@ -383,7 +383,8 @@ fn assert_fracture_energy_never_negative(dir: &Path) {
 
 /// The acceptance on `mode1_lefm.toml` (seed 2.5.3, sigma' = 0.1): the tip within 5% of
 /// LEFM for t' >= 3, slower than c_R, and the fracture energy about phi per unit extension.
-/// `cargo test --release --test cohesive -- --ignored --nocapture` (9 minutes on 1 thread).
+/// `cargo test --release --test suite cohesive::mode1_crack_follows_lefm -- --ignored --nocapture`
+/// (9 minutes on 1 thread).
 #[test]
 #[ignore = "9 minutes on 1 thread: run on demand"]
 fn mode1_crack_follows_lefm() {
@@ -462,7 +463,8 @@ fn mode1_high_scales() -> (f64, f64, f64) {
 /// The seed's point against Xu and Needleman (2.6): even at sigma' = 10^(-1/128) every recorded
 /// tip speed stays below c_R, to t' = 60. Reports the energy released per unit extension once
 /// the crack runs (seed Fig. 2.9b: below phi, part of it spent on the uniform stretch ahead).
-/// `cargo test --release --test cohesive -- --ignored --nocapture` (4 minutes on 2 cores).
+/// `cargo test --release --test suite cohesive::mode1_crack_at_high_load_stays_below_c_r --
+/// --ignored --nocapture` (4 minutes on 2 cores).
 #[test]
 #[ignore = "4 minutes on 2 cores: run on demand"]
 fn mode1_crack_at_high_load_stays_below_c_r() {
@@ -494,7 +496,8 @@ fn mode1_low_scales() -> (f64, f64, f64) {
 
 /// Steady growth at a low load ratio (sigma' = 10^-1.5, seed Fig. 2.9a): once the crack runs
 /// (t' >= 2.5), the energy released per unit extension is phi within 5%; the tip follows LEFM.
-/// `cargo test --release --test cohesive -- --ignored --nocapture`: about five hours on 2 cores
+/// `cargo test --release --test suite cohesive::mode1_crack_at_low_load_releases_phi -- --ignored
+/// --nocapture`: about five hours on 2 cores
 /// (38M patches). The same run, restarted from checkpoints, met every assertion here: 0.9991 phi,
 /// the tip 1.8% behind LEFM at t' = 3 (docs/verification.md).
 #[test]
@@ -550,7 +553,8 @@ fn mode1_low_load_is_the_seed_s() {
 
 /// Mesh convergence of the tip history on `mode1_lefm.toml`: halving the indicator's tolerance
 /// and the smallest edge (3 um to 1.5 um) moves the tip at the end time by less than 2%.
-/// `cargo test --release --test cohesive -- --ignored --nocapture` (about 30 minutes on 2 cores).
+/// `cargo test --release --test suite cohesive::mode1_tip_history_converges_with_the_mesh --
+/// --ignored --nocapture` (about 30 minutes on 2 cores).
 #[test]
 #[ignore = "30 minutes on 2 cores: run on demand"]
 fn mode1_tip_history_converges_with_the_mesh() {

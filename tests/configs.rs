@@ -1,6 +1,6 @@
 //! Every shipped config runs, and its results match the stored values.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! The seed's contact examples (3.4) through the shipped configs: histories on the interface
 //! against an independent 1D reference, energy balance with friction.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
@@ -120,7 +120,9 @@ fn contact_separation_follows_the_1d_reference() {
 }
 
 /// The seed's second set, ten times stiffer: the same assertions (about 40 s on 2 cores, out of
-/// CI for its time; `cargo test --release --test contact -- --ignored`).
+/// CI for its time; `cargo test --release --test suite
+/// contact::contact_separation_with_the_stiffer_regularization_follows_the_1d_reference --
+/// --ignored`).
 #[test]
 #[ignore = "40 s on 2 cores: run on demand"]
 fn contact_separation_with_the_stiffer_regularization_follows_the_1d_reference() {

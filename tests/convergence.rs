@@ -3,7 +3,7 @@
 //! for p = 1, 2, 3, for P and S waves at an oblique angle, in plane strain, plane stress and
 //! anti-plane shear. The errors are printed (`--nocapture`) for docs/verification.md.
 
-mod common;
+use crate::common;
 
 /// A unit square, PMMA, a sine wave of unit wavelength at 30 degrees, run to 0.2 / c_max s.
 const CONFIG: &str = r#"

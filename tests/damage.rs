@@ -3,7 +3,7 @@
 //! reflection that follows, and the two limits of the law (undamaged: bonded; fully debonded:
 //! contact).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
@@ -296,7 +296,8 @@ fn a_damage_crack_runs_along_its_path() {
 
 /// The acceptance on `configs/damage_mode1.toml` to its end time (seed 4.2 with 4.5's
 /// parameters): the tip slower than c_R = 938 m/s at every state, the energy balance below 1e-8.
-/// `cargo test --release --test damage -- --ignored --nocapture` (long: see docs/verification.md).
+/// `cargo test --release --test suite damage::damage_mode1_crack_runs_slower_than_c_r -- --ignored
+/// --nocapture` (long: see docs/verification.md).
 #[test]
 #[ignore = "long: run on demand"]
 fn damage_mode1_crack_runs_slower_than_c_r() {
@@ -311,7 +312,8 @@ fn damage_mode1_crack_runs_slower_than_c_r() {
 /// dissipates far less per metre of crack; a damage law without a length of its own takes its
 /// toughness from the delay (docs/verification.md, "Delayed damage"; at the plate's lower load
 /// the shorter delay does not debond).
-/// Long (two runs of about 1M patches): `cargo test --release --test damage -- --ignored`.
+/// Long (two runs of about 1M patches): `cargo test --release --test suite
+/// damage::the_shorter_delay_debonds_sooner_runs_faster_and_dissipates_less -- --ignored`.
 #[test]
 #[ignore = "long: run on demand"]
 fn the_shorter_delay_debonds_sooner_runs_faster_and_dissipates_less() {

@@ -5,7 +5,7 @@
 //! injected in the writer (`SDG_FAULT`, engine/src/output/fault.rs), and a real full disk is a
 //! small tmpfs where the test may mount one (root, a container that allows it).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

@@ -4,9 +4,9 @@
 //!
 //! The uniform run takes four minutes on two cores, so CI compares with its results stored in
 //! `tests/data/adaptive_pulse_uniform.json`; the ignored test below reruns it and checks the
-//! stored values (`cargo test --release --test efficiency -- --ignored`).
+//! stored values (`cargo test --release --test suite efficiency:: -- --ignored`).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -2,7 +2,7 @@
 //! fluxes, non-negative numerical dissipation equal to the element's energy balance, and
 //! dissipation that falls under refinement.
 
-mod common;
+use crate::common;
 
 use sdg_mesh::{Diagonal, Rectangle};
 use sdg_solver::boundary::{Boundary, Condition};

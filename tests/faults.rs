@@ -6,7 +6,7 @@
 //! in `tests/disk.rs`, kills and restarts in `tests/chaos.rs`, the Slurm scripts in
 //! `tests/slurm.rs`.
 
-mod common;
+use crate::common;
 
 use common::checkpoints;
 

@@ -4,7 +4,7 @@
 //! holds, and the crack pattern is bitwise the same for any thread count; and the load of the
 //! seed's branching plate, `configs/crack_branching.toml`.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -4,7 +4,7 @@
 //! cannot finish are refused by their estimate, and the rest stop at `limits.max_wall_time_s`
 //! (with a checkpoint: exit 3).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Stdio};

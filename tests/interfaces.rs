@@ -2,7 +2,7 @@
 //! free boundary at the expected convergence rate, bonded interfaces change nothing, and a contact
 //! interface that stays in compressive stick gives the bonded solution.
 
-mod common;
+use crate::common;
 
 use sdg_mesh::{Diagonal, Mesh, Rectangle};
 use sdg_solver::boundary::{Boundary, Condition};

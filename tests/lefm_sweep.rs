@@ -5,7 +5,7 @@
 //! 10^-1/2, held to the findings on a low load; the whole sweep (8 minutes on 2 cores) runs
 //! with `-- --ignored`.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 
@@ -102,8 +102,9 @@ fn the_low_load_10_to_the_minus_half_releases_phi_over_the_estimated_process_zon
 /// The seed's findings on the reduced sweep: the onsets in the order of its Fig. 2.7 and the
 /// high load's at the end of its ramp (Fig. 2.8), and the findings on every case and on the
 /// low loads; then the seed's figures from the three runs.
+/// `cargo test --release --test suite lefm_sweep:: -- --ignored`.
 #[test]
-#[ignore = "8 minutes on 2 cores: cargo test --release --test lefm_sweep -- --ignored"]
+#[ignore = "8 minutes on 2 cores: run on demand"]
 fn the_reduced_lefm_sweep_meets_the_seed_s_findings() {
     let out = tempfile::tempdir().unwrap();
     let cases = run_cases(out.path(), &[0, 1, 2]);

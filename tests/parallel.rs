@@ -2,7 +2,7 @@
 //! thread count; so does asynchronous mode for runs without events; asynchronous mode is as
 //! accurate as a serial run.
 
-mod common;
+use crate::common;
 
 use common::{assert_same_outputs, outputs, solve};
 use sdg_engine::Problem;

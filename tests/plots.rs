@@ -2,7 +2,7 @@
 //! has its stripes at the wave's angle; `sdg plot` reads VTU files written by meshio and names
 //! a missing field, and draws several runs' crack tips together.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

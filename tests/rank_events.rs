@@ -4,7 +4,7 @@
 //! count; a run stopped mid-run goes on from its checkpoint over other ranks or on threads to
 //! the same state; only rank 0 writes files.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

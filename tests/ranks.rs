@@ -3,7 +3,7 @@
 //! checkpoint goes on from it on any number of ranks or on threads to the same state; what it
 //! cannot do yet is bad input (exit 2) naming the key.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

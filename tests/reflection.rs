@@ -2,7 +2,7 @@
 //! off a `free` side with the exact sign change and arrival time, and leaves through a
 //! `transmitting` side without reflection.
 
-mod common;
+use crate::common;
 
 use sdg_mesh::{Diagonal, Rectangle};
 use sdg_solver::boundary::{Boundary, Condition};

@@ -8,7 +8,7 @@
 //! wall time, resubmits itself and resumes over the ranks, or, with an sdg built without the
 //! feature `mpi`, refuses before starting any.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};

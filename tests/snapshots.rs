@@ -1,7 +1,7 @@
 //! Snapshots: time slices cut from the spacetime elements agree with the exact plane wave at
 //! every written point (ASCII files), and open in meshio (binary files, the default).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -8,7 +8,7 @@
 //! refuses changes nothing; and the run then continues to its end with a valid energy balance,
 //! its off-midpoint vertices never coarsened.
 
-mod common;
+use crate::common;
 
 use std::sync::{Arc, Mutex};
 

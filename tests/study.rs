@@ -2,7 +2,7 @@
 //! same `study.csv`), reruns cases whose config changed, runs under Slurm one case per array
 //! task, and refuses bad study files before running anything.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

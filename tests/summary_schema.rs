@@ -2,7 +2,7 @@
 //! run writes is documented, and every key documented as always present is written (when its
 //! object is).
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::path::Path;

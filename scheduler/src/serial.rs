@@ -53,7 +53,7 @@ pub fn run_serial<E>(
     Ok(tents)
 }
 
-#[cfg(all(test, not(loom)))]
+#[cfg(all(test, not(feature = "loom")))]
 mod tests {
     use super::*;
 

@@ -1,19 +1,19 @@
 //! Synchronization primitives from `std` and `parking_lot`, or from `loom` when the crate is
-//! model-checked (`--cfg loom`).
+//! model-checked (the feature `loom`).
 
-#[cfg(loom)]
+#[cfg(feature = "loom")]
 pub(crate) use loom::sync::Mutex;
-#[cfg(loom)]
+#[cfg(feature = "loom")]
 pub(crate) use loom::sync::atomic::{AtomicU32, Ordering};
-#[cfg(not(loom))]
+#[cfg(not(feature = "loom"))]
 pub(crate) use std::sync::atomic::{AtomicU32, Ordering};
 
 /// A mutex whose `lock` cannot fail.
-#[cfg(not(loom))]
+#[cfg(not(feature = "loom"))]
 #[derive(Debug, Default)]
 pub(crate) struct Mutex<T>(parking_lot::Mutex<T>);
 
-#[cfg(not(loom))]
+#[cfg(not(feature = "loom"))]
 impl<T> Mutex<T> {
     pub(crate) fn new(value: T) -> Self {
         Self(parking_lot::Mutex::new(value))

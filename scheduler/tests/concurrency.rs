@@ -2,7 +2,7 @@
 //! exclusive events run with no tent in flight, regional ones beside tents that hold none of their
 //! vertices, and single-thread runs finish in both modes.
 
-#![cfg(not(loom))]
+#![cfg(not(feature = "loom"))]
 
 use std::marker::PhantomData;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};

@@ -2,9 +2,9 @@
 //! of threads claiming vertices of a path `0 - 1 - 2`, each exclusive on its vertex and shared on
 //! its neighbours.
 //!
-//! Run: `RUSTFLAGS="--cfg loom" cargo test -p sdg-scheduler --test loom --release`.
+//! Run: `cargo test -p sdg-scheduler --features loom --test loom --release`.
 
-#![cfg(loom)]
+#![cfg(feature = "loom")]
 
 use loom::sync::Arc;
 use loom::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
