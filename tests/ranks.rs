@@ -16,8 +16,9 @@ use common::{history_rows, pieces, run_args, sdg, slices, stderr, summary_json};
 /// ranks writes the same `history.csv`, byte for byte, whose rows balance the energy, start
 /// with the threaded run's first row and end with its last front (time, patches, energy), and
 /// that each snapshot's pieces hold the threaded run's slices and, where the threaded run has
-/// `cracks_NNNN.vtu`, its crack pieces that file's segments. Returns how many crack files it
-/// compared.
+/// `cracks_NNNN.vtu`, its crack pieces that file's segments, and, where the threaded run drew
+/// `snapshot_NNNN.png`, the same picture drawn from the pieces. Returns how many crack files
+/// it compared.
 fn assert_same_outputs_over_ranks(
     name: &str,
     overrides: &[&str],
@@ -104,6 +105,11 @@ fn assert_same_outputs_over_ranks(
                 threaded,
                 "snapshot {index}, {ranks} ranks, {partition}"
             );
+            let picture = format!("snapshot_{index:04}.png");
+            if let Ok(threaded) = std::fs::read(threads_out.join(&picture)) {
+                let drawn = std::fs::read(out.join(&picture)).expect("drawn from the pieces");
+                assert!(drawn == threaded, "{picture}, {ranks} ranks, {partition}");
+            }
             // The interface faces' cuts, where the threaded run has them.
             let cracks = threads_out.join(format!("cracks_{index:04}.vtu"));
             if cracks.exists() {
@@ -148,7 +154,7 @@ fn history_and_snapshots_of_a_frictional_interface_over_ranks_are_the_threaded_r
         "mesh.ny=8",
         "time.end=4e-6",
         "output.snapshot_times=[2e-6, 4e-6]",
-        "output.png=false",
+        "output.png=true",
         "output.vtu=\"ascii\"",
     ];
     let cases = [(2, "coordinate", 1), (3, "random", 2), (4, "metis", 1)];

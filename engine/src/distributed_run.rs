@@ -342,17 +342,10 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
             format!("{file}: output.spacetime_mesh: a run over ranks does not write it yet")
         }),
     ];
-    if let Some(reason) = refusals.into_iter().flatten().next() {
-        return Err(EngineError::Input(reason));
+    match refusals.into_iter().flatten().next() {
+        Some(reason) => Err(EngineError::Input(reason)),
+        None => Ok(()),
     }
-    // What is not done, without being asked for by a key of its own.
-    if config.output.png && !config.output.snapshot_times.is_empty() {
-        tracing::warn!(
-            "snapshots over ranks are written as pieces (snapshot_NNNN_R.vtu) and not drawn: no \
-             snapshot_NNNN.png"
-        );
-    }
-    Ok(())
 }
 
 /// Removes an earlier run's `summary.json` and, unless `restarted`, its snapshot files from

@@ -112,12 +112,31 @@ pub(crate) fn finish(
     let mut written = vec![write_output(dir, "history.csv", history.as_bytes()).map(drop)];
     if config.output.png {
         crate::plot::write_history_png(dir, &history);
+        draw_snapshots(dir, &summary.snapshots);
     }
     if let Some(csv) = crack_csv {
         written.push(write_crack_tips(problem, dir, &csv));
     }
     written.push(write_probes(problem, dir, &mut records.samples));
     crate::solve::finish::write_summary(dir, written, summary, finishing)
+}
+
+/// Draws each snapshot of `snapshots` (time in s, file name) written as pieces
+/// (`snapshot_NNNN.pvtu`) that has no picture yet into `snapshot_NNNN.png` from its pieces, as
+/// the run on threads draws it when it writes the snapshot. A picture that cannot be drawn does
+/// not end the run: a warning names it.
+fn draw_snapshots(dir: &Path, snapshots: &[(f64, String)]) {
+    for (time, name) in snapshots {
+        let Some(stem) = name.strip_suffix(".pvtu") else {
+            continue;
+        };
+        if dir.join(format!("{stem}.png")).exists() {
+            continue;
+        }
+        if let Err(e) = crate::output::snapshot::draw_pieces_png(dir, name, *time) {
+            tracing::warn!("{stem}.png: {e}");
+        }
+    }
 }
 
 /// The energy on `front` with the elements of `solution` (initial data where there is none),

@@ -12,7 +12,8 @@
 //! the same from run to run (its cells come in the order the threads solved them), so one file
 //! would be no closer to it. The cuts of interface faces go the same way, as `cracks_NNNN_R.vtu`
 //! and `cracks_NNNN.pvtu` (every rank writes its piece, empty where its patches cut no face).
-//! Snapshots are not drawn (`output.png`).
+//! With `output.png`, rank 0 draws the snapshots from the pieces when the run ends
+//! (`rank_finish`).
 //!
 //! # History rows: those of the serial reference order
 //! On threads a row is taken when the front's earliest time has passed `t_k = k t_end / 100`,

@@ -4,11 +4,9 @@
 use super::slicing::{InterfaceValues, PointValues, Segment, Triangle};
 use crate::error::EngineError;
 use crate::output::{CellType, Field, UnstructuredGrid};
-use crate::plot::{FIELD_PNG_SIZE, FieldPlot, Values};
+use crate::plot::{FIELD_PNG_SIZE, FieldPlot, Values, VtuGrid};
 use std::path::Path;
 
-/// The slice of the element `v` by the plane `tau = tau_s` (vertices within `tol` of it are on
-/// it), or `None` when neither rule applies or the slice has fewer than three corners.
 /// Removes from `dir` the snapshot files a run writes (`snapshot_NNNN.vtu` and `.png`,
 /// `cracks_NNNN.vtu`, `snapshots.pvd`, and over ranks their `.pvtu` files and pieces
 /// `snapshot_NNNN_R.vtu` and `cracks_NNNN_R.vtu`), so that a new run's folder holds no
@@ -59,22 +57,100 @@ pub(super) fn draw_png(
     triangles: &[Triangle],
     segments: &[Segment],
     time: f64,
-    path: &std::path::Path,
+    path: &Path,
 ) -> Result<(), EngineError> {
     let points: Vec<[f64; 2]> = triangles.iter().flat_map(|t| t.xy).collect();
     let speed: Vec<f64> = triangles
         .iter()
-        .flat_map(|t| {
-            t.values
-                .iter()
-                .map(|v| v.velocity.iter().map(|c| c * c).sum::<f64>().sqrt())
-        })
-        .collect();
-    let corners: Vec<[u32; 3]> = (0..triangles.len() as u32)
-        .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+        .flat_map(|t| t.values.iter().map(|v| magnitude(&v.velocity)))
         .collect();
     let lines: Vec<[[f64; 2]; 2]> = segments.iter().map(|s| s.xy).collect();
-    FieldPlot::new(&points, &corners, Values::Points(&speed))
+    draw_speed(points, speed, lines, time, path)
+}
+
+/// The Euclidean norm of `v`.
+fn magnitude(v: &[f64]) -> f64 {
+    v.iter().map(|c| c * c).sum::<f64>().sqrt()
+}
+
+/// Draws the snapshot `snapshot_NNNN.pvtu` of a run over ranks, at `time` (s), from its pieces
+/// in `dir` (and those of `cracks_NNNN.pvtu` if there is one) into `snapshot_NNNN.png`: the
+/// picture a run on threads draws of the same snapshot. Errors name the file that could not be
+/// read or written.
+pub(crate) fn draw_pieces_png(dir: &Path, pvtu: &str, time: f64) -> Result<(), EngineError> {
+    let stem = pvtu.strip_suffix(".pvtu").unwrap_or(pvtu);
+    let (mut points, mut speed, mut lines) = (Vec::new(), Vec::new(), Vec::new());
+    for grid in piece_grids(dir, pvtu)? {
+        let velocity = grid.point_data.iter().find(|f| f.name == "velocity");
+        let velocity = velocity.ok_or_else(|| {
+            EngineError::Input(format!(
+                "{}: a piece without velocity",
+                dir.join(pvtu).display()
+            ))
+        })?;
+        for (corners, _) in grid.triangles() {
+            for c in corners.map(|c| c as usize) {
+                points.push([grid.points[c][0], grid.points[c][1]]);
+                let n = velocity.components;
+                speed.push(magnitude(&velocity.values[c * n..(c + 1) * n]));
+            }
+        }
+    }
+    let cracks = format!("{}.pvtu", stem.replacen("snapshot", "cracks", 1));
+    if dir.join(&cracks).is_file() {
+        for grid in piece_grids(dir, &cracks)? {
+            let xy = |c: u32| [grid.points[c as usize][0], grid.points[c as usize][1]];
+            lines.extend(grid.lines().into_iter().map(|[a, b]| [xy(a), xy(b)]));
+        }
+    }
+    draw_speed(points, speed, lines, time, &dir.join(format!("{stem}.png")))
+}
+
+/// The pieces that the `.pvtu` file `name` in `dir` lists, read.
+fn piece_grids(dir: &Path, name: &str) -> Result<Vec<VtuGrid>, EngineError> {
+    let path = dir.join(name);
+    let text = std::fs::read_to_string(&path).map_err(|e| EngineError::io(&path, e))?;
+    text.split("<Piece Source=\"")
+        .skip(1)
+        .filter_map(|rest| rest.split_once('"'))
+        .map(|(source, _)| VtuGrid::read(&dir.join(source)))
+        .collect()
+}
+
+/// Draws the speeds (m/s) at the corners of the triangles of `points` (three each) with `lines`
+/// on top into `path`. The triangles are drawn in the order of their centroids, so that the
+/// picture does not depend on the order they come in (a run over ranks has them piece by piece).
+fn draw_speed(
+    points: Vec<[f64; 2]>,
+    speed: Vec<f64>,
+    mut lines: Vec<[[f64; 2]; 2]>,
+    time: f64,
+    path: &Path,
+) -> Result<(), EngineError> {
+    let centroid = |k: usize| {
+        let p = &points[3 * k..3 * k + 3];
+        [p[0][0] + p[1][0] + p[2][0], p[0][1] + p[1][1] + p[2][1]]
+    };
+    let mut order: Vec<usize> = (0..points.len() / 3).collect();
+    order.sort_by(|&a, &b| {
+        let (a, b) = (centroid(a), centroid(b));
+        a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]))
+    });
+    let corners = |k: usize| 3 * k..3 * k + 3;
+    let drawn: Vec<[f64; 2]> = order
+        .iter()
+        .flat_map(|&k| points[corners(k)].iter().copied())
+        .collect();
+    let speed: Vec<f64> = order
+        .iter()
+        .flat_map(|&k| speed[corners(k)].iter().copied())
+        .collect();
+    let key = |l: &[[f64; 2]; 2]| l.map(|p| p.map(f64::to_bits));
+    lines.sort_by_key(key);
+    let triangles: Vec<[u32; 3]> = (0..order.len() as u32)
+        .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+        .collect();
+    FieldPlot::new(&drawn, &triangles, Values::Points(&speed))
         .title("velocity magnitude (m/s)")
         .time(Some(time))
         .segments(&lines)

@@ -33,6 +33,6 @@ mod files;
 mod slicing;
 mod snapshots;
 
-pub(crate) use files::remove_earlier;
+pub(crate) use files::{draw_pieces_png, remove_earlier};
 pub use slicing::{InterfaceValues, PointValues};
 pub use snapshots::{Piece, Snapshots};
