@@ -307,7 +307,7 @@ fn what_ranks_cannot_do_yet_is_bad_input_naming_the_key() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().to_str().unwrap();
     let repo = |name: &str| format!("{}/configs/{name}", env!("CARGO_MANIFEST_DIR"));
-    let cases: [(Vec<String>, &str); 4] = [
+    let cases: [(Vec<String>, &str); 3] = [
         (
             vec![repo("adaptive_pulse.toml")],
             "adapt.enabled: mesh-changing events",
@@ -327,14 +327,6 @@ fn what_ranks_cannot_do_yet_is_bad_input_naming_the_key() {
                 format!("{out}/t.csv"),
             ],
             "--trace",
-        ),
-        (
-            vec![
-                repo("plane_wave.toml"),
-                "--set".into(),
-                "output.spacetime_mesh=true".into(),
-            ],
-            "output.spacetime_mesh",
         ),
     ];
     for (args, needle) in cases {

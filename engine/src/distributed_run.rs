@@ -20,7 +20,8 @@
 //! deterministic rounds' vertices, those first in `(time, id)` among their neighbours), so a
 //! run over ranks is the threaded run of either mode. What cannot be honoured yet is refused
 //! as bad input (exit 2), naming the key and why: mesh-changing events (`[adapt]`,
-//! `[fracture]`) in asynchronous mode, `--trace` and the spacetime mesh.
+//! `[fracture]`) in asynchronous mode, and `--trace`. (`output.spacetime_mesh` is `sdg mesh`'s:
+//! `sdg run` writes no spacetime mesh on threads or over ranks.)
 //! Deterministic runs with events go to the module `rank_rounds` instead: rounds split over
 //! ranks that each hold the whole state.
 
@@ -338,9 +339,6 @@ fn refuse(problem: &Problem, options: &RunOptions, ranks: &RankOptions) -> Resul
             .trace
             .is_some()
             .then(|| "--trace: a run over ranks records no trace yet".to_string()),
-        config.output.spacetime_mesh.then(|| {
-            format!("{file}: output.spacetime_mesh: a run over ranks does not write it yet")
-        }),
     ];
     match refusals.into_iter().flatten().next() {
         Some(reason) => Err(EngineError::Input(reason)),
