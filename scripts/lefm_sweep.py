@@ -106,6 +106,9 @@ def write(name, base, ratio_base, exponents, base_values, min_edge, compare_from
     with_lines = [f'    "adapt.min_edge" = [{", ".join(number(m) for m in min_edge)}],']
     for key, value in base_values.items():
         with_lines.append(f'    "{key}" = [{", ".join(scaled(value, s) for s in scales)}],')
+    # No comma after the last entry: TOML 1.0 inline tables allow none (Python's tomllib
+    # refuses one).
+    with_lines[-1] = with_lines[-1].rstrip(",")
     lines += with_lines
     lines += ["} }", "", "[set]", '"output.png" = false', f'"loading.compare_from" = {compare_from}', ""]
     # TOML inline tables are one line: join the with-table's lines.
@@ -161,7 +164,7 @@ def write_ci(cases, head):
         '"loading.load_ratio" = { values = ['
         + ", ".join(repr(r) for r in ratios)
         + "], with = { "
-        + " ".join(f'"{key}" = [{", ".join(columns[key])}],' for key in keys)
+        + ", ".join(f'"{key}" = [{", ".join(columns[key])}]' for key in keys)
         + " } }",
         "",
         "[set]",
