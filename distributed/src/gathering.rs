@@ -27,7 +27,8 @@ use crate::view::LocalView;
 enum Part {
     /// Elements (energy parts and coefficients) and interface faces the rank owns.
     Cells = 0,
-    /// Tents (`[t_old, t_new, slope, report...]` by global vertex) and owned front times.
+    /// Tents (`[t_old, t_new, slope, report...]` by global vertex; those the rank kept,
+    /// [`crate::Options::keep_tents`]) and owned front times.
     Tents = 1,
     /// The rank's message counts and its outputs ([`RankReport::outputs`]).
     Counts = 2,
@@ -36,7 +37,7 @@ enum Part {
 const PARTS: usize = 3;
 
 /// Values of the counts part before the rank's [`RankReport::outputs`].
-const COUNTS: usize = 6;
+const COUNTS: usize = 7;
 
 /// Values of a [`PatchReport`] in a tent's cell.
 const REPORT_VALUES: usize = 17;
@@ -48,11 +49,12 @@ pub struct Gathered {
     pub front: Front,
     /// Elements by global triangle and interface faces by global edge.
     pub solution: FrontSolution,
-    /// Every tent (global vertex ids) with its patch, by rank in the order each pitched them.
+    /// Every tent (global vertex ids) with its patch, by rank in the order each pitched them
+    /// (those the ranks kept, [`crate::Options::keep_tents`]).
     pub tents: Vec<(Tent, SolvedPatch)>,
     /// Per rank, its report without tents or patches (those are in `tents`).
     pub reports: Vec<RankReport>,
-    /// Per rank, how many of `tents` it pitched.
+    /// Per rank, how many tents it pitched ([`RankReport::pitched`]), kept or not.
     pub tents_by_rank: Vec<u64>,
 }
 
@@ -123,12 +125,9 @@ impl Gathered {
             }
             v if v == Part::Tents as u32 => {
                 let tents = &update.elements;
-                let count = self.tents_by_rank.get_mut(from as usize);
-                let count = count.ok_or_else(|| bad("tents of a rank the run has not"))?;
                 if tents.values.len() != tents.len() * (3 + REPORT_VALUES) {
                     return Err(bad("tents of the wrong size"));
                 }
-                *count += tents.len() as u64;
                 for i in 0..tents.len() {
                     let (vertex, _, values) = tents.get(i);
                     let tent = Tent {
@@ -153,9 +152,16 @@ impl Gathered {
             }
             v if v == Part::Counts as u32 => {
                 let values = &update.elements.values;
-                let report = (self.reports.get_mut(from as usize))
-                    .filter(|_| values.len() >= COUNTS)
-                    .ok_or_else(|| bad("counts of the wrong size or rank"))?;
+                let (Some(report), Some(pitched)) = (
+                    self.reports.get_mut(from as usize),
+                    self.tents_by_rank.get_mut(from as usize),
+                ) else {
+                    return Err(bad("counts of a rank the run has not"));
+                };
+                if values.len() < COUNTS {
+                    return Err(bad("counts of the wrong size"));
+                }
+                *pitched = values[6] as u64;
                 *report = RankReport {
                     rank: from,
                     updates_sent: values[0] as u64,
@@ -164,6 +170,7 @@ impl Gathered {
                     updates_stale: values[3] as u64,
                     boundary_vertices: values[4] as usize,
                     waited: Duration::from_secs_f64(values[5]),
+                    pitched: values[6] as u64,
                     outputs: values[COUNTS..].to_vec(),
                     ..RankReport::default()
                 };
@@ -284,6 +291,7 @@ fn parts(
             report.updates_stale as f64,
             report.boundary_vertices as f64,
             report.waited.as_secs_f64(),
+            report.pitched as f64,
         ]
         .into_iter()
         .chain(report.outputs.iter().copied())

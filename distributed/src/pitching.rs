@@ -75,6 +75,11 @@ pub struct Options {
     /// With patches solved ([`crate::solve_rank`]): what this rank knows of the energy the
     /// body has held, for the blow-up guard ([`PitchingError::BlowUp`]); none: no guard.
     pub held: Option<Held>,
+    /// Keep every tent and its patch in the [`RankReport`] (`tents`, `patches`), as the tests
+    /// that compare them with the serial order need. A caller that sums what it needs of each
+    /// patch as it is solved (an [`crate::Observer`]) sets it false, so that a rank's memory
+    /// does not grow with its tents; [`RankReport::pitched`] counts them either way.
+    pub keep_tents: bool,
 }
 
 /// Tents a rank keeps in flight per solving thread ([`Options::threads`]): enough that a thread
@@ -94,6 +99,7 @@ impl Options {
             pause: Pause::default(),
             threads: 1,
             held: None,
+            keep_tents: true,
         }
     }
 }
@@ -315,8 +321,11 @@ impl Work for () {
 pub struct RankReport {
     /// The rank.
     pub rank: Rank,
-    /// Its tents in the order it pitched them, with global vertex ids.
+    /// Its tents in the order it pitched them, with global vertex ids ([`Options::keep_tents`];
+    /// empty otherwise).
     pub tents: Vec<Tent>,
+    /// How many tents it pitched.
+    pub pitched: u64,
     /// Update messages sent (one per tent and ghost-holding rank).
     pub updates_sent: u64,
     /// Bytes of the updates sent, as [`Message::encode`] writes them.
@@ -329,8 +338,8 @@ pub struct RankReport {
     pub boundary_vertices: usize,
     /// Time spent waiting for messages with nothing to pitch.
     pub waited: Duration,
-    /// With patches solved ([`crate::solve_rank`]), one per tent in the order of `tents`; empty
-    /// for pitching alone.
+    /// With patches solved ([`crate::solve_rank`]) and [`Options::keep_tents`], one per tent in
+    /// the order of `tents`; empty for pitching alone.
     pub patches: Vec<SolvedPatch>,
     /// Values the caller sets after the run (its observer's results, see
     /// [`crate::solving::Observer`]), which [`crate::gather`] carries to rank 0 as they are.
@@ -384,6 +393,7 @@ struct Runner<'v, T, W> {
     received: Vec<u64>,
     done: Vec<Option<u64>>,
     report: RankReport,
+    keep_tents: bool,
 }
 
 impl<T: Transport, W: Work> Runner<'_, T, W> {
@@ -512,10 +522,13 @@ impl<T: Transport, W: Work> Runner<'_, T, W> {
             self.report.update_bytes += update.encoded_len() as u64;
             self.send(to, Message::Update(update))?;
         }
-        self.report.tents.push(Tent {
-            vertex: self.view.global(v),
-            ..*tent
-        });
+        self.report.pitched += 1;
+        if self.keep_tents {
+            self.report.tents.push(Tent {
+                vertex: self.view.global(v),
+                ..*tent
+            });
+        }
         self.offer(v);
         self.offer_neighbours(v);
         Ok(())
@@ -701,6 +714,7 @@ pub(crate) fn run_rank<T: Transport, W: Work>(
             boundary_vertices: view.boundary_vertices(),
             ..RankReport::default()
         },
+        keep_tents: options.keep_tents,
     };
     for v in view.owned() {
         state.offer(v);

@@ -155,6 +155,8 @@ pub trait Observer {
 pub struct Observed<'a> {
     /// Its tent.
     pub tent: &'a Tent,
+    /// Its report and the largest slope of the front's triangles it left.
+    pub patch: &'a SolvedPatch,
     /// The rank's elements and faces, the patch's stored.
     pub solution: &'a FrontSolution,
     /// Where its cohesive faces crossed the crack-tracking levels
@@ -195,8 +197,9 @@ struct Patches<'a, O> {
     edge_generation: Vec<u32>,
     /// Values per element.
     stride: usize,
-    /// Per tent so far, its patch's report and slope.
+    /// Per tent so far, its patch's report and slope ([`Options::keep_tents`]; empty otherwise).
     patches: Vec<SolvedPatch>,
+    keep_tents: bool,
     /// What the rank knows of the energy held ([`Options::held`]), and per rank the entries of
     /// its `known` last sent there (empty without the guard).
     held: Option<Held>,
@@ -348,7 +351,10 @@ impl<O: Observer> Patches<'_, O> {
             self.generation[t as usize] += 1;
             slope = slope.max(front.slope(view.mesh(), t));
         }
-        self.patches.push(SolvedPatch { report, slope });
+        let patch = SolvedPatch { report, slope };
+        if self.keep_tents {
+            self.patches.push(patch);
+        }
         if !self.edge_generation.is_empty() {
             for e in spokes(view.mesh(), tent.vertex) {
                 self.edge_generation[e as usize] += 1;
@@ -356,6 +362,7 @@ impl<O: Observer> Patches<'_, O> {
         }
         let observed = Observed {
             tent,
+            patch: &patch,
             solution: self.solution,
             crossings: &crossings,
             samples: &samples,
@@ -633,6 +640,7 @@ pub fn solve_rank_observed<T: Transport, O: Observer>(
         edge_generation: if faces { vec![0; edges] } else { Vec::new() },
         stride: GEOMETRY_VALUES + ENERGY_VALUES + size,
         patches: Vec::new(),
+        keep_tents: options.keep_tents,
         held,
         sent_work,
     };

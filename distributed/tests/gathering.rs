@@ -145,3 +145,38 @@ fn gathering_through_a_transport_gives_the_serial_runs_elements_and_tents() {
     assert_eq!(updates, expected);
     assert!(updates > 0);
 }
+
+/// Ranks that keep no tents (`Options::keep_tents`, what `sdg run` over ranks does: its
+/// observer tallies them) gather the same elements and count the same tents, and hold none.
+#[test]
+fn ranks_that_keep_no_tents_count_them_and_gather_the_same_state() {
+    let dir = tempfile::tempdir().unwrap();
+    let problem = stick_slip(dir.path());
+    let mesh = &problem.mesh;
+    let (causality, physics) = setup(&problem);
+    let delays = LoopbackOptions {
+        seed: 4,
+        max_delay: Duration::from_micros(100),
+        fifo: false,
+    };
+    let partition = Partition::random(mesh, 3, 5).unwrap();
+    let kept = Options::new(3, Duration::from_secs(20));
+    let kept = solve_threads(mesh, &partition, causality, physics, delays, &kept).unwrap();
+    let kept = gather_threads(mesh, &kept).unwrap();
+    let none = Options {
+        keep_tents: false,
+        ..Options::new(3, Duration::from_secs(20))
+    };
+    let ranks = solve_threads(mesh, &partition, causality, physics, delays, &none).unwrap();
+    for rank in &ranks {
+        assert!(rank.report.tents.is_empty() && rank.report.patches.is_empty());
+        assert!(rank.report.pitched > 0);
+    }
+    let gathered = gather_threads(mesh, &ranks).unwrap();
+    assert!(gathered.tents.is_empty());
+    assert_eq!(gathered.tents_by_rank, kept.tents_by_rank);
+    let total: u64 = gathered.tents_by_rank.iter().sum();
+    assert_eq!(total, kept.tents.len() as u64);
+    assert!(bits(&gathered.solution) == bits(&kept.solution));
+    assert_eq!(times(&gathered), times(&kept));
+}

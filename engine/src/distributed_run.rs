@@ -4,12 +4,13 @@
 //! with the same tents, elements and interface states as a run on threads.
 //!
 //! Each rank pitches and solves the tents at the vertices it owns
-//! ([`sdg_distributed::solve_rank_observed`]), writing its pieces of the snapshots and summing
-//! the history's energies as it goes (module `rank_outputs`); at the end the elements are
-//! gathered on rank 0 ([`sdg_distributed::gathering`]), each from the rank owning its
-//! triangle's first corner (an interface face from the owner of its edge's first end), and rank
-//! 0 writes `summary.json` with the state hash and energy totals summed in the serial order of
-//! the tents, and `history.csv` (module `rank_finish`). The partition and what every rank
+//! ([`sdg_distributed::solve_rank_observed`]), writing its pieces of the snapshots, summing
+//! the history's energies and tallying its tents' reports as it goes (modules `rank_outputs`,
+//! `rank_tally`); at the end the elements are gathered on rank 0
+//! ([`sdg_distributed::gathering`]), each from the rank owning its triangle's first corner (an
+//! interface face from the owner of its edge's first end), and rank 0 writes `summary.json`
+//! with the state hash and the merged tallies' totals, and `history.csv` (module
+//! `rank_finish`). The partition and what every rank
 //! solves with are module `rank_setup`'s; what a restarted run did before, `rank_prior`'s. The
 //! ranks run in phases between checkpoints (module
 //! `rank_run`), which are the threaded run's checkpoint files (module `rank_checkpoint`): a

@@ -22,6 +22,7 @@ mod rank_prior;
 mod rank_rounds;
 mod rank_run;
 mod rank_setup;
+mod rank_tally;
 pub mod solve;
 pub mod study;
 pub mod trace;

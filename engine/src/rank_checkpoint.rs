@@ -12,9 +12,9 @@
 //! flight, and the ranks' fronts and elements are a state of the uninterrupted run.
 //!
 //! # What
-//! Rank 0 gathers the front, the elements and interface faces, the tents since the run (re)
-//! started, each rank's history sums and its slices of the snapshots not written yet, and
-//! writes one `checkpoint_NNNNNN.sdgc` ([`crate::solve::checkpoint`]): the front, the
+//! Rank 0 gathers the front, the elements and interface faces, each rank's tally of its tents
+//! since the run (re)started, its history sums and its slices of the snapshots not written yet,
+//! and writes one `checkpoint_NNNNNN.sdgc` ([`crate::solve::checkpoint`]): the front, the
 //! elements and the pitcher, and a bookkeeping with the totals, the history rows of the times
 //! the whole front has passed, the snapshots (files written, slices pending) and the
 //! milestones still ahead. One file, written last of all (temporary file, sync, rename), is
@@ -30,8 +30,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use sdg_distributed::{Gathered, SolvedPatch};
-use sdg_mesh::{Front, Pitcher, Tent};
+use sdg_distributed::Gathered;
+use sdg_mesh::{Front, Pitcher};
 use sdg_solver::element::{FrontSolution, Geometry};
 use sdg_solver::norms::FrontEnergy;
 
@@ -43,14 +43,16 @@ use crate::problem::Problem;
 use crate::progress::Progress;
 use crate::rank_outputs::{PARTS, history_csv};
 use crate::rank_prior::Prior;
+use crate::rank_tally::Tally;
 use crate::solve::book::{Book, Milestones, Records};
 use crate::solve::checkpoint::{Counts, Folder};
 
-/// What rank 0 writes a checkpoint from: the gathered state, the tents since the (re)start in
-/// serial order, the merged history sums and the snapshots with every rank's pending slices.
+/// What rank 0 writes a checkpoint from: the gathered state, the merged tally of the tents
+/// since the (re)start, the merged history sums and the snapshots with every rank's pending
+/// slices.
 pub(crate) struct Pausing<'a> {
     pub(crate) gathered: &'a Gathered,
-    pub(crate) serial: &'a [(Tent, SolvedPatch)],
+    pub(crate) tally: &'a Tally,
     pub(crate) sums: &'a [[ExactSum; PARTS]],
     pub(crate) snapshots: Snapshots,
     /// The ranks' crack-tracking crossings and probe samples since the (re)start.
@@ -75,14 +77,8 @@ pub(crate) fn write(
     let mesh = &problem.mesh;
     let t_end = config.time.span();
     let (front, solution) = (&at.gathered.front, &at.gathered.solution);
-    let history = history_csv(
-        problem,
-        prior,
-        at.serial,
-        at.sums,
-        (at.energy0, front, None),
-    )?;
-    let mut book = book(problem, prior, at.serial, at.energy0.total);
+    let history = history_csv(problem, prior, at.tally, at.sums, (at.energy0, front, None))?;
+    let mut book = book(problem, prior, at.tally, at.energy0.total);
     book.history = history;
     let mut records = prior.records.clone();
     records.append(at.records);
@@ -142,32 +138,22 @@ pub(crate) fn write(
     Ok((path, seconds))
 }
 
-/// The bookkeeping of a run over ranks of `problem` after `prior` and the `serial` tents, from
-/// an initial front of energy `energy0` (scaled units); history, snapshots and milestones are
-/// the caller's to fill in.
-fn book(problem: &Problem, prior: &Prior, serial: &[(Tent, SolvedPatch)], energy0: f64) -> Book {
+/// The bookkeeping of a run over ranks of `problem` after `prior` and the tents of `tally`,
+/// from an initial front of energy `energy0` (scaled units); history, snapshots and milestones
+/// are the caller's to fill in.
+fn book(problem: &Problem, prior: &Prior, tally: &Tally, energy0: f64) -> Book {
     let config = &problem.loaded.config;
-    let mut totals = prior.totals;
-    let (mut elements, mut dofs) = (prior.elements, prior.dofs);
-    let (mut nonlinear, mut newton, mut newton_max) =
-        (prior.nonlinear, prior.newton, prior.newton_max);
-    let mut slope_ratio = prior.max_slope_ratio;
+    let totals = tally.totals(&prior.totals);
+    let (elements, dofs) = tally.elements_and_dofs();
+    let (elements, dofs) = (prior.elements + elements, prior.dofs + dofs);
+    let (nonlinear, newton, newton_max) = tally.newton();
+    let (nonlinear, newton) = (prior.nonlinear + nonlinear, prior.newton + newton);
+    let newton_max = prior.newton_max.max(newton_max);
     let c_max = problem.material.max_wave_speed();
-    for (_, p) in serial {
-        let r = &p.report;
-        totals.accumulate(r);
-        elements += r.elements as u64;
-        dofs += r.dofs as u64;
-        if r.newton_iterations > 0 {
-            nonlinear += 1;
-            newton += r.newton_iterations as u64;
-            newton_max = newton_max.max(r.newton_iterations);
-        }
-        slope_ratio = slope_ratio.max(c_max * p.slope);
-    }
+    let slope_ratio = prior.max_slope_ratio.max(c_max * tally.slope());
     Book {
         totals,
-        patches: prior.patches + serial.len() as u64,
+        patches: prior.patches + tally.tents(),
         rejected: 0,
         refinements: 0,
         coarsenings: 0,

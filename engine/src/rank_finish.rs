@@ -1,13 +1,14 @@
-//! The end of a run over ranks: rank 0 sums the gathered tents in serial order into
-//! `summary.json` (state hash, energies, Newton counts, the partition's traffic), writes
-//! `history.csv` from the ranks' merged history sums, and `crack_tips.csv` and
+//! The end of a run over ranks: rank 0 merges the ranks' tallies of their tents (module
+//! `rank_tally`) into `summary.json` (with the state hash of the gathered elements, energies,
+//! Newton counts, the partition's traffic), writes `history.csv` from the merged tallies and
+//! history sums, and `crack_tips.csv` and
 //! `interface.csv` from their crack-tracking crossings and probe samples (neither file depends
 //! on the order they come in).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use sdg_distributed::{Gathered, RankReport, SolvedPatch};
+use sdg_distributed::{Gathered, RankReport};
 use sdg_mesh::Front;
 use sdg_solver::element::FrontSolution;
 use sdg_solver::norms::{FrontEnergy, front_energy, slice_errors};
@@ -16,9 +17,10 @@ use sdg_solver::patch::{Initial, PatchSolver};
 use crate::error::EngineError;
 use crate::output::write_output;
 use crate::problem::Problem;
-use crate::rank_outputs::{self, history_csv, merged_sums};
+use crate::rank_outputs::{self, history_csv, merged};
 use crate::rank_prior::Prior;
 use crate::rank_setup::PartitionKind;
+use crate::rank_tally::Tally;
 use crate::solve::context::initial_state;
 use crate::solve::outputs::{crack_tips, lefm, write_crack_tips, write_probes};
 use crate::solve::summary::state_hash;
@@ -70,31 +72,29 @@ pub(crate) fn finish(
     let finishing = Instant::now();
     let gathered = end.gathered;
     let (front, solution) = (&gathered.front, &gathered.solution);
-    let serial = gathered.in_serial_order();
-    let patches: Vec<SolvedPatch> = serial.iter().map(|(_, p)| *p).collect();
+    let outputs: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
+    let times = crate::solve::book::history_times(config.time.span());
+    let (sums, tally, rests) = merged(&outputs, &times)?;
     let ranks = gathered.reports.len();
     let wall_time_s = end.prior.wall_time_s + end.wall_time_s;
-    tracing::info!(patches = patches.len(), wall_time_s, "solve finished");
+    tracing::info!(patches = tally.tents(), wall_time_s, "solve finished");
     let initial_energy = initial_energy(problem, ranks);
     let energy = energy_on(problem, front, solution, ranks);
     let mut summary = summarize(
         problem,
         (front, solution),
-        (end.prior, &patches),
+        (end.prior, &tally),
         &gathered.reports,
         (initial_energy, &energy),
         estimate,
-    )?;
+    );
     summary.wall_time_s = wall_time_s;
     summary.mode = end.mode;
     summary.threads = ranks * end.threads;
-    summary.patches_per_second = patches.len() as f64 / end.wall_time_s.max(f64::MIN_POSITIVE);
+    summary.patches_per_second = tally.tents() as f64 / end.wall_time_s.max(f64::MIN_POSITIVE);
     summary.distributed = Some(distributed_summary(end.partition, gathered));
     summary.snapshots = end.snapshots;
     summary.checkpoint = end.prior.summary(end.checkpoints.0, end.checkpoints.1);
-    let outputs: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
-    let times = crate::solve::book::history_times(config.time.span()).len();
-    let (sums, rests) = merged_sums(&outputs, times)?;
     let mut records = end.prior.records.clone();
     for rest in rests {
         records.append(rank_outputs::records(rest)?.0);
@@ -102,7 +102,7 @@ pub(crate) fn finish(
     let history = history_csv(
         problem,
         end.prior,
-        &serial,
+        &tally,
         &sums,
         (&initial_energy, front, Some(&energy)),
     )?;
@@ -165,16 +165,17 @@ fn energy_on(
 }
 
 /// The summary of a run that left `front` and `solution` (with the energy `e` on it) after
-/// `patches` (in serial order) from the `energy0` of the initial front, with the `estimate`
-/// made before; the wall time is the caller's to fill in.
+/// the tents of `tally` from the `energy0` of the initial front, with the `estimate` made
+/// before; the wall time is the caller's to fill in. (The ranks stop at a patch with a
+/// non-finite value, so the tally holds none.)
 fn summarize(
     problem: &Problem,
     (front, solution): (&Front, &FrontSolution),
-    (prior, patches): (&Prior, &[SolvedPatch]),
+    (prior, tally): (&Prior, &Tally),
     ranks: &[RankReport],
     (energy0, e): (FrontEnergy, &FrontEnergy),
     estimate: crate::estimate::Estimate,
-) -> Result<RunSummary, EngineError> {
+) -> RunSummary {
     let config = &problem.loaded.config;
     let mesh = &problem.mesh;
     let system = &problem.system;
@@ -183,35 +184,23 @@ fn summarize(
     let solver = PatchSolver::new(system.clone(), config.solver.order, 0);
     let (basis, width) = (solver.basis(), solver.width());
     let threads = ranks.len();
-    let mut totals = prior.totals;
+    let totals = tally.totals(&prior.totals);
     let c_max = problem.material.max_wave_speed();
-    let mut slope = prior.max_slope_ratio / c_max;
-    let (mut nonlinear, mut newton) = (prior.nonlinear, prior.newton);
-    let mut newton_max = prior.newton_max;
-    let (mut elements, mut dofs) = (prior.elements, prior.dofs);
-    let mut timings = Timings::default();
-    for p in patches {
-        let r = &p.report;
-        if let Some((name, value)) = r.first_non_finite() {
-            return Err(EngineError::Runtime(format!(
-                "a patch over ranks has {name} = {value} (a non-finite value)"
-            )));
-        }
-        elements += r.elements as u64;
-        dofs += r.dofs as u64;
-        timings.assembly_s += r.assembly_s;
-        timings.solve_s += r.solve_s;
-        timings.evaluation_s += r.evaluation_s;
-        totals.accumulate(r);
-        if r.newton_iterations > 0 {
-            nonlinear += 1;
-            newton += r.newton_iterations as u64;
-            newton_max = newton_max.max(r.newton_iterations);
-        }
-        slope = slope.max(p.slope);
-    }
-    timings.waiting_s = ranks.iter().map(|r| r.waited.as_secs_f64()).sum();
-    let count = prior.patches + patches.len() as u64;
+    let slope = (prior.max_slope_ratio / c_max).max(tally.slope());
+    let (nonlinear, newton, newton_max) = tally.newton();
+    let (nonlinear, newton) = (prior.nonlinear + nonlinear, prior.newton + newton);
+    let newton_max = prior.newton_max.max(newton_max);
+    let (elements, dofs) = tally.elements_and_dofs();
+    let (elements, dofs) = (prior.elements + elements, prior.dofs + dofs);
+    let [assembly_s, solve_s, evaluation_s] = tally.timings();
+    let timings = Timings {
+        assembly_s,
+        solve_s,
+        evaluation_s,
+        waiting_s: ranks.iter().map(|r| r.waited.as_secs_f64()).sum(),
+        ..Timings::default()
+    };
+    let count = prior.patches + tally.tents();
     let error = problem.exact.as_ref().map(|w| {
         let e = slice_errors(mesh, solution, basis, system, t_end, w);
         ErrorSummary {
@@ -220,7 +209,7 @@ fn summarize(
         }
     });
     let (min_edge, max_edge) = mesh.edge_length_range();
-    Ok(RunSummary {
+    RunSummary {
         command: "run",
         config_file: problem.loaded.file.clone(),
         overrides: problem.loaded.overrides.clone(),
@@ -265,13 +254,14 @@ fn summarize(
         max_edge,
         checkpoint: CheckpointSummary::default(),
         timings,
-    })
+    }
 }
 
 /// `distributed` of `summary.json`.
 fn distributed_summary(partition: PartitionKind, gathered: &Gathered) -> DistributedSummary {
     let reports = &gathered.reports;
-    let per_tent = |x: u64| x as f64 / gathered.tents.len().max(1) as f64;
+    let tents: u64 = gathered.tents_by_rank.iter().sum();
+    let per_tent = |x: u64| x as f64 / tents.max(1) as f64;
     DistributedSummary {
         partition: partition.name(),
         boundary_vertices: reports.iter().map(|r| r.boundary_vertices).sum(),

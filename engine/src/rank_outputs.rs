@@ -1,7 +1,7 @@
 //! The outputs of a run over ranks as it goes: each rank cuts the elements it solves by the
 //! snapshot planes and writes its piece of every snapshot once its own vertices have passed the
-//! plane, and sums the front's energy at each history time; rank 0 writes `history.csv` from
-//! those sums and the gathered tents at the end.
+//! plane, sums the front's energy at each history time and tallies its tents (module
+//! `rank_tally`); rank 0 writes `history.csv` from the merged sums and tallies at the end.
 //!
 //! # Snapshots: one piece per rank
 //! Every element is left by exactly one tent, solved on one rank: the ranks' slices together are
@@ -21,8 +21,8 @@
 //! ranks the row of `t_k` is the serial reference order's (tents by `(t_old, id)`), the same for
 //! every partition and timing: the front right after the last tent with `t_old < t_k`, where
 //! every vertex is at the end of its tent crossing `t_k` (`t_old < t_k <= t_new`). Its columns:
-//! - `patches`: the tents with `t_old < t_k`; the accounts: their reports summed in that order
-//!   on rank 0 from the gathered tents;
+//! - `patches`: the tents with `t_old < t_k`; the accounts: their reports summed exactly
+//!   (the ranks' tallies, merged on rank 0);
 //! - `time_s`: the smallest `t_new` of the crossing tents;
 //! - the front's energy: per triangle, the top-facet energy of the element left by the last of
 //!   its corners' crossing tents. Tents at neighbours run in `(t_old, id)` order, so that tent is
@@ -32,15 +32,17 @@
 //!   partition.
 //!
 //! The first row is the initial front's, the last the end front's (energy summed in triangle
-//! order, as on threads): those two are the threaded run's but for the accounts' order of
-//! summation. Rows that would repeat the last row's time and patches are left out.
+//! order, as on threads): those two are the threaded run's but for the accounts' rounding
+//! (summed exactly here, in the order of recording there). Rows that would repeat the last
+//! row's time and patches are left out.
 //!
 //! # Memory
 //! Per rank: the slices of its elements for the snapshots not yet written, and three exact sums
-//! (a few values each) per history time; no element is kept beyond the run's own.
+//! (a few values each) and a bin of the tally per history time; no element is kept beyond the
+//! run's own, and no tent.
 
-use sdg_distributed::{LocalView, Observed, Observer, Partition, SolvedPatch};
-use sdg_mesh::{Front, Tent};
+use sdg_distributed::{LocalView, Observed, Observer, Partition};
+use sdg_mesh::Front;
 use sdg_solver::basis::Basis;
 use sdg_solver::crack::Crossing;
 use sdg_solver::element::{FrontSolution, Geometry};
@@ -52,6 +54,7 @@ use crate::exact_sum::ExactSum;
 use crate::output::snapshot::{Piece, Snapshots};
 use crate::problem::Problem;
 use crate::rank_prior::Prior;
+use crate::rank_tally::Tally;
 use crate::solve::book::{Milestone, Milestones, Records, history_times};
 use crate::solve::history::{history_header, history_line, point_values, repeats_last_row};
 
@@ -80,6 +83,8 @@ pub(crate) struct RankOutputs<'p> {
     coefficients: Vec<f64>,
     phi: Vec<f64>,
     values: Vec<f64>,
+    /// The rank's tents summed for the accounts.
+    tally: Tally,
     /// The crack-tracking crossings and probe samples of the rank's patches.
     records: Records,
     /// The first failure (a snapshot not written, an element without its energy).
@@ -146,6 +151,7 @@ impl<'p> RankOutputs<'p> {
             milestones,
             passed: Vec::new(),
             sums: vec![Default::default(); times.len()],
+            tally: Tally::new(&times),
             times,
             geometry: Geometry::default(),
             coefficients: vec![0.0; basis.len() * width],
@@ -184,14 +190,16 @@ impl<'p> RankOutputs<'p> {
         self.snapshots.forget_kept(next);
     }
 
-    /// The history sums and the records as values: per history time and part, the number of
-    /// partials, then the partials; then the [`Records`] as CBOR bytes ([`push_bytes`]).
+    /// The history sums, the tally and the records as values: per history time and part, the
+    /// number of partials, then the partials; then the [`Tally`]; then the [`Records`] as CBOR
+    /// bytes ([`push_bytes`]).
     fn values(&self) -> Vec<f64> {
         let mut values = Vec::new();
         for sum in self.sums.iter().flatten() {
             values.push(sum.partials().len() as f64);
             values.extend_from_slice(sum.partials());
         }
+        self.tally.push_values(&mut values);
         let mut cbor = Vec::new();
         ciborium::into_writer(&self.records, &mut cbor).expect("records encode in memory");
         push_bytes(&mut values, &cbor);
@@ -238,6 +246,7 @@ impl<'p> RankOutputs<'p> {
 impl Observer for RankOutputs<'_> {
     fn solved(&mut self, view: &LocalView, front: &Front, solved: Observed<'_>) {
         let (tent, solution) = (solved.tent, solved.solution);
+        self.tally.add(tent, solved.patch);
         let edges = self.problem.mesh.edges();
         let records = &mut self.records;
         records.crossings.extend(solved.crossings.iter().map(|c| {
@@ -303,14 +312,14 @@ impl Observer for RankOutputs<'_> {
 
 /// `history.csv` of a run over ranks on rank 0 after `prior`: its rows (or, for a new run,
 /// the row of the initial front with energy `energy0`), a row per history time after the
-/// prior's front from the `tents` since in serial order and the ranks' merged history `sums`,
-/// and the row of the end `front` with its `energy` (all scaled units). Without `energy` (a
-/// checkpoint) the rows stop at the last history time the whole `front` has passed, with no
-/// end row. Errors: tents of the wrong form, as a runtime error.
+/// prior's front from the ranks' merged `tally` of the tents since and their merged history
+/// `sums`, and the row of the end `front` with its `energy` (all scaled units). Without
+/// `energy` (a checkpoint) the rows stop at the last history time the whole `front` has
+/// passed, with no end row. Errors: sums of the wrong form, as a runtime error.
 pub(crate) fn history_csv(
     problem: &Problem,
     prior: &Prior,
-    tents: &[(Tent, SolvedPatch)],
+    tally: &Tally,
     sums: &[[ExactSum; PARTS]],
     (energy0, front, energy): (&FrontEnergy, &Front, Option<&FrontEnergy>),
 ) -> Result<String, EngineError> {
@@ -336,30 +345,19 @@ pub(crate) fn history_csv(
             rho,
         ));
     }
-    // The earliest end among the tents crossing each history time.
-    let mut earliest = vec![f64::INFINITY; times.len()];
-    for (tent, _) in tents {
-        let first = times.partition_point(|&t| t <= tent.t_old);
-        let last = times.partition_point(|&t| t <= tent.t_new);
-        for e in &mut earliest[first..last] {
-            *e = e.min(tent.t_new);
-        }
-    }
-    let mut totals = prior.totals;
-    let mut done = 0;
+    let all = tally.tents();
+    let mut running = tally.running(&prior.totals);
     let min_time = front.min_time();
     for (k, &t_k) in times.iter().enumerate() {
         if energy.is_none() && t_k > min_time {
             break;
         }
-        while done < tents.len() && tents[done].0.t_old < t_k {
-            totals.accumulate(&tents[done].1.report);
-            done += 1;
-        }
-        let patches = prior.patches + done as u64;
+        // The tents with `t_old < t_k`: those of the bins up to k.
+        running.through(k);
+        let patches = prior.patches + running.tents();
         // After every tent, the front is the end front: its row is the last.
-        let time = config.time.clock(earliest[k]);
-        let at_end = energy.is_some() && done == tents.len();
+        let time = config.time.clock(tally.earliest(k));
+        let at_end = energy.is_some() && running.tents() == all;
         if t_k <= prior.reached || at_end || repeats_last_row(&history, time, patches) {
             continue;
         }
@@ -370,16 +368,15 @@ pub(crate) fn history_csv(
             flux,
             total: kinetic + strain + flux,
         };
+        let totals = running.report();
         history.push_str(&history_line(time, patches, &e, &totals, initial, rho));
     }
     let Some(energy) = energy else {
         return Ok(history);
     };
-    for (_, patch) in &tents[done..] {
-        totals.accumulate(&patch.report);
-    }
+    let totals = tally.totals(&prior.totals);
     let time = config.time.clock(front.min_time());
-    let patches = prior.patches + tents.len() as u64;
+    let patches = prior.patches + all;
     if !repeats_last_row(&history, time, patches) {
         let row = history_line(time, patches, energy, &totals, initial, rho);
         history.push_str(&row);
@@ -387,14 +384,16 @@ pub(crate) fn history_csv(
     Ok(history)
 }
 
-/// The ranks' history `outputs` merged: per history time (`times` of them), the sums of the
-/// energy parts; with each rank's values after its sums (what [`RankOutputs::checkpoint_values`]
-/// adds).
-pub(crate) fn merged_sums<'a>(
-    outputs: &[&'a [f64]],
-    times: usize,
-) -> Result<(Vec<HistorySums>, Vec<&'a [f64]>), EngineError> {
-    let mut sums: Vec<[ExactSum; PARTS]> = vec![Default::default(); times];
+/// The ranks' outputs merged ([`merged`]): per history time the sums of the energy parts, the
+/// tally of every rank's tents, and each rank's values after its tally.
+pub(crate) type Merged<'a> = (Vec<HistorySums>, Tally, Vec<&'a [f64]>);
+
+/// The ranks' `outputs` merged, for the history times `times` (s): per history time, the sums
+/// of the energy parts, and the tally of every rank's tents; with each rank's values after its
+/// tally (its records, then what [`RankOutputs::checkpoint_values`] adds).
+pub(crate) fn merged<'a>(outputs: &[&'a [f64]], times: &[f64]) -> Result<Merged<'a>, EngineError> {
+    let mut sums: Vec<[ExactSum; PARTS]> = vec![Default::default(); times.len()];
+    let mut tally = Tally::new(times);
     let mut rests = Vec::new();
     for (rank, values) in outputs.iter().enumerate() {
         let bad = || EngineError::Runtime(format!("rank {rank}: history sums of the wrong form"));
@@ -405,9 +404,13 @@ pub(crate) fn merged_sums<'a>(
             sum.merge(&ExactSum::from_partials(partials));
             at += 1 + n;
         }
-        rests.push(&values[at..]);
+        let (theirs, rest) = Tally::take(&values[at..], times).ok_or_else(|| {
+            EngineError::Runtime(format!("rank {rank}: a tally of the wrong form"))
+        })?;
+        tally.merge(&theirs);
+        rests.push(rest);
     }
-    Ok((sums, rests))
+    Ok((sums, tally, rests))
 }
 
 /// Appends `bytes` to `values`: their length, then the bytes, 8 to a value's bits.

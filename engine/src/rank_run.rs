@@ -29,7 +29,7 @@ use crate::estimate::Estimate;
 use crate::problem::Problem;
 use crate::rank_checkpoint::{self, Pausing};
 use crate::rank_finish::{End, finish, initial_energy};
-use crate::rank_outputs::{self, RankOutputs, merged_sums};
+use crate::rank_outputs::{self, RankOutputs, merged};
 use crate::rank_prior::Prior;
 use crate::rank_setup::{PartitionKind, causality, physics};
 use crate::solve::book::{Records, history_times};
@@ -114,20 +114,18 @@ fn next_multiple(every: f64, time: f64) -> u64 {
     k
 }
 
-/// What rank 0 holds across phases: the tents and reports gathered so far.
+/// What rank 0 holds across phases: the ranks' counts so far and the last state gathered.
 #[derive(Default)]
 struct Collected {
     gathered: Option<Gathered>,
 }
 
 impl Collected {
-    /// Adds a phase's `gathered` results: its tents to those before, its counts (tents and
-    /// messages) to each rank's, its front and elements for the earlier ones'.
+    /// Adds a phase's `gathered` results: its counts (tents and messages) to each rank's, its
+    /// front, elements and outputs (the ranks' sums and tallies since the (re)start) for the
+    /// earlier ones'.
     fn add(&mut self, mut gathered: Gathered) -> &Gathered {
         if let Some(before) = self.gathered.take() {
-            let mut tents = before.tents;
-            tents.append(&mut gathered.tents);
-            gathered.tents = tents;
             for (now, then) in (gathered.tents_by_rank.iter_mut()).zip(before.tents_by_rank) {
                 *now += then;
             }
@@ -213,6 +211,7 @@ pub(crate) fn run_rank<T: Transport>(
             },
             threads: shared.threads,
             held: held.take(),
+            keep_tents: false,
             ..Options::new(u64::from(rank), IDLE_LIMIT)
         };
         let state = (&view, &pitcher, &front, &solution);
@@ -322,8 +321,8 @@ fn write_checkpoint(
 ) -> Result<(PathBuf, f64, f64, usize), EngineError> {
     let problem = shared.problem;
     let values: Vec<&[f64]> = gathered.reports.iter().map(|r| &r.outputs[..]).collect();
-    let times = history_times(problem.loaded.config.time.span()).len();
-    let (sums, rests) = merged_sums(&values, times)?;
+    let times = history_times(problem.loaded.config.time.span());
+    let (sums, tally, rests) = merged(&values, &times)?;
     let (mut records, mut pending) = (Records::default(), Vec::new());
     for rest in rests {
         let (theirs, rest) = rank_outputs::records(rest)?;
@@ -337,10 +336,9 @@ fn write_checkpoint(
             .add_pending(cbor)
             .map_err(|e| EngineError::Runtime(format!("a rank's snapshot slices: {e}")))?;
     }
-    let serial = gathered.in_serial_order();
     let pausing = Pausing {
         gathered,
-        serial: &serial,
+        tally: &tally,
         sums: &sums,
         snapshots,
         records,
