@@ -57,8 +57,9 @@ impl Solve<'_> {
         let report = match solved {
             Ok(report) => report,
             // A non-finite residual comes from non-finite inflow, which refinement copies
-            // onto the children: the guard's failure, not a reason to refine.
-            Err(failure) if !failure.residual.is_finite() => {
+            // onto the children: the guard's failure, not a reason to refine. (A face whose
+            // separation did not converge is a patch not converged: refined below.)
+            Err(failure) if failure.is_non_finite() => {
                 let [x, y] = mesh.vertex(v);
                 self.control.fail(format!(
                     "the patch of vertex {v} at ({x:e}, {y:e}) m, t = {:e} s: the Newton \

@@ -32,19 +32,28 @@ impl PatchSolver {
         let failure = |iterations, residual| NewtonFailure {
             iterations,
             residual,
+            face: false,
         };
         let mut iterations = 1;
+        let mut relative = f64::NAN;
         loop {
             nl.fill(0.0);
             if !self.contact.evaluate(&self.system, q, nl) {
-                return Err(failure(iterations, f64::NAN));
+                // A face whose separation did not converge for a finite iterate is a patch not
+                // converged; a non-finite iterate comes from non-finite inflow.
+                let face = q.iter().all(|x| x.is_finite());
+                let residual = if face { relative } else { f64::NAN };
+                return Err(NewtonFailure {
+                    face,
+                    ..failure(iterations, residual)
+                });
             }
             self.blocks.residual(q, r);
             for (ri, ni) in r.iter_mut().zip(nl.iter()) {
                 *ri -= ni;
             }
             let scale = b_norm + norm(nl);
-            let relative = if scale > 0.0 { norm(r) / scale } else { 0.0 };
+            relative = if scale > 0.0 { norm(r) / scale } else { 0.0 };
             if !relative.is_finite() {
                 return Err(failure(iterations, relative));
             }
