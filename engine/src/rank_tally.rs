@@ -11,15 +11,9 @@
 
 use sdg_distributed::SolvedPatch;
 use sdg_mesh::Tent;
-use sdg_solver::patch::PatchReport;
+use sdg_solver::patch::{ENERGY_TERMS as ENERGY, MOMENTUM_TERMS as MOMENTUM, PatchReport};
 
 use crate::exact_sum::ExactSum;
-
-/// Energy terms of a [`PatchReport`] that add up.
-const ENERGY: usize = 7;
-
-/// Momentum diagnostics of a [`PatchReport`] whose largest is kept.
-const MOMENTUM: usize = 3;
 
 /// The tents of one history bin.
 #[derive(Clone, Debug, Default)]
@@ -62,22 +56,6 @@ pub(crate) struct Tally {
     timings: [f64; 3],
 }
 
-fn energy_terms(r: &PatchReport) -> [f64; ENERGY] {
-    [
-        r.energy_in,
-        r.energy_out,
-        r.boundary_work,
-        r.interface_work,
-        r.friction_dissipation,
-        r.fracture_work,
-        r.dissipation,
-    ]
-}
-
-fn momentum_terms(r: &PatchReport) -> [f64; MOMENTUM] {
-    [r.momentum_residual, r.momentum_imbalance, r.momentum_flux]
-}
-
 impl Tally {
     /// No tents yet, for the history times `times` (s, increasing).
     pub(crate) fn new(times: &[f64]) -> Self {
@@ -105,10 +83,10 @@ impl Tally {
         }
         let bin = &mut self.bins[first];
         bin.tents += 1;
-        for (sum, x) in bin.energy.iter_mut().zip(energy_terms(r)) {
+        for (sum, x) in bin.energy.iter_mut().zip(r.energy_terms()) {
             sum.add(x);
         }
-        for (m, x) in bin.momentum.iter_mut().zip(momentum_terms(r)) {
+        for (m, x) in bin.momentum.iter_mut().zip(r.momentum_terms()) {
             *m = m.max(x);
         }
         self.elements += r.elements as u64;
@@ -165,7 +143,7 @@ impl Tally {
             next: 0,
             tents: 0,
             sums: Default::default(),
-            momentum: momentum_terms(prior),
+            momentum: prior.momentum_terms(),
         }
     }
 
@@ -284,23 +262,7 @@ impl Running<'_> {
     /// The prior accounts with the tents summed so far.
     pub(crate) fn report(&self) -> PatchReport {
         let mut r = self.prior;
-        let [
-            e_in,
-            e_out,
-            boundary,
-            interface,
-            friction,
-            fracture,
-            dissipation,
-        ] = self.sums.each_ref().map(ExactSum::value);
-        r.energy_in += e_in;
-        r.energy_out += e_out;
-        r.boundary_work += boundary;
-        r.interface_work += interface;
-        r.friction_dissipation += friction;
-        r.fracture_work += fracture;
-        r.dissipation += dissipation;
-        [r.momentum_residual, r.momentum_imbalance, r.momentum_flux] = self.momentum;
+        r.add_terms(self.sums.each_ref().map(ExactSum::value), self.momentum);
         r
     }
 }

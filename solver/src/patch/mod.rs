@@ -16,5 +16,7 @@ pub(crate) mod tables;
 
 pub use inflow::Initial;
 pub use newton::{Newton, NewtonFailure};
-pub use report::{BLOW_UP, ElementReport, FaceCut, InterfaceSample, PatchReport};
+pub use report::{
+    BLOW_UP, ENERGY_TERMS, ElementReport, FaceCut, InterfaceSample, MOMENTUM_TERMS, PatchReport,
+};
 pub use solver::PatchSolver;

@@ -91,6 +91,13 @@ pub struct PatchReport {
 /// upwind fluxes only ever dissipate ([`PatchReport::blows_up`]).
 pub const BLOW_UP: f64 = 10.0;
 
+/// Energy terms of a [`PatchReport`] that add up ([`PatchReport::energy_terms`]).
+pub const ENERGY_TERMS: usize = 7;
+
+/// Momentum diagnostics of a [`PatchReport`] whose largest is kept
+/// ([`PatchReport::momentum_terms`]).
+pub const MOMENTUM_TERMS: usize = 3;
+
 impl PatchReport {
     /// True when the patch carries more than [`BLOW_UP`] times `held` out, `held` being what the
     /// body has held before it (scaled units, as the report's) plus the patch's own boundary
@@ -120,16 +127,55 @@ impl PatchReport {
     /// Adds `other`'s energy terms to these totals and keeps the largest of each momentum
     /// diagnostic; sums in the order of the calls.
     pub fn accumulate(&mut self, other: &PatchReport) {
-        self.energy_in += other.energy_in;
-        self.energy_out += other.energy_out;
-        self.boundary_work += other.boundary_work;
-        self.interface_work += other.interface_work;
-        self.friction_dissipation += other.friction_dissipation;
-        self.fracture_work += other.fracture_work;
-        self.dissipation += other.dissipation;
-        self.momentum_residual = self.momentum_residual.max(other.momentum_residual);
-        self.momentum_imbalance = self.momentum_imbalance.max(other.momentum_imbalance);
-        self.momentum_flux = self.momentum_flux.max(other.momentum_flux);
+        self.add_terms(other.energy_terms(), other.momentum_terms());
+    }
+
+    /// The energy terms that add up over patches: energy in and out, boundary work, interface
+    /// work, friction dissipation, fracture work, dissipation (scaled units).
+    pub fn energy_terms(&self) -> [f64; ENERGY_TERMS] {
+        [
+            self.energy_in,
+            self.energy_out,
+            self.boundary_work,
+            self.interface_work,
+            self.friction_dissipation,
+            self.fracture_work,
+            self.dissipation,
+        ]
+    }
+
+    /// The momentum diagnostics whose largest is kept over patches: residual, imbalance, flux.
+    pub fn momentum_terms(&self) -> [f64; MOMENTUM_TERMS] {
+        [
+            self.momentum_residual,
+            self.momentum_imbalance,
+            self.momentum_flux,
+        ]
+    }
+
+    /// Adds `energy` (in the order of [`Self::energy_terms`]) to the energy terms and keeps the
+    /// larger of each momentum diagnostic and `momentum` ([`Self::momentum_terms`]).
+    pub fn add_terms(&mut self, energy: [f64; ENERGY_TERMS], momentum: [f64; MOMENTUM_TERMS]) {
+        let [
+            e_in,
+            e_out,
+            boundary,
+            interface,
+            friction,
+            fracture,
+            dissipation,
+        ] = energy;
+        self.energy_in += e_in;
+        self.energy_out += e_out;
+        self.boundary_work += boundary;
+        self.interface_work += interface;
+        self.friction_dissipation += friction;
+        self.fracture_work += fracture;
+        self.dissipation += dissipation;
+        let [residual, imbalance, flux] = momentum;
+        self.momentum_residual = self.momentum_residual.max(residual);
+        self.momentum_imbalance = self.momentum_imbalance.max(imbalance);
+        self.momentum_flux = self.momentum_flux.max(flux);
     }
 }
 
